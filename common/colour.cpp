@@ -1,0 +1,55 @@
+// Colour conversion parameters and plane geometry of the supported formats.
+#include "frame.h"
+
+namespace p3d {
+
+// From Kr/Kb (BT.601: 0.299/0.114, BT.709: 0.2126/0.0722, ...):
+//   R = Y + 2(1-Kr) Cr,  B = Y + 2(1-Kb) Cb,  G = (Y - Kr R - Kb B) / Kg
+//   => G = Y - 2Kb(1-Kb)/Kg Cb - 2Kr(1-Kr)/Kg Cr,  Kg = 1 - Kr - Kb.
+// Limited range: Y in 16..235 (219 levels), Cb/Cr in 16..240 (224 levels).
+YuvToRgb yuv_to_rgb_params(double kr, double kb, bool full_range) {
+  YuvToRgb m;
+  const double kg = 1.0 - kr - kb;
+  m.rv = static_cast<float>(2.0 * (1.0 - kr));
+  m.bu = static_cast<float>(2.0 * (1.0 - kb));
+  m.gu = static_cast<float>(-2.0 * kb * (1.0 - kb) / kg);
+  m.gv = static_cast<float>(-2.0 * kr * (1.0 - kr) / kg);
+  if (full_range) {
+    m.y_offset = 0.f;
+    m.y_scale = 1.f;
+    m.c_scale = 1.f;
+  } else {
+    m.y_offset = 16.f;
+    m.y_scale = static_cast<float>(255.0 / 219.0);
+    m.c_scale = static_cast<float>(255.0 / 224.0);
+  }
+  return m;
+}
+
+int frame_plane_count(PixelFormat f) {
+  switch (f) {
+    case PixelFormat::NV12: return 2;
+    case PixelFormat::I420: return 3;
+    default: return 1;
+  }
+}
+
+void frame_plane_size(PixelFormat f, int width, int height, int plane, int *bytes_per_row, int *rows) {
+  const int cw = (width + 1) / 2, ch = (height + 1) / 2;
+  switch (f) {
+    case PixelFormat::NV12:
+      *bytes_per_row = plane == 0 ? width : 2 * cw;
+      *rows = plane == 0 ? height : ch;
+      return;
+    case PixelFormat::I420:
+      *bytes_per_row = plane == 0 ? width : cw;
+      *rows = plane == 0 ? height : ch;
+      return;
+    default:
+      *bytes_per_row = 4 * width;
+      *rows = height;
+      return;
+  }
+}
+
+}  // namespace p3d

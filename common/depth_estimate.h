@@ -1,0 +1,117 @@
+// Depth from a single frame using edge information (regions grouped along
+// image edges, each given depth from a depth-gradient hypothesis), plus the
+// temporal smoothing used for video. CPU reference; cuda/depth_estimate_gpu.h
+// computes the same function on the GPU.
+//
+// The function, exactly (both implementations follow these steps):
+//  1. Blocks. The frame is cut into block_size x block_size blocks (the last
+//     row/column of blocks may be partial). Each block's feature is the mean
+//     of load_native3() over its pixels: integer sums per channel, then
+//     mean = (float)sum / (float)count.
+//  2. Edges. Two 4-connected blocks belong to one region when
+//     |dc0| + |dc1| + |dc2| (L1 of the mean features) < edge_threshold.
+//     Regions are the connected components of that graph. A component's label
+//     is the smallest block index (by * blocks_x + bx) in it, so any correct
+//     connected-components algorithm (sequential union-find, parallel
+//     union-find on the GPU) gives identical labels.
+//  3. Hypothesis. h(block) = hypothesis evaluated at the block's centre
+//     (cx = (bx*B + min(B, W - bx*B) / 2.0) / W, likewise cy), see
+//     hypothesis_depth(). It is quantised hq = (uint32)(h * 65535 + 0.5).
+//  4. Region depth. r = (float)(sum of hq over the region's blocks, uint64) /
+//     (float)(block count) / 65535. Block depth
+//     b = region_weight * r + (1 - region_weight) * h_q, with h_q = hq / 65535.
+//  5. Temporal (when the estimator has state from an earlier frame):
+//     diff = mean over blocks and channels of |feature - reference feature|
+//     (the reference is the last frame whose depth was computed, not reused).
+//       diff <= static_threshold -> reuse: output the previous block depths
+//                                   unchanged, keep the reference;
+//       diff >= cut_threshold    -> cut: output b, reset the state;
+//       otherwise                -> out = temporal_smoothing * prev + (1 - temporal_smoothing) * b.
+//     A first frame or a size change behaves as a cut.
+//  6. Expansion. Every pixel takes its block's depth (piecewise constant; the
+//     cross-bilateral filter aligns the block edges with image edges later).
+// Depth convention: 0 = farthest, 1 = nearest.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "frame.h"
+
+namespace p3d {
+
+enum class Hypothesis : int {
+  TopBottom = 0,   // far at the top, near at the bottom: h = cy
+  LeftRight = 1,   // far at the left, near at the right: h = cx
+  CenterNear = 2,  // near in the centre: h = 1 - min(1, dist(c, centre) / sqrt(0.5))
+  Flat = 3,        // h = 0.5 everywhere
+};
+
+struct DepthParams {
+  Hypothesis hypothesis = Hypothesis::TopBottom;
+  int block_size = 4;              // pixels, 2..64
+  float edge_threshold = 24.f;     // L1 of 8-bit channel means; 0 = every block its own region
+  float region_weight = 0.75f;     // 0..1: share of the region mean in a block's depth
+  float temporal_smoothing = 0.5f; // 0..0.99: weight of the previous depth (0 = none)
+  float static_threshold = 0.5f;   // mean |difference| (8-bit levels) under which depth is reused
+  float cut_threshold = 30.f;      // mean |difference| at or over which the history is dropped
+};
+
+P3D_HD float hypothesis_depth(Hypothesis h, float cx, float cy) {
+  switch (h) {
+    case Hypothesis::TopBottom: return cy;
+    case Hypothesis::LeftRight: return cx;
+    case Hypothesis::CenterNear: {
+      const float dx = cx - 0.5f, dy = cy - 0.5f;
+      const float d = sqrtf(dx * dx + dy * dy) / 0.70710678f;
+      return 1.f - (d < 1.f ? d : 1.f);
+    }
+    default: return 0.5f;
+  }
+}
+
+P3D_HD int blocks_along(int pixels, int block) { return (pixels + block - 1) / block; }
+
+// What step 5 decided for a frame.
+enum class TemporalDecision : int { Cut = 0, Smooth = 1, Reuse = 2 };
+
+// Stateful CPU estimator (one per element instance; not thread-safe).
+class DepthEstimatorCpu {
+ public:
+  // Estimates depth for one frame into `depth` (same size as the frame).
+  // Returns what the temporal step decided.
+  TemporalDecision estimate(const DepthParams &params, const FrameView &frame, ImageView<float> depth);
+  void reset();  // forget history (next frame is treated as a cut)
+
+  // Block-level results of the last call, for tests.
+  const std::vector<int> &labels() const { return labels_; }
+  const std::vector<float> &block_depth() const { return block_depth_; }
+  int blocks_x() const { return bx_; }
+  int blocks_y() const { return by_; }
+
+ private:
+  int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
+  std::vector<float> features_;      // 3 per block, this frame
+  std::vector<float> ref_features_;  // 3 per block, last computed frame
+  std::vector<int> labels_;
+  std::vector<float> block_depth_;   // output of the last frame
+  bool have_state_ = false;
+};
+
+// Stateless helpers the estimator is built from (exposed for tests and for
+// the GPU tests that compare intermediate results).
+void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features);
+void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold,
+                       std::vector<int> &labels);
+void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
+                     int block_size, const DepthParams &params, std::vector<float> &block_depth);
+void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x, int block_size, ImageView<float> depth);
+
+// Depth from a grey picture (RGBD input): depth = rgb_luma(load_rgba(grey, x, y)) / 255.
+P3D_HD float depth_from_grey(const FrameView &grey, int x, int y, const YuvToRgb &m) {
+  const Rgba c = load_rgba(grey, x, y, m);
+  return rgb_luma(c.r, c.g, c.b) / 255.f;
+}
+void depth_from_grey_cpu(const FrameView &grey, const YuvToRgb &m, ImageView<float> depth);
+
+}  // namespace p3d

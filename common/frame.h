@@ -1,0 +1,134 @@
+// Pixel formats the plugin accepts, a format-agnostic view of one frame, and
+// the per-pixel colour conversion shared by the CPU reference and the kernels.
+#pragma once
+
+#include "p3d_defs.h"
+
+namespace p3d {
+
+// The formats every element accepts. Packed RGB formats are 4 bytes a pixel
+// in memory order given by the name (RGBx: R,G,B,unused). NV12/I420 are
+// 4:2:0 with chroma sited at the top-left of each 2x2 block (nearest chroma
+// is used; no interpolation), 8 bits.
+enum class PixelFormat : int { NV12 = 0, I420, RGBA, BGRA, RGBx, BGRx };
+
+P3D_HD bool is_packed_rgb(PixelFormat f) { return f != PixelFormat::NV12 && f != PixelFormat::I420; }
+
+// One frame, host or device memory. Plane pointers and strides come from the
+// mapped GstVideoFrame (never width*bpp). Unused planes are null.
+struct FrameView {
+  PixelFormat format = PixelFormat::RGBA;
+  int width = 0;
+  int height = 0;
+  uint8_t *plane[3] = {nullptr, nullptr, nullptr};
+  int stride[3] = {0, 0, 0};
+};
+
+struct Rgba {
+  uint8_t r, g, b, a;
+};
+
+// Y'CbCr -> R'G'B' for 8-bit samples. Built from Kr/Kb and the range by
+// yuv_to_rgb_params() (colour.cpp); the gst layer takes Kr/Kb from the
+// caps' colorimetry.
+//   Yn = (Y - y_offset) * y_scale,  Cb = (U - 128) * c_scale, Cr = (V - 128) * c_scale
+//   R = Yn + rv*Cr,  G = Yn + gu*Cb + gv*Cr,  B = Yn + bu*Cb      (all in 0..255 units)
+struct YuvToRgb {
+  float y_offset = 16.f, y_scale = 255.f / 219.f, c_scale = 255.f / 224.f;
+  float rv = 1.402f, gu = -0.344136f, gv = -0.714136f, bu = 1.772f;
+};
+
+YuvToRgb yuv_to_rgb_params(double kr, double kb, bool full_range);
+
+// Luma weights of the guide image and of depth read from grey pictures
+// (BT.601; only used on R'G'B' values, so it is colorimetry independent).
+P3D_HD float rgb_luma(float r, float g, float b) { return 0.299f * r + 0.587f * g + 0.114f * b; }
+
+// Read pixel (x, y) of any supported format as R'G'B'A (alpha 255 where the
+// format has none).
+P3D_HD Rgba load_rgba(const FrameView &f, int x, int y, const YuvToRgb &m) {
+  Rgba o;
+  switch (f.format) {
+    case PixelFormat::RGBA:
+    case PixelFormat::RGBx:
+    case PixelFormat::BGRA:
+    case PixelFormat::BGRx: {
+      const uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
+      const bool bgr = f.format == PixelFormat::BGRA || f.format == PixelFormat::BGRx;
+      const bool alpha = f.format == PixelFormat::RGBA || f.format == PixelFormat::BGRA;
+      o.r = bgr ? p[2] : p[0];
+      o.g = p[1];
+      o.b = bgr ? p[0] : p[2];
+      o.a = alpha ? p[3] : 255;
+      return o;
+    }
+    default: {
+      const int yv = f.plane[0][static_cast<size_t>(y) * f.stride[0] + x];
+      int u, v;
+      if (f.format == PixelFormat::NV12) {
+        const uint8_t *c = f.plane[1] + static_cast<size_t>(y / 2) * f.stride[1] + 2 * (x / 2);
+        u = c[0];
+        v = c[1];
+      } else {
+        u = f.plane[1][static_cast<size_t>(y / 2) * f.stride[1] + x / 2];
+        v = f.plane[2][static_cast<size_t>(y / 2) * f.stride[2] + x / 2];
+      }
+      const float yn = (static_cast<float>(yv) - m.y_offset) * m.y_scale;
+      const float cb = (static_cast<float>(u) - 128.f) * m.c_scale;
+      const float cr = (static_cast<float>(v) - 128.f) * m.c_scale;
+      o.r = to_u8(yn + m.rv * cr);
+      o.g = to_u8(yn + m.gu * cb + m.gv * cr);
+      o.b = to_u8(yn + m.bu * cb);
+      o.a = 255;
+      return o;
+    }
+  }
+}
+
+// Write an R'G'B'A pixel into a packed RGB frame (other formats: no-op).
+P3D_HD void store_rgba(const FrameView &f, int x, int y, Rgba c) {
+  if (!is_packed_rgb(f.format)) return;
+  uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
+  const bool bgr = f.format == PixelFormat::BGRA || f.format == PixelFormat::BGRx;
+  p[0] = bgr ? c.b : c.r;
+  p[1] = c.g;
+  p[2] = bgr ? c.r : c.b;
+  p[3] = c.a;  // RGBx/BGRx: the padding byte gets 255, harmless and defined
+}
+
+// The 8-bit guide value of pixel (x, y): the Y' plane for YUV formats, the
+// BT.601 luma of R'G'B' otherwise.
+P3D_HD uint8_t load_luma(const FrameView &f, int x, int y) {
+  if (!is_packed_rgb(f.format)) return f.plane[0][static_cast<size_t>(y) * f.stride[0] + x];
+  const YuvToRgb unused;
+  const Rgba c = load_rgba(f, x, y, unused);
+  return to_u8(rgb_luma(c.r, c.g, c.b));
+}
+
+// Three 8-bit colour channels of pixel (x, y) in the frame's own space
+// (Y'UV for YUV formats, R'G'B' otherwise): what region grouping compares.
+P3D_HD void load_native3(const FrameView &f, int x, int y, int out[3]) {
+  if (is_packed_rgb(f.format)) {
+    const YuvToRgb unused;
+    const Rgba c = load_rgba(f, x, y, unused);
+    out[0] = c.r;
+    out[1] = c.g;
+    out[2] = c.b;
+    return;
+  }
+  out[0] = f.plane[0][static_cast<size_t>(y) * f.stride[0] + x];
+  if (f.format == PixelFormat::NV12) {
+    const uint8_t *c = f.plane[1] + static_cast<size_t>(y / 2) * f.stride[1] + 2 * (x / 2);
+    out[1] = c[0];
+    out[2] = c[1];
+  } else {
+    out[1] = f.plane[1][static_cast<size_t>(y / 2) * f.stride[1] + x / 2];
+    out[2] = f.plane[2][static_cast<size_t>(y / 2) * f.stride[2] + x / 2];
+  }
+}
+
+// Helpers for host code: number of planes and the size of plane i.
+int frame_plane_count(PixelFormat f);
+void frame_plane_size(PixelFormat f, int width, int height, int plane, int *bytes_per_row, int *rows);
+
+}  // namespace p3d

@@ -1,0 +1,12 @@
+// GPU stereo packing: the function of common/pack.h.
+#pragma once
+
+#include "../common/pack.h"
+#include "cuda_check.h"
+
+namespace p3d {
+
+// in, out: device memory, packed RGB of one format; out sized by pack_size().
+CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream);
+
+}  // namespace p3d

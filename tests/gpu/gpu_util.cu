@@ -1,0 +1,75 @@
+#include "gpu_util.h"
+
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+namespace p3d::test {
+
+void check_cuda(const CudaStatus &st) { ASSERT_TRUE(st.ok()) << st.message(); }
+
+DeviceFrame::DeviceFrame(PixelFormat format, int width, int height) {
+  view_.format = format;
+  view_.width = width;
+  view_.height = height;
+  for (int i = 0; i < frame_plane_count(format); ++i) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(format, width, height, i, &row_bytes, &rows);
+    const CudaStatus st = planes_[i].ensure_2d(row_bytes + 64, rows);  // +64: pitch != host stride
+    EXPECT_TRUE(st.ok()) << st.message();
+    view_.plane[i] = planes_[i].as<uint8_t>();
+    view_.stride[i] = static_cast<int>(planes_[i].pitch());
+    cudaMemset(view_.plane[i], 0xA5, planes_[i].size());  // poison
+  }
+}
+
+DeviceFrame DeviceFrame::upload(const HostFrame &h) {
+  DeviceFrame d(h.format(), h.width(), h.height());
+  const FrameView hv = h.view();
+  for (int i = 0; i < frame_plane_count(h.format()); ++i) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(h.format(), h.width(), h.height(), i, &row_bytes, &rows);
+    EXPECT_EQ(cudaSuccess, cudaMemcpy2D(d.view_.plane[i], d.view_.stride[i], hv.plane[i], hv.stride[i], row_bytes,
+                                        rows, cudaMemcpyHostToDevice));
+  }
+  return d;
+}
+
+HostFrame DeviceFrame::download() const {
+  HostFrame h(view_.format, view_.width, view_.height, 8);
+  const FrameView hv = h.view();
+  EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
+  for (int i = 0; i < frame_plane_count(view_.format); ++i) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(view_.format, view_.width, view_.height, i, &row_bytes, &rows);
+    EXPECT_EQ(cudaSuccess, cudaMemcpy2D(hv.plane[i], hv.stride[i], view_.plane[i], view_.stride[i], row_bytes, rows,
+                                        cudaMemcpyDeviceToHost));
+  }
+  return h;
+}
+
+DeviceDepth::DeviceDepth(int width, int height) {
+  const CudaStatus st = buf_.ensure_2d(static_cast<size_t>(width) * sizeof(float) + 128, height);
+  EXPECT_TRUE(st.ok()) << st.message();
+  view_ = ImageView<float>{buf_.as<float>(), width, height, buf_.pitch()};
+  poison();
+}
+
+void DeviceDepth::poison() { cudaMemset(buf_.get(), 0xFF, buf_.size()); }  // 0xFFFFFFFF is a NaN
+
+DeviceDepth DeviceDepth::upload(const cv::Mat &depth) {
+  DeviceDepth d(depth.cols, depth.rows);
+  EXPECT_EQ(cudaSuccess, cudaMemcpy2D(d.view_.data, d.view_.pitch, depth.data, depth.step, depth.cols * sizeof(float),
+                                      depth.rows, cudaMemcpyHostToDevice));
+  return d;
+}
+
+cv::Mat DeviceDepth::download() const {
+  cv::Mat m(view_.height, view_.width, CV_32FC1);
+  EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
+  EXPECT_EQ(cudaSuccess, cudaMemcpy2D(m.data, m.step, view_.data, view_.pitch, view_.width * sizeof(float),
+                                      view_.height, cudaMemcpyDeviceToHost));
+  return m;
+}
+
+}  // namespace p3d::test

@@ -1,0 +1,43 @@
+// Test data helpers: real images (Middlebury Aloe from opencv-doc, see
+// scripts/get-test-data.sh) and comparison helpers shared by the suites.
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "frame.h"
+#include "host_frame.h"
+
+namespace p3d::test {
+
+// Folder holding aloeL.jpg, aloeR.jpg, aloeGT.png, vtest.avi. Env
+// P3D_DATA_DIR overrides the build-time default.
+std::string data_dir();
+// Loads a file from data_dir() (cv::IMREAD_UNCHANGED); fails the test
+// (ADD_FAILURE) and returns an empty Mat when missing.
+cv::Mat load_data_image(const std::string &name);
+
+// Largest |a - b| over all pixels and channels of two 8-bit images and the
+// number of samples that differ by more than `tolerance`.
+struct DiffStats {
+  int max_abs = 0;
+  long long over_tolerance = 0;
+  long long samples = 0;
+};
+DiffStats compare_u8(const cv::Mat &a, const cv::Mat &b, int tolerance);
+// Same for two float images.
+struct FloatDiff {
+  double max_abs = 0;
+  long long nonfinite = 0;
+};
+FloatDiff compare_f32(const cv::Mat &a, const cv::Mat &b);
+
+// All six input formats, for parameterised tests.
+inline constexpr PixelFormat kAllFormats[] = {PixelFormat::NV12, PixelFormat::I420, PixelFormat::RGBA,
+                                              PixelFormat::BGRA, PixelFormat::RGBx, PixelFormat::BGRx};
+inline constexpr PixelFormat kPackedFormats[] = {PixelFormat::RGBA, PixelFormat::BGRA, PixelFormat::RGBx,
+                                                 PixelFormat::BGRx};
+const char *format_name(PixelFormat f);
+
+}  // namespace p3d::test
