@@ -14,6 +14,16 @@
 // pixels with the centre's exact guide value.
 // guide(p) is load_luma() of the frame (8-bit). radius 0 is the identity (the
 // element passes the buffer through).
+//
+// Out-of-range parameters (bilateral_sanitize(), applied by both the CPU and
+// the GPU filter) are mapped to the nearest meaningful filter, never to NaN:
+//   radius < 0 -> 0 (identity), radius > kMaxBilateralRadius -> kMaxBilateralRadius;
+//   sigma_space <= 0 or NaN -> radius 0 (the identity, the sigma_space -> 0 limit);
+//   sigma_range < 0 or NaN -> 0 (exact guide match only);
+//   tiny sigmas whose square underflows act as their -> 0 limit and huge
+//   ones (up to +inf) as a plain box / range-blind average.
+// Summation order (both sides, bit-identical results): dy outer from -r to r,
+// dx inner from -r to r, window clipped to the image.
 #pragma once
 
 #include "frame.h"
@@ -21,6 +31,7 @@
 namespace p3d {
 
 constexpr int kMaxBilateralRadius = 16;
+constexpr int kBilateralRangeTableSize = 256;  // |guide difference| 0..255
 
 struct BilateralParams {
   int radius = 5;             // 0..kMaxBilateralRadius
@@ -28,22 +39,84 @@ struct BilateralParams {
   float sigma_range = 12.f;   // 8-bit guide levels, >= 0
 };
 
+// The parameters the filter really runs with (see the header comment).
+inline BilateralParams bilateral_sanitize(const BilateralParams &p) {
+  BilateralParams s = p;
+  s.radius = clamp_value(p.radius, 0, kMaxBilateralRadius);
+  if (!(p.sigma_space > 0.f)) {
+    s.radius = 0;
+    s.sigma_space = 1.f;  // unused at radius 0; canonical so equal inputs compare equal
+  }
+  if (!(p.sigma_range > 0.f)) s.sigma_range = 0.f;
+  return s;
+}
+
+// Number of floats of the space table for a (sanitised) radius.
+inline int bilateral_space_table_size(int radius) { return (2 * radius + 1) * (2 * radius + 1); }
+
 // Weight helpers shared with the kernel. The kernel may tabulate
 // space_weight per (dx, dy) and range_weight per |g| in 0..255 (the tables
 // are computed by these same functions on the host), so both sides use
-// identical weights.
+// identical weights. The zero-distance weights are returned as exactly 1
+// without evaluating d/(2 sigma^2), which would be 0/0 when sigma^2
+// underflows to 0.
 inline float bilateral_space_weight(const BilateralParams &p, int dx, int dy) {
-  return expf(-static_cast<float>(dx * dx + dy * dy) / (2.f * p.sigma_space * p.sigma_space));
+  const int d2 = dx * dx + dy * dy;
+  if (d2 == 0) return 1.f;
+  const float denom = 2.f * p.sigma_space * p.sigma_space;
+  if (!(denom > 0.f)) return 0.f;
+  return expf(-static_cast<float>(d2) / denom);
 }
 inline float bilateral_range_weight(const BilateralParams &p, int absdiff) {
-  if (p.sigma_range <= 0.f) return absdiff == 0 ? 1.f : 0.f;
-  return expf(-static_cast<float>(absdiff * absdiff) / (2.f * p.sigma_range * p.sigma_range));
+  if (absdiff == 0) return 1.f;
+  if (!(p.sigma_range > 0.f)) return 0.f;
+  const float denom = 2.f * p.sigma_range * p.sigma_range;
+  if (!(denom > 0.f)) return 0.f;
+  return expf(-static_cast<float>(absdiff * absdiff) / denom);
 }
 
-// Tables the filter uses (host side): space[(dy+r)*(2r+1)+(dx+r)], range[0..255].
+// Tables the filter uses (host side): space[(dy+r)*(2r+1)+(dx+r)], range[0..255],
+// for r = bilateral_sanitize(p).radius (space needs
+// bilateral_space_table_size(r) floats, range kBilateralRangeTableSize).
 void bilateral_tables(const BilateralParams &p, float *space, float *range);
 
-// depth_in and depth_out must not alias. guide has the depth map's size.
+// One tap of the window: the float operations every path performs, in this
+// order, so that all of them round alike.
+P3D_HD void bilateral_accumulate(float space_w, float range_w, float depth, float &sum_w, float &sum_wd) {
+  const float w = space_w * range_w;
+  sum_w += w;
+  sum_wd += w * depth;
+}
+
+// One output pixel: the shared per-pixel maths of the CPU loop and the kernel.
+// guide(qx, qy) returns the 8-bit guide value and depth(qx, qy) the input
+// depth of an image pixel (the kernel reads both from shared-memory tiles);
+// (x, y) is inside the width x height image. The kernel's fast path for
+// windows that need no clipping (cuda/bilateral.cu) visits the same taps in
+// the same order through bilateral_accumulate().
+template <typename GuideFn, typename DepthFn>
+P3D_HD float bilateral_pixel(int x, int y, int width, int height, int radius, const float *space,
+                             const float *range, const GuideFn &guide, const DepthFn &depth) {
+  const int side = 2 * radius + 1;
+  const int centre = guide(x, y);
+  const int y0 = y - radius < 0 ? 0 : y - radius;
+  const int y1 = y + radius > height - 1 ? height - 1 : y + radius;
+  const int x0 = x - radius < 0 ? 0 : x - radius;
+  const int x1 = x + radius > width - 1 ? width - 1 : x + radius;
+  float sum_w = 0.f, sum_wd = 0.f;
+  for (int qy = y0; qy <= y1; ++qy) {
+    const float *space_row = space + (qy - y + radius) * side + radius;  // index by qx - x
+    for (int qx = x0; qx <= x1; ++qx) {
+      const int g = static_cast<int>(guide(qx, qy)) - centre;
+      bilateral_accumulate(space_row[qx - x], range[g < 0 ? -g : g], depth(qx, qy), sum_w, sum_wd);
+    }
+  }
+  return sum_wd / sum_w;
+}
+
+// depth_in and depth_out may alias (the CPU copies the input first; the GPU
+// filter refuses). guide has the depth map's size (checked: cv::Exception
+// otherwise). Empty images are a no-op.
 void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                           ImageView<float> depth_out);
 

@@ -1,1 +1,163 @@
-// placeholder: implemented by the stage owner
+#include "depth_estimate.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include <opencv2/core.hpp>
+
+namespace p3d {
+
+void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features) {
+  const int B = block_size, W = frame.width, H = frame.height;
+  if (B < 1 || W <= 0 || H <= 0) {
+    features.clear();
+    return;
+  }
+  const int bx = blocks_along(W, B), by = blocks_along(H, B);
+  features.resize(static_cast<size_t>(bx) * by * 3);
+  // One task per block row: every block's pixels are then summed by one
+  // thread, in integers, so the result does not depend on the split.
+  cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
+    std::vector<uint32_t> sums(static_cast<size_t>(bx) * 3);
+    for (int j = range.start; j < range.end; ++j) {
+      std::fill(sums.begin(), sums.end(), 0u);
+      const int rows = block_extent(j, B, H);
+      for (int y = j * B; y < j * B + rows; ++y)
+        for (int x = 0; x < W; ++x) {
+          int c[3];
+          load_native3(frame, x, y, c);
+          uint32_t *s = &sums[static_cast<size_t>(x / B) * 3];
+          s[0] += c[0];
+          s[1] += c[1];
+          s[2] += c[2];
+        }
+      float *f = &features[static_cast<size_t>(j) * bx * 3];
+      for (int i = 0; i < bx; ++i) {
+        const int count = block_extent(i, B, W) * rows;
+        for (int c = 0; c < 3; ++c) f[i * 3 + c] = block_mean(sums[static_cast<size_t>(i) * 3 + c], count);
+      }
+    }
+  });
+}
+
+namespace {
+
+// Parents always point to a smaller index, so a root is the smallest index
+// of its tree: the label the spec asks for falls out of the forest.
+int find_root(std::vector<int> &parent, int i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];  // path halving
+    i = parent[i];
+  }
+  return i;
+}
+
+void unite(std::vector<int> &parent, int a, int b) {
+  a = find_root(parent, a);
+  b = find_root(parent, b);
+  if (a < b)
+    parent[b] = a;
+  else if (b < a)
+    parent[a] = b;
+}
+
+}  // namespace
+
+void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold,
+                       std::vector<int> &labels) {
+  const int n = blocks_x * blocks_y;
+  labels.resize(n);
+  std::iota(labels.begin(), labels.end(), 0);
+  for (int j = 0; j < blocks_y; ++j)
+    for (int i = 0; i < blocks_x; ++i) {
+      const int k = j * blocks_x + i;
+      const float *f = &features[static_cast<size_t>(k) * 3];
+      if (i + 1 < blocks_x && blocks_joined(f, f + 3, edge_threshold)) unite(labels, k, k + 1);
+      if (j + 1 < blocks_y && blocks_joined(f, f + static_cast<size_t>(blocks_x) * 3, edge_threshold))
+        unite(labels, k, k + blocks_x);
+    }
+  for (int k = 0; k < n; ++k) labels[k] = find_root(labels, k);
+}
+
+void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
+                     int block_size, const DepthParams &params, std::vector<float> &block_depth) {
+  const size_t n = static_cast<size_t>(blocks_x) * blocks_y;
+  std::vector<uint32_t> hq(n), count(n, 0);
+  std::vector<uint64_t> sum(n, 0);
+  for (int j = 0; j < blocks_y; ++j)
+    for (int i = 0; i < blocks_x; ++i) {
+      const size_t k = static_cast<size_t>(j) * blocks_x + i;
+      hq[k] = block_hypothesis_q(params.hypothesis, i, j, block_size, width, height);
+      sum[labels[k]] += hq[k];
+      ++count[labels[k]];
+    }
+  block_depth.resize(n);
+  for (size_t k = 0; k < n; ++k)
+    block_depth[k] = block_depth_value(params.region_weight, sum[labels[k]], count[labels[k]], hq[k]);
+}
+
+void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x, int block_size,
+                            ImageView<float> depth) {
+  if (depth.empty() || block_size < 1 || blocks_x < 1) return;
+  const int blocks_y = static_cast<int>(block_depth.size() / blocks_x);
+  const int w = std::min(depth.width, blocks_x * block_size), h = std::min(depth.height, blocks_y * block_size);
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &range) {
+    for (int y = range.start; y < range.end; ++y) {
+      const float *src = &block_depth[static_cast<size_t>(y / block_size) * blocks_x];
+      float *dst = depth.row(y);
+      for (int x = 0; x < w; ++x) dst[x] = src[x / block_size];
+    }
+  });
+}
+
+void depth_from_grey_cpu(const FrameView &grey, const YuvToRgb &m, ImageView<float> depth) {
+  if (depth.empty()) return;
+  const int w = std::min(depth.width, grey.width), h = std::min(depth.height, grey.height);
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &range) {
+    for (int y = range.start; y < range.end; ++y) {
+      float *dst = depth.row(y);
+      for (int x = 0; x < w; ++x) dst[x] = depth_from_grey(grey, x, y, m);
+    }
+  });
+}
+
+void DepthEstimatorCpu::reset() { have_state_ = false; }
+
+TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const FrameView &frame,
+                                             ImageView<float> depth) {
+  const int B = effective_block_size(params), W = frame.width, H = frame.height;
+  if (W <= 0 || H <= 0) {
+    reset();
+    return TemporalDecision::Cut;
+  }
+  const int bx = blocks_along(W, B), by = blocks_along(H, B);
+  const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;
+
+  block_features_cpu(frame, B, features_);
+  region_labels_cpu(features_, bx, by, params.edge_threshold, labels_);
+  block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
+
+  float diff = 0.f;
+  if (same_grid) {
+    uint64_t fixed_sum = 0;
+    for (size_t k = 0; k < features_.size(); ++k) fixed_sum += temporal_diff_fixed(features_[k], ref_features_[k]);
+    diff = temporal_mean_diff(fixed_sum, static_cast<long long>(features_.size()));
+  }
+  const TemporalDecision decision = temporal_decision(same_grid, diff, params);
+  if (decision != TemporalDecision::Reuse) ref_features_ = features_;
+  block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values
+  for (size_t k = 0; k < fresh_depth_.size(); ++k)
+    block_depth_[k] = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);
+
+  have_state_ = true;
+  bx_ = bx;
+  by_ = by;
+  block_ = B;
+  width_ = W;
+  height_ = H;
+  last_diff_ = diff;
+  expand_block_depth_cpu(block_depth_, bx, B, depth);
+  return decision;
+}
+
+}  // namespace p3d

@@ -28,6 +28,10 @@
 //       diff >= cut_threshold    -> cut: output b, reset the state;
 //       otherwise                -> out = temporal_smoothing * prev + (1 - temporal_smoothing) * b.
 //     A first frame or a size change behaves as a cut.
+//     (The mean is taken in fixed point, see temporal_diff_fixed(); a change
+//     of block_size is a size change of the block grid, so also a cut.)
+//     Steps 1-4 run on every frame, reused or not, so labels() always
+//     describe the current frame.
 //  6. Expansion. Every pixel takes its block's depth (piecewise constant; the
 //     cross-bilateral filter aligns the block edges with image edges later).
 // Depth convention: 0 = farthest, 1 = nearest.
@@ -75,6 +79,76 @@ P3D_HD int blocks_along(int pixels, int block) { return (pixels + block - 1) / b
 // What step 5 decided for a frame.
 enum class TemporalDecision : int { Cut = 0, Smooth = 1, Reuse = 2 };
 
+// ---------------------------------------------------------------------------
+// The per-block maths of steps 1-5, shared by the CPU loops and the kernels so
+// that both compute one function (same operation order; common/ is built with
+// -ffp-contract=off and cuda/ with -fmad=false, division and sqrtf are IEEE on
+// both sides, so the results are bitwise identical).
+
+// block_size outside 2..64 is clamped (the kernels size shared memory for 64).
+P3D_HD int effective_block_size(const DepthParams &p) { return clamp_value(p.block_size, 2, 64); }
+
+// Pixels of block number b along an axis of `pixels` (the last block may be partial).
+P3D_HD int block_extent(int b, int block, int pixels) {
+  const int left = pixels - b * block;
+  return left < block ? left : block;
+}
+
+// Step 1: one channel's mean from its integer sum.
+P3D_HD float block_mean(uint32_t sum, int count) { return static_cast<float>(sum) / static_cast<float>(count); }
+
+// Step 2: whether two 4-connected blocks with features a[3], b[3] share a region.
+P3D_HD bool blocks_joined(const float *a, const float *b, float edge_threshold) {
+  return fabsf(a[0] - b[0]) + fabsf(a[1] - b[1]) + fabsf(a[2] - b[2]) < edge_threshold;
+}
+
+// Step 3: normalised centre of block b along an axis (computed in double as the
+// spec writes it; exact up to the final rounding to float).
+P3D_HD float block_centre(int b, int block, int pixels) {
+  return static_cast<float>((b * block + block_extent(b, block, pixels) / 2.0) / pixels);
+}
+
+// Step 3: the quantised hypothesis of block (bx, by).
+P3D_HD uint32_t block_hypothesis_q(Hypothesis h, int bx, int by, int block, int width, int height) {
+  const float v = hypothesis_depth(h, block_centre(bx, block, width), block_centre(by, block, height));
+  return static_cast<uint32_t>(v * 65535.f + 0.5f);
+}
+
+// Step 4: a block's depth from its region's hq sum and block count and its own hq.
+P3D_HD float block_depth_value(float region_weight, uint64_t region_sum, uint32_t region_count, uint32_t hq) {
+  const float r = static_cast<float>(region_sum) / static_cast<float>(region_count) / 65535.f;
+  const float h_q = static_cast<float>(hq) / 65535.f;
+  return region_weight * r + (1.f - region_weight) * h_q;
+}
+
+// Step 5, the mean |difference|. A float sum would depend on the summation
+// order (sequential on the CPU, a tree of atomics on the GPU) and could flip a
+// decision near a threshold. Each |feature - reference| is therefore truncated
+// to 40.24 fixed point (multiplying by 2^24 is exact) and summed as uint64,
+// which is exact in any order; the mean is then within 2^-24 of the exact one.
+// Sum bound: 3 * blocks * 256 * 2^24 < 2^64 for up to 2^29 blocks.
+P3D_HD uint64_t temporal_diff_fixed(float feature, float reference) {
+  return static_cast<uint64_t>(fabsf(feature - reference) * 16777216.f);
+}
+P3D_HD float temporal_mean_diff(uint64_t fixed_sum, long long values) {
+  return static_cast<float>(static_cast<double>(fixed_sum) / 16777216.0 / static_cast<double>(values));
+}
+P3D_HD TemporalDecision temporal_decision(bool have_state, float diff, const DepthParams &p) {
+  if (!have_state) return TemporalDecision::Cut;
+  if (diff <= p.static_threshold) return TemporalDecision::Reuse;
+  if (diff >= p.cut_threshold) return TemporalDecision::Cut;
+  return TemporalDecision::Smooth;
+}
+
+// Step 5, the output block depth given the decision (prev: last output, fresh: b).
+P3D_HD float temporal_output(TemporalDecision d, float prev, float fresh, float temporal_smoothing) {
+  switch (d) {
+    case TemporalDecision::Reuse: return prev;
+    case TemporalDecision::Smooth: return temporal_smoothing * prev + (1.f - temporal_smoothing) * fresh;
+    default: return fresh;
+  }
+}
+
 // Stateful CPU estimator (one per element instance; not thread-safe).
 class DepthEstimatorCpu {
  public:
@@ -88,6 +162,8 @@ class DepthEstimatorCpu {
   const std::vector<float> &block_depth() const { return block_depth_; }
   int blocks_x() const { return bx_; }
   int blocks_y() const { return by_; }
+  // Mean |feature difference| of the last call (step 5; 0 after a cut for want of history).
+  float last_diff() const { return last_diff_; }
 
  private:
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
@@ -95,6 +171,8 @@ class DepthEstimatorCpu {
   std::vector<float> ref_features_;  // 3 per block, last computed frame
   std::vector<int> labels_;
   std::vector<float> block_depth_;   // output of the last frame
+  std::vector<float> fresh_depth_;   // b of this frame (step 4), before step 5
+  float last_diff_ = 0.f;
   bool have_state_ = false;
 };
 
@@ -105,6 +183,7 @@ void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blo
                        std::vector<int> &labels);
 void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
                      int block_size, const DepthParams &params, std::vector<float> &block_depth);
+// Writes depth's pixels that the block grid covers (all of them when depth has the frame's size).
 void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x, int block_size, ImageView<float> depth);
 
 // Depth from a grey picture (RGBD input): depth = rgb_luma(load_rgba(grey, x, y)) / 255.

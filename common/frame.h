@@ -93,7 +93,7 @@ P3D_HD void store_rgba(const FrameView &f, int x, int y, Rgba c) {
   p[0] = bgr ? c.b : c.r;
   p[1] = c.g;
   p[2] = bgr ? c.r : c.b;
-  p[3] = c.a;  // RGBx/BGRx: the padding byte gets 255, harmless and defined
+  p[3] = c.a;  // RGBx/BGRx: the padding byte gets c.a (255 for any converted pixel): defined, never garbage
 }
 
 // The 8-bit guide value of pixel (x, y): the Y' plane for YUV formats, the

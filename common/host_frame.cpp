@@ -22,6 +22,16 @@ HostFrame::HostFrame(PixelFormat format, int width, int height, int row_padding)
   for (int i = 0; i < frame_plane_count(format); ++i) view_.plane[i] = storage_.data() + offsets[i];
 }
 
+HostFrame::HostFrame(const HostFrame &o) : storage_(o.storage_), view_(o.view_) {
+  for (int i = 0; i < 3; ++i)
+    if (o.view_.plane[i]) view_.plane[i] = storage_.data() + (o.view_.plane[i] - o.storage_.data());
+}
+
+HostFrame &HostFrame::operator=(const HostFrame &o) {
+  if (this != &o) *this = HostFrame(o);
+  return *this;
+}
+
 void HostFrame::fill_random(uint32_t seed) {
   std::mt19937 rng(seed);
   for (auto &b : storage_) b = static_cast<uint8_t>(rng() >> 24);

@@ -17,6 +17,11 @@ class HostFrame {
   HostFrame() = default;
   // row_padding: extra bytes at the end of every row of every plane.
   HostFrame(PixelFormat format, int width, int height, int row_padding = 0);
+  // Copies own their planes: the view is re-pointed into the copy's storage.
+  HostFrame(const HostFrame &o);
+  HostFrame &operator=(const HostFrame &o);
+  HostFrame(HostFrame &&o) noexcept = default;  // vector storage moves, pointers stay valid
+  HostFrame &operator=(HostFrame &&o) noexcept = default;
 
   FrameView view() const { return view_; }
   PixelFormat format() const { return view_.format; }

@@ -22,8 +22,11 @@
 // red-cyan, green-magenta and amber-blue glasses; Color: each eye's channels
 // pass through its filter (red-cyan: R from L, G and B from R); HalfColor:
 // the left eye's channel is L's luma, the other eye in colour (for red-cyan;
-// for the others the eye behind the single-channel filter gets luma);
-// Gray: both eyes as luma.
+// for the others the eye behind the single-channel filter gets luma:
+// green-magenta the left, amber-blue the right eye); Gray: both eyes as luma.
+// Color/HalfColor/Gray are matrices too (luma rows: rgb_luma's BT.601
+// weights), so every anaglyph takes the one path out = Ml * L + Mr * R,
+// evaluated as (Ml row . L) + (Mr row . R), each dot left to right.
 #pragma once
 
 #include "frame.h"
@@ -70,7 +73,94 @@ P3D_HD int half_split(int n) { return (n + 1) / 2; }
 // in this header (below) so the kernel calls the very same code.
 P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y);
 
-// Whole frame. out must have pack_size()'s size and the input's format.
+// Whether pack_cpu/pack_gpu accept these arguments: enums in range, in and
+// out packed RGB of one format, in of even width >= 2 and height >= 1, out of
+// pack_size()'s size, and no view's stride shorter than its rows.
+bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameView &out);
+
+// Whole frame. out must have pack_size()'s size and the input's format;
+// throws std::invalid_argument (writing nothing) when pack_args_valid() fails.
 void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out);
+
+// ---- per-pixel implementation ----------------------------------------------
+
+namespace pack_detail {
+
+// Pixel (x, y) of the left (eye 0) or right (eye 1) view of the pair.
+P3D_HD Rgba view_pixel(const FrameView &in, bool swap_eyes, int eye, int x, int y) {
+  const int w = in.width / 2;
+  const bool right_half = (eye == 1) != swap_eyes;
+  const YuvToRgb unused;  // packed RGB only: the conversion is never applied
+  return load_rgba(in, right_half ? x + w : x, y, unused);
+}
+
+// Rounded per-channel mean: what the half formats store for a pair of samples.
+P3D_HD uint8_t mean2(uint8_t a, uint8_t b) { return static_cast<uint8_t>((a + b + 1) / 2); }
+P3D_HD Rgba mean2(Rgba a, Rgba b) { return Rgba{mean2(a.r, b.r), mean2(a.g, b.g), mean2(a.b, b.b), mean2(a.a, b.a)}; }
+
+// Row `row` of a 3x3 matrix times (r, g, b). One fixed evaluation order, so
+// the host (-ffp-contract=off) and the device (-fmad=false) round alike.
+P3D_HD float mat_row(const float *m, int row, float r, float g, float b) {
+  return m[3 * row] * r + m[3 * row + 1] * g + m[3 * row + 2] * b;
+}
+
+P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {
+  const float lr = l.r, lg = l.g, lb = l.b, rr = r.r, rg = r.g, rb = r.b;
+  Rgba o;
+  o.r = to_u8(mat_row(am.left, 0, lr, lg, lb) + mat_row(am.right, 0, rr, rg, rb));
+  o.g = to_u8(mat_row(am.left, 1, lr, lg, lb) + mat_row(am.right, 1, rr, rg, rb));
+  o.b = to_u8(mat_row(am.left, 2, lr, lg, lb) + mat_row(am.right, 2, rr, rg, rb));
+  o.a = l.a;
+  return o;
+}
+
+// A half format along one axis: output index i of an axis of n samples per
+// view holds eye 0 below half_split(n), eye 1 above; returns the eye and sets
+// the two source indices whose mean is taken (the second clamped to n - 1).
+P3D_HD int half_source(int i, int n, int *s0, int *s1) {
+  const int split = half_split(n);
+  const int eye = i < split ? 0 : 1;
+  const int j = eye == 0 ? i : i - split;
+  *s0 = 2 * j;
+  *s1 = 2 * j + 1 < n ? 2 * j + 1 : n - 1;
+  return eye;
+}
+
+}  // namespace pack_detail
+
+P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
+  using namespace pack_detail;
+  const int w = in.width / 2, h = in.height;
+  const bool sw = p.swap_eyes;
+  switch (p.layout) {
+    case PackLayout::SideBySide:
+      return X < w ? view_pixel(in, sw, 0, X, Y) : view_pixel(in, sw, 1, X - w, Y);
+    case PackLayout::TopBottom:
+      return Y < h ? view_pixel(in, sw, 0, X, Y) : view_pixel(in, sw, 1, X, Y - h);
+    case PackLayout::SideBySideHalf: {
+      int x0, x1;
+      const int eye = half_source(X, w, &x0, &x1);
+      return mean2(view_pixel(in, sw, eye, x0, Y), view_pixel(in, sw, eye, x1, Y));
+    }
+    case PackLayout::TopBottomHalf: {
+      int y0, y1;
+      const int eye = half_source(Y, h, &y0, &y1);
+      return mean2(view_pixel(in, sw, eye, X, y0), view_pixel(in, sw, eye, X, y1));
+    }
+    case PackLayout::RowInterleaved:
+      return view_pixel(in, sw, Y & 1, X, Y);
+    case PackLayout::ColumnInterleaved:
+      return view_pixel(in, sw, X & 1, X, Y);
+    case PackLayout::Checkerboard:
+      return view_pixel(in, sw, (X + Y) & 1, X, Y);
+    case PackLayout::Left:
+      return view_pixel(in, sw, 0, X, Y);
+    case PackLayout::Right:
+      return view_pixel(in, sw, 1, X, Y);
+    case PackLayout::Anaglyph:
+    default:
+      return anaglyph(am, view_pixel(in, sw, 0, X, Y), view_pixel(in, sw, 1, X, Y));
+  }
+}
 
 }  // namespace p3d

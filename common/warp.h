@@ -27,6 +27,19 @@
 // All float maths is written once in the P3D_HD helpers below; cuda/ is
 // compiled with -fmad=false so the host and the device round identically.
 //
+// Precise reading of the rules above (warp_source / warp_span / warp_key_at):
+//  * "X >= t(x) on a connected span" means t(x) <= X < t(x+1): a footprint
+//    target past t(x+1) (possible when t(x+1) - t(x) < 0.5) takes the
+//    unit-slope u, so u never runs past the span's far end.
+//  * The colour is sampled at the u stored in the winning key (1/256 pixel
+//    steps), because that is all the GPU's atomicMax keeps.
+//  * Depth is read through warp_depth(): NaN and values below 0 count as 0
+//    (far), values above 1 as 1, so every target is finite and the key's
+//    depth bits order like the value.
+//  * WarpParams are read through warp_sanitize(): max_disparity clamped to
+//    0..kMaxDisparityPercent and convergence to 0..1 (NaN -> 0). With
+//    D == 0 both views are the source, copied.
+//
 // Hole filling (only pixels with key 0 are touched):
 //  * Background (default): take the nearest non-hole pixel to the left (XL)
 //    and to the right (XR) in the same row of the rendered view; copy the
@@ -37,8 +50,12 @@
 //    neighbours (as of the previous iteration) becomes the per-channel
 //    rounded mean (sum + n/2) / n of those neighbours, and stops being a hole.
 //    Repeat until no hole is left or an iteration changes nothing (then the
-//    rest becomes black).
+//    rest becomes black). Neighbours are read back from the output view
+//    (load_rgba of the packed output), never across into the other view.
 //  * None: holes are painted kHoleColour (magenta) so they can be seen.
+// "Black" is kFillBlack (alpha 255). Background and NeighborAverage colours
+// are read back from the rendered output (load_rgba), so an RGBx/BGRx output
+// carries alpha 255 into the fill, like the GPU.
 #pragma once
 
 #include <cstdint>
@@ -53,6 +70,7 @@ enum class HoleFill : int { Background = 0, NeighborAverage = 1, None = 2 };
 constexpr float kMaxStretch = 2.f;  // a gap wider than 1 + this many pixels is a disocclusion
 constexpr Rgba kHoleColour = {255, 0, 255, 255};
 constexpr float kMaxDisparityPercent = 25.f;
+constexpr Rgba kFillBlack = {0, 0, 0, 255};
 
 struct WarpParams {
   float max_disparity = 3.f;   // percent of frame width, 0..kMaxDisparityPercent
@@ -114,10 +132,150 @@ P3D_HD Rgba sample_row(const FrameView &src, float u, int y, const YuvToRgb &m) 
   return o;
 }
 
+// ---- Helpers shared by warp_render_cpu and WarpRendererGpu -------------
+
+// The parameters the warp really runs with (see the header comment).
+P3D_HD WarpParams warp_sanitize(const WarpParams &p) {
+  WarpParams s = p;
+  s.max_disparity = p.max_disparity >= 0.f ? (p.max_disparity <= kMaxDisparityPercent ? p.max_disparity
+                                                                                       : kMaxDisparityPercent)
+                                           : 0.f;
+  s.convergence = p.convergence >= 0.f ? (p.convergence <= 1.f ? p.convergence : 1.f) : 0.f;
+  return s;
+}
+
+// Depth as the warp reads it: NaN and < 0 -> 0, > 1 -> 1.
+P3D_HD float warp_depth(float d) { return d >= 0.f ? (d <= 1.f ? d : 1.f) : 0.f; }
+
+// Shift factor an eye is rendered with: 0 (copy the source) for the eye that
+// view_shift() leaves alone and for every eye when D == 0.
+P3D_HD float warp_eye_shift(const WarpParams &sanitized, float D, int eye) {
+  return D > 0.f ? view_shift(sanitized.view, eye) : 0.f;
+}
+
+// Source pixel x of one row, placed in a view: its target t(x), its depth,
+// and the next pixel's, with whether the two are connected.
+struct WarpSource {
+  int x;
+  float t0, d0;  // pixel x
+  float t1, d1;  // pixel x+1 (= x's own values at the row's end)
+  bool connected;
+};
+
+P3D_HD WarpSource warp_source(const float *depth_row, int x, int width, float shift, float D, float convergence) {
+  WarpSource s;
+  s.x = x;
+  s.d0 = warp_depth(depth_row[x]);
+  s.t0 = warp_target(x, s.d0, shift, D, convergence);
+  s.t1 = s.t0;
+  s.d1 = s.d0;
+  s.connected = false;
+  if (x + 1 < width) {
+    s.d1 = warp_depth(depth_row[x + 1]);
+    s.t1 = warp_target(x + 1, s.d1, shift, D, convergence);
+    const float gap = s.t1 - s.t0;
+    s.connected = gap > 0.f && gap <= 1.f + kMaxStretch;
+  }
+  return s;
+}
+
+// Whether x covers target X (footprint or connected span). t0 +- 0.5f is
+// exact for |t0| < 2^23, so the footprint holds exactly one integer.
+P3D_HD bool warp_covers(const WarpSource &s, int X) {
+  const float xf = static_cast<float>(X);
+  if (xf >= s.t0 - 0.5f && xf < s.t0 + 0.5f) return true;
+  return s.connected && xf >= s.t0 && xf < s.t1;
+}
+
+// The targets x covers, clipped to the view: first..last inclusive (empty
+// when first > last). The covered set is one run starting at the footprint's
+// integer ceil(t0 - 0.5) (the span starts inside the footprint), at most
+// 2 + 1 + kMaxStretch targets long, so callers loop over it directly.
+struct WarpSpan {
+  int first, last;
+};
+
+P3D_HD WarpSpan warp_span(const WarpSource &s, int width) {
+  int X = static_cast<int>(ceilf(s.t0 - 0.5f));
+  WarpSpan r;
+  r.first = X;
+  while (warp_covers(s, X + 1)) ++X;
+  r.last = X;
+  if (r.first < 0) r.first = 0;
+  if (r.last > width - 1) r.last = width - 1;
+  return r;
+}
+
+// The z-buffer key x offers target X (X covered by x).
+P3D_HD unsigned long long warp_key_at(const WarpSource &s, int X, int width) {
+  const float xf = static_cast<float>(X);
+  const float x = static_cast<float>(s.x);
+  const float hi = static_cast<float>(width - 1);
+  if (s.connected && xf >= s.t0 && xf < s.t1) {
+    const float u = clamp_value(x + (xf - s.t0) / (s.t1 - s.t0), 0.f, hi);
+    return warp_key(s.d0 + (u - x) * (s.d1 - s.d0), u);
+  }
+  const float u = clamp_value(x + (xf - s.t0), 0.f, hi);
+  return warp_key(s.d0, u);
+}
+
+// Background fill of hole X: xl / xr are the nearest non-holes to its left /
+// right in the row (-1: none) with their keys. Returns the column whose
+// colour fills X, or -1 for black.
+P3D_HD int background_source(int X, int xl, unsigned long long key_l, int xr, unsigned long long key_r) {
+  if (xl < 0) return xr;
+  if (xr < 0) return xl;
+  const float dl = warp_key_depth(key_l), dr = warp_key_depth(key_r);
+  if (dl != dr) return dl < dr ? xl : xr;
+  return xr - X < X - xl ? xr : xl;
+}
+
+// One NeighborAverage (Jacobi) step at hole (X, y) of a view W x H that
+// starts at column col0 of the packed output `out`. mask (W x H, row pitch
+// mask_pitch bytes) is the hole mask before this step (non-zero = hole).
+// Returns false when no neighbour is filled yet; else *c is the rounded mean.
+// Neighbours are visited dy outer, dx inner (integer sums: order free).
+P3D_HD bool neighbour_average(const FrameView &out, int col0, const uint8_t *mask, size_t mask_pitch, int width,
+                              int height, int X, int y, Rgba *c) {
+  const YuvToRgb packed;  // unused for the packed output formats
+  int n = 0, r = 0, g = 0, b = 0, a = 0;
+  for (int dy = -1; dy <= 1; ++dy) {
+    const int yy = y + dy;
+    if (yy < 0 || yy >= height) continue;
+    const uint8_t *mrow = mask + static_cast<size_t>(yy) * mask_pitch;
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int xx = X + dx;
+      if ((dx == 0 && dy == 0) || xx < 0 || xx >= width || mrow[xx]) continue;
+      const Rgba p = load_rgba(out, col0 + xx, yy, packed);
+      r += p.r;
+      g += p.g;
+      b += p.b;
+      a += p.a;
+      ++n;
+    }
+  }
+  if (n == 0) return false;
+  c->r = static_cast<uint8_t>((r + n / 2) / n);
+  c->g = static_cast<uint8_t>((g + n / 2) / n);
+  c->b = static_cast<uint8_t>((b + n / 2) / n);
+  c->a = static_cast<uint8_t>((a + n / 2) / n);
+  return true;
+}
+
+// Whether the frames fit together: src W x H (W, H > 0), depth W x H, out
+// packed RGB 2W x H.
+inline bool warp_frames_fit(const FrameView &src, ImageView<const float> depth, const FrameView &out) {
+  return src.width > 0 && src.height > 0 && src.plane[0] && depth.data && depth.width == src.width &&
+         depth.height == src.height && out.plane[0] && is_packed_rgb(out.format) && out.width == 2 * src.width &&
+         out.height == src.height;
+}
+
 // Renders the stereo pair side by side into `out` (packed RGB, 2W x H: left
 // view in columns [0, W), right in [W, 2W)). A view with shift 0 is the
 // source converted (load_rgba), no warping. Returns the number of hole pixels
-// the warp left before filling (0: the fill pass did not run).
+// the warp left before filling, both views together (0: the fill pass did
+// not run), or -1 when the frames do not fit (warp_frames_fit; nothing is
+// written).
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out);
 

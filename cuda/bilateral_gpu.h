@@ -1,5 +1,13 @@
 // GPU cross-bilateral filter: the function of common/bilateral.h.
+//
+// One instance per stream: the weight tables live in this instance's device
+// memory and are rewritten (stream-ordered, cudaMemcpyAsync) only when the
+// sanitised parameters change, so calls on one instance must be ordered on
+// one stream. No host synchronisation except the one the driver may do when
+// the tables are uploaded from pageable memory (on parameter changes only).
 #pragma once
+
+#include <vector>
 
 #include "../common/bilateral.h"
 #include "cuda_check.h"
@@ -9,12 +17,18 @@ namespace p3d {
 
 class BilateralFilterGpu {
  public:
-  // guide, depth_in, depth_out: device memory; depth_in != depth_out.
+  // guide, depth_in, depth_out: device memory; depth_in != depth_out
+  // (cudaErrorInvalidValue otherwise, as for a guide or output whose size
+  // differs from depth_in). Parameters are sanitised as on the CPU
+  // (bilateral_sanitize). Empty images: no-op.
   CudaStatus run(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                  ImageView<float> depth_out, cudaStream_t stream);
 
  private:
-  DeviceBuffer tables_;  // space then range weights, uploaded when params change
+  CudaStatus upload_tables(const BilateralParams &sanitised, cudaStream_t stream);
+
+  DeviceBuffer tables_;  // range (511, symmetric) then space ((2r+1)^2) weights, uploaded when params change
+  std::vector<float> host_tables_;  // source of the last upload; outlives the async copy
   BilateralParams uploaded_{-1, 0.f, 0.f};
 };
 

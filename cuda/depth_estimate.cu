@@ -1,1 +1,411 @@
-// placeholder: implemented by the stage owner
+#include "depth_estimate_gpu.h"
+
+namespace p3d {
+
+namespace {
+
+constexpr unsigned kFullMask = 0xffffffffu;
+constexpr int kThreads = 256;        // 1-D kernels and the features kernel
+constexpr int kTile = 32;            // labels: tiles of 32 x 32 blocks ...
+constexpr int kTileRowsPerPass = 8;  // ... worked by 32 x 8 threads, 4 rows each
+constexpr int kExpandX = 32, kExpandY = 8;
+
+struct DepthDeviceState {
+  unsigned long long diff_sum;  // step 5, fixed point (temporal_diff_fixed)
+  float diff;                   // the mean, recorded for last_diff()
+  int decision;                 // TemporalDecision, recorded for last_decision()
+};
+
+unsigned grid_for(long long items, int per_block) { return static_cast<unsigned>((items + per_block - 1) / per_block); }
+
+// ---------------------------------------------------------------- step 1 ---
+// A CTA covers `per_cta` blocks side by side (per_cta * B <= 256 pixel
+// columns, one thread a column) and `rows_per_cta` block rows. Each thread sums
+// its column over a block row in integers; the first per_cta threads then add
+// their block's B columns, so every block sum is formed by one thread, exactly.
+__global__ void block_features_kernel(FrameView frame, int B, int per_cta, int rows_per_cta, int bx, int by,
+                                      float *__restrict__ features, const float *__restrict__ ref, bool have_state,
+                                      DepthDeviceState *state) {
+  __shared__ uint32_t col[3][kThreads];
+  __shared__ unsigned long long warp_diff[kThreads / 32];
+  const int t = threadIdx.x;
+  const int x = blockIdx.x * per_cta * B + t;
+  const bool column_in = t < per_cta * B && x < frame.width;
+  const int i = blockIdx.x * per_cta + t;  // the block this thread finishes (t < per_cta)
+  unsigned long long diff = 0;
+  for (int r = 0; r < rows_per_cta; ++r) {
+    const int j = blockIdx.y * rows_per_cta + r;
+    if (j >= by) break;  // uniform over the CTA
+    const int rows = block_extent(j, B, frame.height);
+    uint32_t s0 = 0, s1 = 0, s2 = 0;
+    if (column_in)
+      for (int y = j * B; y < j * B + rows; ++y) {
+        int c[3];
+        load_native3(frame, x, y, c);
+        s0 += c[0];
+        s1 += c[1];
+        s2 += c[2];
+      }
+    col[0][t] = s0;
+    col[1][t] = s1;
+    col[2][t] = s2;
+    __syncthreads();
+    if (t < per_cta && i < bx) {
+      const int cols = block_extent(i, B, frame.width);
+      uint32_t sum[3] = {0, 0, 0};
+      for (int k = t * B; k < t * B + cols; ++k)
+        for (int c = 0; c < 3; ++c) sum[c] += col[c][k];
+      const size_t base = (static_cast<size_t>(j) * bx + i) * 3;
+      for (int c = 0; c < 3; ++c) {
+        const float f = block_mean(sum[c], cols * rows);
+        features[base + c] = f;
+        if (have_state) diff += temporal_diff_fixed(f, ref[base + c]);
+      }
+    }
+    __syncthreads();
+  }
+  if (!have_state) return;  // uniform: a kernel parameter
+  for (int o = 16; o > 0; o >>= 1) diff += __shfl_down_sync(kFullMask, diff, o);
+  if ((t & 31) == 0) warp_diff[t >> 5] = diff;
+  __syncthreads();
+  if (t == 0) {
+    unsigned long long total = 0;
+    for (int w = 0; w < kThreads / 32; ++w) total += warp_diff[w];
+    if (total) atomicAdd(&state->diff_sum, total);
+  }
+}
+
+// ---------------------------------------------------------------- step 2 ---
+// Union-find shared by the tile and the border passes. Invariant: parent[i] <=
+// i, and only a root (parent[r] == r) is ever re-pointed, by atomicCAS from r
+// to a smaller root, so a root is its tree's smallest index. Path halving
+// lowers a non-root's parent to its grandparent, an ancestor either way, with
+// atomicMin so that concurrent halvings only ever move a parent up the tree
+// (and compute-sanitizer's racecheck sees no plain store racing with a load).
+// volatile: another thread's hook must be seen, not a stale L1 copy.
+__device__ int find_root(volatile int *parent, int i) {
+  while (true) {
+    const int p = parent[i];
+    if (p == i) return i;
+    const int g = parent[p];
+    if (g == p) return p;
+    atomicMin(const_cast<int *>(parent + i), g);
+    i = g;
+  }
+}
+
+__device__ void unite(volatile int *parent, int a, int b) {
+  while (true) {
+    a = find_root(parent, a);
+    b = find_root(parent, b);
+    if (a == b) return;
+    if (a > b) {
+      const int s = a;
+      a = b;
+      b = s;
+    }
+    const int old = atomicCAS(const_cast<int *>(parent + b), b, a);
+    if (old == b) return;
+    b = old;  // b was hooked meanwhile: join a with b's new tree instead
+  }
+}
+
+// After the merges: a plain walk. No path halving here, because a halving
+// store could land after the owner's final `labels[i] = root` and leave a
+// non-root label behind.
+__device__ int find_root_final(const int *parent, int i) {
+  int p;
+  while ((p = parent[i]) != i) i = p;
+  return i;
+}
+
+__device__ void load_feature(const float *__restrict__ features, int k, float out[3]) {
+  out[0] = features[static_cast<size_t>(k) * 3];
+  out[1] = features[static_cast<size_t>(k) * 3 + 1];
+  out[2] = features[static_cast<size_t>(k) * 3 + 2];
+}
+
+// Tile pass: components inside one 32x32 tile of blocks, in shared memory.
+// The local index ly*32+lx orders a tile's blocks as the global index does, so
+// the local root maps to the tile-local smallest global index. Also clears the
+// region sums that the resolve pass accumulates into.
+__global__ void tile_labels_kernel(const float *__restrict__ features, int bx, int by, float edge_threshold,
+                                   int *labels, unsigned long long *region_sums, uint32_t *region_counts) {
+  __shared__ int parent[kTile * kTile];
+  __shared__ float feat[kTile * kTile][3];
+  const int lx = threadIdx.x, x0 = blockIdx.x * kTile, y0 = blockIdx.y * kTile;
+  const int gx = x0 + lx;
+  for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
+    const int l = ly * kTile + lx, gy = y0 + ly;
+    parent[l] = l;
+    if (gx < bx && gy < by) load_feature(features, gy * bx + gx, feat[l]);
+  }
+  __syncthreads();
+  for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
+    const int l = ly * kTile + lx, gy = y0 + ly;
+    if (gx >= bx || gy >= by) continue;
+    if (lx > 0 && blocks_joined(feat[l], feat[l - 1], edge_threshold)) unite(parent, l, l - 1);
+    if (ly > 0 && blocks_joined(feat[l], feat[l - kTile], edge_threshold)) unite(parent, l, l - kTile);
+  }
+  __syncthreads();
+  for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
+    const int l = ly * kTile + lx, gy = y0 + ly;
+    if (gx >= bx || gy >= by) continue;
+    const int root = find_root(parent, l);
+    const int g = gy * bx + gx;
+    labels[g] = (y0 + root / kTile) * bx + x0 + root % kTile;
+    region_sums[g] = 0;
+    region_counts[g] = 0;
+  }
+}
+
+// Border pass: one thread per 4-neighbour pair that crosses a tile border
+// (first the vertical borders, row-major, then the horizontal ones).
+__global__ void border_labels_kernel(const float *__restrict__ features, int bx, int by, float edge_threshold,
+                                     int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
+  const long long e = static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (e >= pairs) return;
+  int a, b;
+  if (e < vertical_pairs) {
+    const int gy = static_cast<int>(e / (tiles_x - 1));
+    const int gx = static_cast<int>(e % (tiles_x - 1) + 1) * kTile;
+    b = gy * bx + gx;
+    a = b - 1;
+  } else {
+    const long long h = e - vertical_pairs;
+    const int gy = static_cast<int>(h / bx + 1) * kTile;
+    const int gx = static_cast<int>(h % bx);
+    b = gy * bx + gx;
+    a = b - bx;
+  }
+  float fa[3], fb[3];
+  load_feature(features, a, fa);
+  load_feature(features, b, fb);
+  if (blocks_joined(fa, fb, edge_threshold)) unite(labels, a, b);
+}
+
+// ------------------------------------------------------------- steps 3-4 ---
+// The merges are done: every block takes its root as label, and adds its hq
+// to the root's sum. Integer atomics make the sums exact in any order; they are
+// aggregated first (a whole CTA when it lies in one region, the common case,
+// else per warp and label) because a large region would otherwise put every
+// block's atomic on one address.
+__global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int height, Hypothesis hypothesis,
+                               unsigned long long *region_sums, uint32_t *region_counts) {
+  __shared__ int cta_root;
+  __shared__ uint32_t warp_sum[kThreads / 32], warp_count[kThreads / 32];
+  const int i = blockIdx.x * kThreads + threadIdx.x;
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+  const bool valid = i < n;
+  int root = -1;
+  uint32_t hq = 0;
+  if (valid) {
+    root = find_root_final(labels, i);
+    if (root != labels[i]) labels[i] = root;
+    hq = block_hypothesis_q(hypothesis, i % bx, i / bx, B, width, height);
+  }
+  if (threadIdx.x == 0) cta_root = root;  // thread 0 is always valid
+  __syncthreads();
+  if (__syncthreads_and(!valid || root == cta_root)) {
+    const uint32_t s = __reduce_add_sync(kFullMask, hq);  // <= 256 * 65535: no overflow
+    const uint32_t c = __popc(__ballot_sync(kFullMask, valid));
+    if (lane == 0) {
+      warp_sum[warp] = s;
+      warp_count[warp] = c;
+    }
+    __syncthreads();
+    if (threadIdx.x == 0) {
+      uint32_t total = 0, count = 0;
+      for (int w = 0; w < kThreads / 32; ++w) {
+        total += warp_sum[w];
+        count += warp_count[w];
+      }
+      atomicAdd(&region_sums[cta_root], static_cast<unsigned long long>(total));
+      atomicAdd(&region_counts[cta_root], count);
+    }
+    return;
+  }
+  // One round per distinct label in the warp; all 32 lanes take part in every
+  // round, so the full-mask warp intrinsics are well defined.
+  unsigned pending = __ballot_sync(kFullMask, valid);
+  while (pending) {
+    const int leader = __ffs(pending) - 1;
+    const int r = __shfl_sync(kFullMask, root, leader);
+    const bool mine = valid && root == r;
+    const unsigned group = __ballot_sync(kFullMask, mine);
+    const uint32_t s = __reduce_add_sync(kFullMask, mine ? hq : 0u);
+    if (lane == leader) {
+      atomicAdd(&region_sums[r], static_cast<unsigned long long>(s));
+      atomicAdd(&region_counts[r], static_cast<uint32_t>(__popc(group)));
+    }
+    pending &= ~group;
+  }
+}
+
+// ------------------------------------------------------------- steps 4-5 ---
+__global__ void block_depth_kernel(const int *__restrict__ labels, const unsigned long long *__restrict__ region_sums,
+                                   const uint32_t *__restrict__ region_counts, const float *__restrict__ features,
+                                   float *__restrict__ ref, float *__restrict__ block_depth, DepthDeviceState *state,
+                                   DepthParams params, bool have_state, int n, int bx, int B, int width, int height) {
+  const int i = blockIdx.x * kThreads + threadIdx.x;
+  if (i >= n) return;
+  const float diff = have_state ? temporal_mean_diff(state->diff_sum, 3LL * n) : 0.f;
+  const TemporalDecision decision = temporal_decision(have_state, diff, params);
+  if (i == 0) {
+    state->diff = diff;
+    state->decision = static_cast<int>(decision);
+  }
+  if (decision == TemporalDecision::Reuse) return;  // previous depth and reference stay
+  const int label = labels[i];
+  const uint32_t hq = block_hypothesis_q(params.hypothesis, i % bx, i / bx, B, width, height);
+  const float fresh = block_depth_value(params.region_weight, region_sums[label], region_counts[label], hq);
+  const float prev = decision == TemporalDecision::Smooth ? block_depth[i] : 0.f;  // a cut never reads stale memory
+  block_depth[i] = temporal_output(decision, prev, fresh, params.temporal_smoothing);
+  for (int c = 0; c < 3; ++c) ref[static_cast<size_t>(i) * 3 + c] = features[static_cast<size_t>(i) * 3 + c];
+}
+
+// ---------------------------------------------------------------- step 6 ---
+__global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int B, int width, int height,
+                              ImageView<float> depth) {
+  const int x = blockIdx.x * kExpandX + threadIdx.x, y = blockIdx.y * kExpandY + threadIdx.y;
+  if (x >= width || y >= height) return;
+  depth.at(x, y) = block_depth[static_cast<size_t>(y / B) * bx + x / B];
+}
+
+__global__ void depth_from_grey_kernel(FrameView grey, YuvToRgb m, int width, int height, ImageView<float> depth) {
+  const int x = blockIdx.x * kExpandX + threadIdx.x, y = blockIdx.y * kExpandY + threadIdx.y;
+  if (x >= width || y >= height) return;
+  depth.at(x, y) = depth_from_grey(grey, x, y, m);
+}
+
+}  // namespace
+
+void DepthEstimatorGpu::reset() { have_state_ = false; }
+
+CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, ImageView<float> depth,
+                                       cudaStream_t stream) {
+  const int B = effective_block_size(params), W = frame.width, H = frame.height;
+  if (W <= 0 || H <= 0) {
+    reset();
+    return {};
+  }
+  const int bx = blocks_along(W, B), by = blocks_along(H, B);
+  const int n = bx * by;
+  const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;
+  // Until this frame is fully queued the history is not trustworthy: a failure
+  // part-way makes the next frame a cut.
+  have_state_ = false;
+  const size_t nb = static_cast<size_t>(n);
+  P3D_CUDA_TRY_STATUS(features_.ensure(nb * 3 * sizeof(float)));
+  P3D_CUDA_TRY_STATUS(ref_features_.ensure(nb * 3 * sizeof(float)));
+  P3D_CUDA_TRY_STATUS(labels_.ensure(nb * sizeof(int)));
+  P3D_CUDA_TRY_STATUS(region_sums_.ensure(nb * sizeof(unsigned long long)));
+  P3D_CUDA_TRY_STATUS(region_counts_.ensure(nb * sizeof(uint32_t)));
+  P3D_CUDA_TRY_STATUS(block_depth_.ensure(nb * sizeof(float)));
+  P3D_CUDA_TRY_STATUS(state_.ensure(sizeof(DepthDeviceState)));
+  auto *state = state_.as<DepthDeviceState>();
+  P3D_CUDA_TRY(cudaMemsetAsync(state, 0, sizeof(DepthDeviceState), stream));
+
+  // Step 1 (+ the difference sum of step 5). ~16 pixel rows a CTA, so that
+  // small blocks do not make one atomic per handful of pixels.
+  const int per_cta = kThreads / B, rows_per_cta = B >= 16 ? 1 : 16 / B;
+  block_features_kernel<<<dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0, stream>>>(
+      frame, B, per_cta, rows_per_cta, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid, state);
+  P3D_CUDA_TRY_LAUNCH(block_features_kernel);
+
+  // Step 2.
+  const int tiles_x = blocks_along(bx, kTile), tiles_y = blocks_along(by, kTile);
+  tile_labels_kernel<<<dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream>>>(
+      features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(),
+      region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>());
+  P3D_CUDA_TRY_LAUNCH(tile_labels_kernel);
+  const long long vertical_pairs = static_cast<long long>(tiles_x - 1) * by;
+  const long long pairs = vertical_pairs + static_cast<long long>(tiles_y - 1) * bx;
+  if (pairs > 0) {
+    border_labels_kernel<<<grid_for(pairs, kThreads), kThreads, 0, stream>>>(
+        features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(), tiles_x, vertical_pairs, pairs);
+    P3D_CUDA_TRY_LAUNCH(border_labels_kernel);
+  }
+
+  // Steps 3-4.
+  resolve_kernel<<<grid_for(n, kThreads), kThreads, 0, stream>>>(labels_.as<int>(), n, bx, B, W, H, params.hypothesis,
+                                                                 region_sums_.as<unsigned long long>(),
+                                                                 region_counts_.as<uint32_t>());
+  P3D_CUDA_TRY_LAUNCH(resolve_kernel);
+
+  // Steps 4-5.
+  block_depth_kernel<<<grid_for(n, kThreads), kThreads, 0, stream>>>(
+      labels_.as<int>(), region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(), features_.as<float>(),
+      ref_features_.as<float>(), block_depth_.as<float>(), state, params, same_grid, n, bx, B, W, H);
+  P3D_CUDA_TRY_LAUNCH(block_depth_kernel);
+
+  // Step 6.
+  const int ew = depth.width < bx * B ? depth.width : bx * B, eh = depth.height < by * B ? depth.height : by * B;
+  if (!depth.empty()) {
+    expand_kernel<<<dim3(grid_for(ew, kExpandX), grid_for(eh, kExpandY)), dim3(kExpandX, kExpandY), 0, stream>>>(
+        block_depth_.as<float>(), bx, B, ew, eh, depth);
+    P3D_CUDA_TRY_LAUNCH(expand_kernel);
+  }
+
+  have_state_ = true;
+  bx_ = bx;
+  by_ = by;
+  block_ = B;
+  width_ = W;
+  height_ = H;
+  return {};
+}
+
+CudaStatus DepthEstimatorGpu::download_labels(std::vector<int> &labels, cudaStream_t stream) const {
+  P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+  labels.resize(static_cast<size_t>(bx_) * by_);
+  if (!labels.empty())
+    P3D_CUDA_TRY(cudaMemcpy(labels.data(), labels_.get(), labels.size() * sizeof(int), cudaMemcpyDeviceToHost));
+  return {};
+}
+
+CudaStatus DepthEstimatorGpu::download_block_depth(std::vector<float> &block_depth, cudaStream_t stream) const {
+  P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+  block_depth.resize(static_cast<size_t>(bx_) * by_);
+  if (!block_depth.empty())
+    P3D_CUDA_TRY(cudaMemcpy(block_depth.data(), block_depth_.get(), block_depth.size() * sizeof(float),
+                            cudaMemcpyDeviceToHost));
+  return {};
+}
+
+namespace {
+
+CudaStatus download_state(const DeviceBuffer &buf, DepthDeviceState *out, cudaStream_t stream) {
+  P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+  *out = DepthDeviceState{0, 0.f, static_cast<int>(TemporalDecision::Cut)};
+  if (buf.get()) P3D_CUDA_TRY(cudaMemcpy(out, buf.get(), sizeof(DepthDeviceState), cudaMemcpyDeviceToHost));
+  return {};
+}
+
+}  // namespace
+
+CudaStatus DepthEstimatorGpu::last_decision(TemporalDecision *decision, cudaStream_t stream) const {
+  DepthDeviceState s;
+  P3D_CUDA_TRY_STATUS(download_state(state_, &s, stream));
+  *decision = static_cast<TemporalDecision>(s.decision);
+  return {};
+}
+
+CudaStatus DepthEstimatorGpu::last_diff(float *diff, cudaStream_t stream) const {
+  DepthDeviceState s;
+  P3D_CUDA_TRY_STATUS(download_state(state_, &s, stream));
+  *diff = s.diff;
+  return {};
+}
+
+CudaStatus depth_from_grey_gpu(const FrameView &grey, const YuvToRgb &m, ImageView<float> depth, cudaStream_t stream) {
+  const int w = depth.width < grey.width ? depth.width : grey.width;
+  const int h = depth.height < grey.height ? depth.height : grey.height;
+  if (depth.empty() || w <= 0 || h <= 0) return {};
+  depth_from_grey_kernel<<<dim3(grid_for(w, kExpandX), grid_for(h, kExpandY)), dim3(kExpandX, kExpandY), 0, stream>>>(
+      grey, m, w, h, depth);
+  P3D_CUDA_TRY_LAUNCH(depth_from_grey_kernel);
+  return {};
+}
+
+}  // namespace p3d

@@ -1,6 +1,22 @@
 // GPU depth estimation: the function of common/depth_estimate.h. Stateful
 // like DepthEstimatorCpu (temporal history stays on the device; the
 // reuse/smooth/cut decision is taken on the device, so no host sync).
+//
+// One estimate() queues, on the given stream and without host sync:
+//   memset    the fixed-point |difference| sum in the device state
+//   features  block sums in integers -> means (step 1), and each block's
+//             |feature - reference| added to the device sum (step 5)
+//   labels    union-find in shared memory per 32x32 tile of blocks, then
+//             across tile borders (atomicCAS hooking: a root only ever points
+//             to a smaller index, so roots are the smallest index, step 2)
+//   resolve   every block's root, and the region sums of hq with 64-bit
+//             integer atomics (steps 3-4, exact)
+//   depth     step 4 and the temporal step: every thread derives the decision
+//             from the device sum (same input, same function, same answer),
+//             thread 0 records it in the device state; the reference features
+//             are updated unless the frame is reused
+//   expand    block depth -> full-resolution float depth (step 6)
+// Buffers are DeviceBuffer members grown when the block grid grows.
 #pragma once
 
 #include <vector>
@@ -21,9 +37,18 @@ class DepthEstimatorGpu {
   CudaStatus download_labels(std::vector<int> &labels, cudaStream_t stream) const;
   CudaStatus download_block_depth(std::vector<float> &block_depth, cudaStream_t stream) const;
   CudaStatus last_decision(TemporalDecision *decision, cudaStream_t stream) const;
+  // Mean |feature difference| of the last frame (as DepthEstimatorCpu::last_diff()).
+  CudaStatus last_diff(float *diff, cudaStream_t stream) const;
+
+  int blocks_x() const { return bx_; }
+  int blocks_y() const { return by_; }
 
  private:
-  DeviceBuffer sums_, features_, ref_features_, labels_, region_sums_, block_depth_, prev_block_depth_, state_;
+  // features_/ref_features_: 3 floats a block; labels_: int a block (the
+  // union-find forest, then the labels); region_sums_: uint64 a block;
+  // region_counts_: uint32 a block; block_depth_: float a block, the output
+  // of the last frame; state_: DepthDeviceState (depth_estimate.cu).
+  DeviceBuffer features_, ref_features_, labels_, region_sums_, region_counts_, block_depth_, state_;
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   bool have_state_ = false;
 };

@@ -7,6 +7,9 @@
 namespace p3d {
 
 // in, out: device memory, packed RGB of one format; out sized by pack_size().
+// Asynchronous on `stream`; no allocation, no state. Returns
+// cudaErrorInvalidValue (launching nothing) when pack_args_valid() fails.
+// Bit-identical to pack_cpu(): both call pack_pixel().
 CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream);
 
 }  // namespace p3d

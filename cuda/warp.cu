@@ -1,1 +1,372 @@
-// placeholder: implemented by the stage owner
+// GPU DIBR warp (cuda/warp_gpu.h): kernels and the host launcher. Every
+// per-pixel decision calls the P3D_HD helpers of common/warp.h.
+//
+// Rows are independent for everything but NeighborAverage, so one block
+// renders one output row, both eyes, from start to end: the source row is
+// converted to RGBA once into shared memory, the z-buffer lives in shared
+// memory (global memory only for rows too wide for it), scatter, resolve and
+// the Background fill follow each other behind __syncthreads, and nothing
+// but the depth row, the source row and the output row touches DRAM.
+#include "warp_gpu.h"
+
+#include <climits>
+#include <utility>
+
+namespace p3d {
+namespace {
+
+constexpr unsigned kFullMask = 0xffffffffu;
+constexpr int kBlockX = 32;  // NeighborAverage kernels: one warp = one row segment
+constexpr int kBlockY = 8;
+
+// The eyes' shift factors (0: copy the source).
+struct EyeShifts {
+  float shift[2];
+};
+
+// Layout of counters_: total hole count, then the per-step fill counts of
+// one NeighborAverage batch.
+constexpr size_t kTotalOffset = 0;
+constexpr size_t kFilledOffset = sizeof(unsigned long long);
+constexpr size_t kCountersBytes = kFilledOffset + sizeof(unsigned) * kWarpFillBatch;
+
+// Dynamic shared memory of the row kernel: [keys: W x u64 when in shared
+// memory] [the source row, W x RGBA] [four int arrays of one entry per
+// 32-pixel chunk].
+__host__ __device__ int row_chunks(int W) { return (W + 31) / 32; }
+size_t row_smem_bytes(int W, bool shared_keys) {
+  return (shared_keys ? sizeof(unsigned long long) * W : 0) + 4 * static_cast<size_t>(W) +
+         4 * sizeof(int) * static_cast<size_t>(row_chunks(W));
+}
+
+// Per-chunk first and last non-hole (INT_MAX / -1: none), one warp per chunk.
+__device__ void chunk_extremes(const unsigned long long *keys, int W, int chunks, int *first, int *last) {
+  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
+  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
+    const int X = c * 32 + lane;
+    const unsigned nonhole = __ballot_sync(kFullMask, X < W && keys[X] != 0);
+    if (lane == 0) {
+      first[c] = nonhole ? c * 32 + __ffs(nonhole) - 1 : INT_MAX;
+      last[c] = nonhole ? c * 32 + 31 - __clz(nonhole) : -1;
+    }
+  }
+}
+
+// Warp 0: before[c] = last non-hole of the chunks left of c (-1: none),
+// after[c] = first non-hole of the chunks right of c (-1: none). Warp-wide
+// inclusive scans over 32 chunks at a time, carrying between them.
+__device__ void chunk_neighbours(int chunks, const int *first, const int *last, int *before, int *after) {
+  const int lane = threadIdx.x & 31;
+  int carry = -1;
+  for (int base = 0; base < chunks; base += 32) {
+    const int c = base + lane;
+    int v = c < chunks ? last[c] : -1;
+    for (int o = 1; o < 32; o <<= 1) {
+      const int n = __shfl_up_sync(kFullMask, v, o);
+      if (lane >= o) v = max(v, n);
+    }
+    v = max(v, carry);
+    int excl = __shfl_up_sync(kFullMask, v, 1);
+    if (lane == 0) excl = carry;
+    if (c < chunks) before[c] = excl;
+    carry = __shfl_sync(kFullMask, v, 31);
+  }
+  carry = INT_MAX;
+  for (int top = chunks - 1; top >= 0; top -= 32) {
+    const int c = top - lane;
+    int v = c >= 0 ? first[c] : INT_MAX;
+    for (int o = 1; o < 32; o <<= 1) {
+      const int n = __shfl_up_sync(kFullMask, v, o);
+      if (lane >= o) v = min(v, n);
+    }
+    v = min(v, carry);
+    int excl = __shfl_up_sync(kFullMask, v, 1);
+    if (lane == 0) excl = carry;
+    if (c >= 0) after[c] = excl == INT_MAX ? -1 : excl;
+    carry = __shfl_sync(kFullMask, v, 31);
+  }
+}
+
+// Background fill of one row whose keys are final and whose non-hole
+// colours are in `out`: each hole's nearest non-holes come from its chunk's
+// ballot or, past the chunk, from before/after.
+__device__ void background_fill_row(const FrameView &out, int col0, int y, const unsigned long long *keys, int W,
+                                    int chunks, const int *before, const int *after) {
+  const YuvToRgb packed;
+  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
+  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
+    const int X = c * 32 + lane;
+    const bool in = X < W;
+    const unsigned long long key = in ? keys[X] : 0ull;
+    const unsigned nonhole = __ballot_sync(kFullMask, in && key != 0);
+    if (!in || key != 0) continue;
+    const unsigned below = nonhole & ((1u << lane) - 1u);
+    const unsigned above = nonhole & ~((2u << lane) - 1u);
+    const int xl = below ? c * 32 + 31 - __clz(below) : before[c];
+    const int xr = above ? c * 32 + __ffs(above) - 1 : after[c];
+    const int pick = background_source(X, xl, xl >= 0 ? keys[xl] : 0ull, xr, xr >= 0 ? keys[xr] : 0ull);
+    store_rgba(out, col0 + X, y, pick >= 0 ? load_rgba(out, col0 + pick, y, packed) : kFillBlack);
+  }
+}
+
+// What one block works on: output row y, its converted source row in shared
+// memory, its z-buffer, the chunk arrays of the Background fill.
+struct RowJob {
+  FrameView out;
+  FrameView row;  // the source row as RGBA bytes in shared memory (y = 0)
+  EyeShifts eyes;
+  float D, convergence;
+  HoleFill fill;
+  const float *depth_row;
+  unsigned long long *keys;
+  int *first, *last, *before, *after;
+  uint8_t *mask;  // NeighborAverage masks (2 eyes x H x W), or null
+  unsigned long long *total;
+  int y, W, H, chunks;
+};
+
+// Renders one eye of the row; every thread of the block calls it.
+__device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
+  const int col0 = eye * j.W;
+  const float shift = j.eyes.shift[eye];
+  const YuvToRgb packed;  // j.row is RGBA
+  uint8_t *mask_row = j.mask ? j.mask + (static_cast<size_t>(eye) * j.H + j.y) * j.W : nullptr;
+  if (shift == 0.f) {  // this eye is the source
+    for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
+      store_rgba(j.out, col0 + x, j.y, load_rgba(j.row, x, 0, packed));
+      if (mask_row) mask_row[x] = 0;
+    }
+    return;
+  }
+  __syncthreads();  // the previous eye is done with keys and row_holes
+  if (threadIdx.x == 0) *row_holes = 0;
+  for (int X = threadIdx.x; X < j.W; X += blockDim.x) j.keys[X] = 0ull;
+  __syncthreads();
+
+  for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
+    const WarpSource s = warp_source(j.depth_row, x, j.W, shift, j.D, j.convergence);
+    const WarpSpan span = warp_span(s, j.W);
+    for (int X = span.first; X <= span.last; ++X) atomicMax(j.keys + X, warp_key_at(s, X, j.W));
+  }
+  __syncthreads();
+
+  // sample_row on the RGBA copy reads exactly the load_rgba() values of the
+  // source that the CPU's sample_row reads.
+  int holes = 0;
+  for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
+    const unsigned long long key = j.keys[X];
+    if (key != 0) {
+      store_rgba(j.out, col0 + X, j.y, sample_row(j.row, warp_key_u(key), 0, packed));
+    } else {
+      ++holes;
+      if (j.fill == HoleFill::None) store_rgba(j.out, col0 + X, j.y, kHoleColour);
+    }
+    if (mask_row) mask_row[X] = key == 0 ? 1 : 0;
+  }
+  if (holes) atomicAdd(row_holes, holes);
+  __syncthreads();  // also publishes this row's colours to the fill below
+  const int row_total = *row_holes;
+  if (row_total == 0) return;  // block-uniform
+  if (threadIdx.x == 0) atomicAdd(j.total, static_cast<unsigned long long>(row_total));
+  if (j.fill != HoleFill::Background) return;
+
+  chunk_extremes(j.keys, j.W, j.chunks, j.first, j.last);
+  __syncthreads();
+  if (threadIdx.x < 32) chunk_neighbours(j.chunks, j.first, j.last, j.before, j.after);
+  __syncthreads();
+  background_fill_row(j.out, col0, j.y, j.keys, j.W, j.chunks, j.before, j.after);
+}
+
+// One block = output row blockIdx.x, both eyes one after the other, so the
+// source row is converted once. kSharedKeys: the z-buffer in shared memory,
+// else in global_keys (one W-key row per block).
+template <bool kSharedKeys>
+__global__ void warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out,
+                                EyeShifts eyes, float D, float convergence, HoleFill fill,
+                                unsigned long long *global_keys, uint8_t *mask, unsigned long long *total) {
+  extern __shared__ unsigned long long smem[];
+  __shared__ int row_holes;
+  RowJob j;
+  j.y = blockIdx.x;
+  j.W = src.width;
+  j.H = src.height;
+  j.chunks = row_chunks(j.W);
+  j.out = out;
+  j.eyes = eyes;
+  j.D = D;
+  j.convergence = convergence;
+  j.fill = fill;
+  j.depth_row = depth.row(j.y);
+  j.keys = kSharedKeys ? smem : global_keys + static_cast<size_t>(j.y) * j.W;
+  uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? smem + j.W : smem);
+  j.first = reinterpret_cast<int *>(rgba + 4 * static_cast<size_t>(j.W));
+  j.last = j.first + j.chunks;
+  j.before = j.last + j.chunks;
+  j.after = j.before + j.chunks;
+  j.mask = mask;
+  j.total = total;
+  j.row.format = PixelFormat::RGBA;
+  j.row.width = j.W;
+  j.row.height = 1;
+  j.row.plane[0] = rgba;
+  j.row.stride[0] = 4 * j.W;
+
+  for (int x = threadIdx.x; x < j.W; x += blockDim.x) store_rgba(j.row, x, 0, load_rgba(src, x, j.y, m));
+  __syncthreads();
+  render_eye(j, 0, &row_holes);
+  render_eye(j, 1, &row_holes);
+}
+
+// One Jacobi step of NeighborAverage over both eyes: reads mask_in and the
+// colours of pixels that mask_in says are filled (never written in this
+// step), writes the new mask for every pixel.
+__global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint8_t *mask_in, uint8_t *mask_out,
+                                         unsigned *filled) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x;
+  const int y = blockIdx.y * blockDim.y + threadIdx.y;
+  const int eye = blockIdx.z;
+  bool done = false;
+  if (x < W && y < H) {
+    const size_t plane = static_cast<size_t>(W) * H;
+    const size_t i = eye * plane + static_cast<size_t>(y) * W + x;
+    uint8_t still = 0;
+    if (mask_in[i]) {
+      Rgba c;
+      if (neighbour_average(out, eye * W, mask_in + eye * plane, W, W, H, x, y, &c)) {
+        store_rgba(out, eye * W + x, y, c);
+        done = true;
+      } else {
+        still = 1;
+      }
+    }
+    mask_out[i] = still;
+  }
+  const unsigned ballot = __ballot_sync(kFullMask, done);  // every lane gets here
+  if ((threadIdx.x & 31) == 0 && ballot != 0) atomicAdd(filled, static_cast<unsigned>(__popc(ballot)));
+}
+
+__global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *mask) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x;
+  const int y = blockIdx.y * blockDim.y + threadIdx.y;
+  const int eye = blockIdx.z;
+  if (x >= W || y >= H) return;
+  if (mask[(static_cast<size_t>(eye) * H + y) * W + x]) store_rgba(out, eye * W + x, y, kFillBlack);
+}
+
+dim3 pixel_grid(int W, int H) { return dim3((W + kBlockX - 1) / kBlockX, (H + kBlockY - 1) / kBlockY, 2); }
+
+struct RowLaunch {
+  FrameView src;
+  YuvToRgb m;
+  ImageView<const float> depth;
+  FrameView out;
+  EyeShifts eyes;
+  float D, convergence;
+  HoleFill fill;
+  unsigned long long *global_keys;
+  uint8_t *mask;
+  unsigned long long *total;
+  size_t smem;
+  cudaStream_t stream;
+};
+
+template <bool kSharedKeys>
+CudaStatus launch_rows(const RowLaunch &l) {
+  if (l.smem > 48 * 1024)  // the default dynamic shared memory limit
+    P3D_CUDA_TRY(cudaFuncSetAttribute(warp_row_kernel<kSharedKeys>, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                      static_cast<int>(l.smem)));
+  const int threads = l.src.width > 1024 ? 512 : 256;
+  warp_row_kernel<kSharedKeys><<<l.src.height, threads, l.smem, l.stream>>>(
+      l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence, l.fill, l.global_keys, l.mask, l.total);
+  P3D_CUDA_TRY_LAUNCH(warp_row_kernel);
+  return {};
+}
+
+CudaStatus invalid_frames() {
+  return CudaStatus{cudaErrorInvalidValue, "warp_frames_fit(src, depth, out)", __FILE__, __LINE__};
+}
+
+}  // namespace
+
+CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                                   ImageView<const float> depth, const FrameView &out, cudaStream_t stream,
+                                   long long *holes_out) {
+  if (!warp_frames_fit(src, depth, out)) return invalid_frames();
+  const WarpParams p = warp_sanitize(params);
+  const int W = src.width, H = src.height;
+  const float D = disparity_scale(p, W);
+  const EyeShifts eyes{{warp_eye_shift(p, D, 0), warp_eye_shift(p, D, 1)}};
+  const bool average = p.fill == HoleFill::NeighborAverage;
+
+  if (smem_optin_ < 0) {
+    int dev = 0;
+    P3D_CUDA_TRY(cudaGetDevice(&dev));
+    P3D_CUDA_TRY(cudaDeviceGetAttribute(&smem_optin_, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+  }
+  // 64 bytes: room for the kernel's static __shared__ counter.
+  const bool shared_keys = row_smem_bytes(W, true) + 64 <= static_cast<size_t>(smem_optin_);
+  const size_t smem = row_smem_bytes(W, shared_keys);
+  if (smem + 64 > static_cast<size_t>(smem_optin_))  // rows wider than ~50000 pixels on Hopper
+    return CudaStatus{cudaErrorInvalidValue, "row_smem_bytes(W) <= cudaDevAttrMaxSharedMemoryPerBlockOptin", __FILE__,
+                      __LINE__};
+  if (!shared_keys) P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(unsigned long long)));
+  if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
+  P3D_CUDA_TRY_STATUS(counters_.ensure(kCountersBytes));
+  uint8_t *counters = counters_.as<uint8_t>();
+  auto *total = reinterpret_cast<unsigned long long *>(counters + kTotalOffset);
+  P3D_CUDA_TRY(cudaMemsetAsync(counters, 0, kCountersBytes, stream));
+
+  uint8_t *mask = average ? scratch_.as<uint8_t>() : nullptr;
+  const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill, keys_.as<unsigned long long>(), mask,
+                         total, smem, stream};
+  P3D_CUDA_TRY_STATUS(shared_keys ? launch_rows<true>(launch) : launch_rows<false>(launch));
+  if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
+
+  if (holes_out) {
+    unsigned long long h = 0;
+    P3D_CUDA_TRY(cudaMemcpyAsync(&h, total, sizeof(h), cudaMemcpyDeviceToHost, stream));
+    P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+    *holes_out = static_cast<long long>(h);
+  }
+  return {};
+}
+
+// NeighborAverage driver: batches of kWarpFillBatch Jacobi steps; the host
+// reads the batch's per-step fill counts (one stream sync per batch) and
+// stops once no hole is left or a step filled nothing. Steps after such a
+// step are no-ops (masks copied), so running the rest of a batch is harmless.
+CudaStatus WarpRendererGpu::neighbour_average(const FrameView &out, int W, int H, cudaStream_t stream) {
+  uint8_t *counters = counters_.as<uint8_t>();
+  auto *filled = reinterpret_cast<unsigned *>(counters + kFilledOffset);
+  unsigned long long total = 0;
+  P3D_CUDA_TRY(cudaMemcpyAsync(&total, counters + kTotalOffset, sizeof(total), cudaMemcpyDeviceToHost, stream));
+  P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+
+  const size_t masks = 2 * static_cast<size_t>(W) * H;
+  uint8_t *cur = scratch_.as<uint8_t>(), *next = cur + masks;
+  long long remaining = static_cast<long long>(total);
+  bool stuck = false;
+  while (remaining > 0 && !stuck) {
+    P3D_CUDA_TRY(cudaMemsetAsync(filled, 0, sizeof(unsigned) * kWarpFillBatch, stream));
+    for (int i = 0; i < kWarpFillBatch; ++i) {
+      neighbour_average_kernel<<<pixel_grid(W, H), dim3(kBlockX, kBlockY), 0, stream>>>(out, W, H, cur, next,
+                                                                                      filled + i);
+      P3D_CUDA_TRY_LAUNCH(neighbour_average_kernel);
+      std::swap(cur, next);
+    }
+    unsigned counts[kWarpFillBatch] = {};
+    P3D_CUDA_TRY(cudaMemcpyAsync(counts, filled, sizeof(counts), cudaMemcpyDeviceToHost, stream));
+    P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+    for (int i = 0; i < kWarpFillBatch && !stuck; ++i) {
+      remaining -= counts[i];
+      stuck = counts[i] == 0;
+    }
+  }
+  if (remaining > 0) {
+    paint_holes_kernel<<<pixel_grid(W, H), dim3(kBlockX, kBlockY), 0, stream>>>(out, W, H, cur);
+    P3D_CUDA_TRY_LAUNCH(paint_holes_kernel);
+  }
+  return {};
+}
+
+}  // namespace p3d

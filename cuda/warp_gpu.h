@@ -1,4 +1,23 @@
-// GPU DIBR warp and hole filling: the function of common/warp.h.
+// GPU DIBR warp and hole filling: the function of common/warp.h, bit-exact
+// with warp_render_cpu (same P3D_HD helpers, -fmad=false; the z-buffer max
+// is order independent, so atomicMax gives the CPU's sequential result).
+//
+// Per frame, all on `stream`: one block per output row y renders both eyes
+// of it: the source row is converted once (load_rgba) into shared memory,
+// then per warped eye it clears its z-buffer (shared memory; global memory
+// only for rows too wide for it, about 28000 pixels on Hopper; rows wider
+// than about 50000 pixels are refused with cudaErrorInvalidValue), scatters
+// the depth row (atomicMax on 64-bit keys), resolves colours and holes
+// (kHoleColour for fill=None), adds the row's holes to a device counter and,
+// for Background, fills the row's holes: per-32-pixel-chunk ballots plus a
+// chunk-level prefix max / suffix min give each hole its nearest non-holes,
+// O(W) per row, no host sync. An eye with shift 0 is copied.
+//  * NeighborAverage: afterwards, Jacobi steps ping-ponging two hole masks,
+//    in batches of kWarpFillBatch steps; after each batch the host reads the
+//    per-step fill counts (a stream sync) to stop when no hole is left or a
+//    step filled nothing (what is left is then painted kFillBlack).
+// Buffers grow on demand and are reused: no per-frame allocation once the
+// largest frame has been seen. One renderer serves one stream at a time.
 #pragma once
 
 #include "../common/warp.h"
@@ -7,16 +26,27 @@
 
 namespace p3d {
 
+// NeighborAverage steps launched between two host checks of the counters.
+constexpr int kWarpFillBatch = 8;
+
 class WarpRendererGpu {
  public:
   // src, depth, out: device memory (out is packed RGB, 2W x H). If
   // holes_out is not null, the hole count is copied back (a stream sync).
   // fill=NeighborAverage synchronises to test for remaining holes.
+  // Frames that do not fit (warp_frames_fit) give cudaErrorInvalidValue and
+  // nothing is launched.
   CudaStatus render(const WarpParams &params, const FrameView &src, const YuvToRgb &m, ImageView<const float> depth,
                     const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr);
 
  private:
+  CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
+
+  // keys_: 2 eyes x H x W keys, only for rows too wide for shared memory.
+  // counters_: total holes, per-step fill counts. scratch_: the two
+  // NeighborAverage hole masks (2 eyes x H x W bytes each).
   DeviceBuffer keys_, counters_, scratch_;
+  int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
 };
 
 }  // namespace p3d

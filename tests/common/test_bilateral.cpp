@@ -1,1 +1,295 @@
-// placeholder: implemented by the stage owner
+// CPU cross-bilateral filter: known answers, degenerate parameters, sizes
+// and every guide format, against an independent double-precision reference.
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "bilateral.h"
+#include "host_frame.h"
+#include "test_data.h"
+
+namespace p3d {
+namespace {
+
+using test::kAllFormats;
+
+// A float tolerance against the double reference: float weights and a float
+// accumulation of up to (2*16+1)^2 = 1089 terms of depth in [0, 1]; the
+// rounding error grows like sqrt(n) * 6e-8 (worst case n * 6e-8 = 6.5e-5,
+// never approached by these inputs).
+constexpr double kRefTol = 2e-5;
+
+// A guide frame (NV12: plane 0 is the luma itself) holding `luma` (CV_8UC1).
+HostFrame luma_guide(const cv::Mat &luma, int row_padding = 5) {
+  HostFrame f(PixelFormat::NV12, luma.cols, luma.rows, row_padding);
+  f.fill(128);
+  const FrameView v = f.view();
+  for (int y = 0; y < luma.rows; ++y)
+    for (int x = 0; x < luma.cols; ++x) v.plane[0][y * v.stride[0] + x] = luma.at<uint8_t>(y, x);
+  return f;
+}
+
+cv::Mat random_depth(int w, int h, uint64_t seed) {
+  cv::Mat d(h, w, CV_32FC1);
+  cv::RNG rng(seed);
+  rng.fill(d, cv::RNG::UNIFORM, 0.0, 1.0);
+  return d;
+}
+
+cv::Mat filter(const BilateralParams &p, const HostFrame &guide, const cv::Mat &depth) {
+  cv::Mat out(depth.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  bilateral_filter_cpu(p, guide.view(), depth_view_of(depth), depth_view_of(out));
+  return out;
+}
+
+// The definition of common/bilateral.h, written out in double with exp().
+cv::Mat reference(const BilateralParams &p, const FrameView &guide, const cv::Mat &depth) {
+  const int r = p.radius;
+  cv::Mat out(depth.size(), CV_64FC1);
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x) {
+      const int gc = load_luma(guide, x, y);
+      double sw = 0, swd = 0;
+      for (int qy = std::max(0, y - r); qy <= std::min(depth.rows - 1, y + r); ++qy)
+        for (int qx = std::max(0, x - r); qx <= std::min(depth.cols - 1, x + r); ++qx) {
+          const double d2 = (qx - x) * (qx - x) + (qy - y) * (qy - y);
+          const double g = load_luma(guide, qx, qy) - gc;
+          const double ws = d2 == 0 ? 1.0 : std::exp(-d2 / (2.0 * p.sigma_space * p.sigma_space));
+          const double wr = p.sigma_range > 0 ? std::exp(-g * g / (2.0 * p.sigma_range * p.sigma_range))
+                                              : (g == 0 ? 1.0 : 0.0);
+          sw += ws * wr;
+          swd += ws * wr * depth.at<float>(qy, qx);
+        }
+      out.at<double>(y, x) = swd / sw;
+    }
+  return out;
+}
+
+double max_abs_diff(const cv::Mat &f32, const cv::Mat &f64) {
+  double m = 0;
+  for (int y = 0; y < f32.rows; ++y)
+    for (int x = 0; x < f32.cols; ++x) {
+      const double v = f32.at<float>(y, x);
+      if (!std::isfinite(v)) return INFINITY;
+      m = std::max(m, std::fabs(v - f64.at<double>(y, x)));
+    }
+  return m;
+}
+
+bool all_finite(const cv::Mat &m) { return cv::checkRange(m, true, nullptr, -1e30, 1e30); }
+
+bool bit_equal(const cv::Mat &a, const cv::Mat &b) {
+  if (a.size() != b.size() || a.type() != b.type()) return false;
+  for (int y = 0; y < a.rows; ++y)
+    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) return false;
+  return true;
+}
+
+// Left half `left`, right half `right` (the step between columns w/2-1 and w/2).
+template <typename T>
+cv::Mat step_image(int w, int h, int type, T left, T right) {
+  cv::Mat m(h, w, type, cv::Scalar(left));
+  m(cv::Rect(w / 2, 0, w - w / 2, h)).setTo(cv::Scalar(right));
+  return m;
+}
+
+TEST(BilateralTables, CentreIsOneSymmetricAndGaussian) {
+  const BilateralParams p{3, 2.f, 10.f};
+  std::vector<float> space(bilateral_space_table_size(3)), range(kBilateralRangeTableSize);
+  bilateral_tables(p, space.data(), range.data());
+  const int side = 7;
+  EXPECT_EQ(space[3 * side + 3], 1.f);
+  EXPECT_EQ(range[0], 1.f);
+  EXPECT_EQ(space[3 * side + 4], expf(-1.f / 8.f));
+  EXPECT_NEAR(space[0], std::exp(-18.0 / 8.0), 1e-7);  // (dx, dy) = (-3, -3)
+  for (int i = 0; i < side * side; ++i) EXPECT_EQ(space[i], space[side * side - 1 - i]);
+  EXPECT_NEAR(range[10], std::exp(-0.5), 1e-7);
+  for (int g = 1; g < kBilateralRangeTableSize; ++g) EXPECT_LE(range[g], range[g - 1]);
+}
+
+TEST(BilateralTables, SanitiseClampsAndCanonicalises) {
+  EXPECT_EQ(bilateral_sanitize({-4, 3.f, 12.f}).radius, 0);
+  EXPECT_EQ(bilateral_sanitize({99, 3.f, 12.f}).radius, kMaxBilateralRadius);
+  EXPECT_EQ(bilateral_sanitize({5, 0.f, 12.f}).radius, 0);
+  EXPECT_EQ(bilateral_sanitize({5, -1.f, 12.f}).radius, 0);
+  EXPECT_EQ(bilateral_sanitize({5, std::nanf(""), 12.f}).radius, 0);
+  EXPECT_EQ(bilateral_sanitize({5, 3.f, std::nanf("")}).sigma_range, 0.f);
+  EXPECT_EQ(bilateral_sanitize({5, 3.f, -2.f}).sigma_range, 0.f);
+  const BilateralParams kept = bilateral_sanitize({7, 2.5f, 9.f});
+  EXPECT_EQ(kept.radius, 7);
+  EXPECT_EQ(kept.sigma_space, 2.5f);
+  EXPECT_EQ(kept.sigma_range, 9.f);
+}
+
+TEST(BilateralCpu, DepthStepAlignedWithGuideStepIsKept) {
+  const int w = 40, h = 20;
+  const HostFrame guide = luma_guide(step_image<int>(w, h, CV_8UC1, 50, 200));
+  const cv::Mat depth = step_image<float>(w, h, CV_32FC1, 0.2f, 0.8f);
+  const cv::Mat out = filter({5, 3.f, 12.f}, guide, depth);
+  // Across the edge the range weight is exp(-150^2 / 288) ~ 1e-34: nothing leaks.
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) ASSERT_NEAR(out.at<float>(y, x), depth.at<float>(y, x), 1e-6) << x << "," << y;
+}
+
+TEST(BilateralCpu, DepthStepUnderConstantGuideIsGaussianSmoothed) {
+  const int w = 40, h = 20;
+  const HostFrame guide = luma_guide(cv::Mat(h, w, CV_8UC1, cv::Scalar(90)));
+  const cv::Mat depth = step_image<float>(w, h, CV_32FC1, 0.2f, 0.8f);
+  const BilateralParams p{1, 1.f, 12.f};
+  const cv::Mat out = filter(p, guide, depth);
+  // Away from the top/bottom border the row factor cancels: 1-D Gaussian
+  // with taps e^-1/2, 1, e^-1/2 over 0.2, 0.2, 0.8 left of the step.
+  const double e = std::exp(-0.5);
+  const double left = (0.2 * (1 + e) + 0.8 * e) / (1 + 2 * e);  // 0.36444
+  EXPECT_NEAR(out.at<float>(10, w / 2 - 1), left, 1e-6);
+  EXPECT_NEAR(out.at<float>(10, w / 2), 1.0 - left, 1e-6);
+  EXPECT_NEAR(out.at<float>(10, w / 2 - 2), 0.2, 1e-6);  // flat beyond the radius
+  // The whole image, corners (clipped windows) included.
+  const BilateralParams wide{5, 3.f, 12.f};
+  EXPECT_LE(max_abs_diff(filter(wide, guide, depth), reference(wide, guide.view(), depth)), kRefTol);
+  EXPECT_GT(filter(wide, guide, depth).at<float>(10, w / 2 - 1), 0.3f);  // really blurred
+}
+
+TEST(BilateralCpu, ConstantDepthComesBackUnchanged) {
+  HostFrame guide(PixelFormat::RGBA, 37, 23, 3);
+  guide.fill_random(11);
+  const cv::Mat depth(23, 37, CV_32FC1, cv::Scalar(0.37f));
+  for (float sr : {0.f, 2.f, 12.f, 1e30f}) {
+    const cv::Mat out = filter({6, 2.f, sr}, guide, depth);
+    double mn, mx;
+    cv::minMaxLoc(out, &mn, &mx);
+    // Only the rounding of sum(w*d)/sum(w) separates the result from 0.37.
+    EXPECT_NEAR(mn, 0.37, 1e-6) << "sigma_range " << sr;
+    EXPECT_NEAR(mx, 0.37, 1e-6) << "sigma_range " << sr;
+  }
+}
+
+TEST(BilateralCpu, DegenerateSigmaRangeNeverGivesNanOrInf) {
+  const int w = 31, h = 19;
+  HostFrame guide(PixelFormat::BGRx, w, h, 4);
+  guide.fill_random(5);
+  const cv::Mat depth = random_depth(w, h, 6);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (float sr : {0.f, 1e-30f, 1e-20f, 1e30f, inf, nan, -3.f}) {
+    const cv::Mat out = filter({5, 3.f, sr}, guide, depth);
+    EXPECT_TRUE(all_finite(out)) << "sigma_range " << sr;
+  }
+  // sigma_range -> 0 averages only exact guide matches; 1e-30 squares to 0 in float.
+  const cv::Mat exact = filter({5, 3.f, 0.f}, guide, depth);
+  EXPECT_LE(max_abs_diff(exact, reference({5, 3.f, 0.f}, guide.view(), depth)), kRefTol);
+  EXPECT_TRUE(bit_equal(exact, filter({5, 3.f, 1e-30f}, guide, depth)));
+  EXPECT_TRUE(bit_equal(exact, filter({5, 3.f, nan}, guide, depth)));
+  // Huge sigma_range: every range weight is exactly 1, as under a constant guide.
+  const HostFrame flat = luma_guide(cv::Mat(h, w, CV_8UC1, cv::Scalar(7)));
+  EXPECT_TRUE(bit_equal(filter({5, 3.f, 1e30f}, guide, depth), filter({5, 3.f, 12.f}, flat, depth)));
+}
+
+TEST(BilateralCpu, DegenerateSigmaSpace) {
+  const int w = 23, h = 11;
+  HostFrame guide(PixelFormat::I420, w, h, 2);
+  guide.fill_random(8);
+  const cv::Mat depth = random_depth(w, h, 9);
+  // sigma_space <= 0 or NaN: the sigma -> 0 limit, the identity; 1e-30 reaches it numerically.
+  for (float ss : {0.f, -1.f, std::nanf(""), 1e-30f})
+    EXPECT_TRUE(bit_equal(filter({5, ss, 12.f}, guide, depth), depth)) << "sigma_space " << ss;
+  // Huge sigma_space: a range-weighted box.
+  const BilateralParams box{3, 1e30f, 12.f};
+  const cv::Mat out = filter(box, guide, depth);
+  EXPECT_TRUE(all_finite(out));
+  EXPECT_LE(max_abs_diff(out, reference(box, guide.view(), depth)), kRefTol);
+}
+
+TEST(BilateralCpu, RadiusZeroIsIdentity) {
+  HostFrame guide(PixelFormat::RGBA, 29, 13, 0);
+  guide.fill_random(1);
+  const cv::Mat depth = random_depth(29, 13, 2);
+  EXPECT_TRUE(bit_equal(filter({0, 3.f, 12.f}, guide, depth), depth));
+  EXPECT_TRUE(bit_equal(filter({-7, 3.f, 12.f}, guide, depth), depth));  // clamped to 0
+}
+
+TEST(BilateralCpu, Radius16MatchesReferenceAndLargerIsClamped) {
+  const int w = 53, h = 41;
+  HostFrame guide(PixelFormat::NV12, w, h, 3);
+  guide.fill_random(21);
+  const cv::Mat depth = random_depth(w, h, 22);
+  const BilateralParams p{16, 6.f, 40.f};
+  const cv::Mat out = filter(p, guide, depth);
+  EXPECT_LE(max_abs_diff(out, reference(p, guide.view(), depth)), kRefTol);
+  EXPECT_TRUE(bit_equal(out, filter({99, 6.f, 40.f}, guide, depth)));
+}
+
+TEST(BilateralCpu, TinySizes) {
+  for (const cv::Size sz : {cv::Size(1, 1), cv::Size(3, 2), cv::Size(2, 3), cv::Size(1, 7)}) {
+    for (int r : {0, 1, 5, 16}) {
+      HostFrame guide(PixelFormat::NV12, sz.width, sz.height, 1);
+      guide.fill_random(31 + r);
+      const cv::Mat depth = random_depth(sz.width, sz.height, 32 + r);
+      const BilateralParams p{r, 2.f, 30.f};
+      const cv::Mat out = filter(p, guide, depth);
+      EXPECT_LE(max_abs_diff(out, reference(p, guide.view(), depth)), kRefTol) << sz << " r=" << r;
+      if (sz.area() == 1) {
+        EXPECT_EQ(out.at<float>(0, 0), depth.at<float>(0, 0));  // weight 1 only
+      }
+    }
+  }
+}
+
+TEST(BilateralCpu, InPlaceEqualsOutOfPlace) {
+  HostFrame guide(PixelFormat::BGRA, 40, 30, 0);
+  guide.fill_random(41);
+  cv::Mat depth = random_depth(40, 30, 42);
+  const BilateralParams p{4, 2.f, 15.f};
+  const cv::Mat expected = filter(p, guide, depth);
+  bilateral_filter_cpu(p, guide.view(), as_const(depth_view_of(depth)), depth_view_of(depth));
+  EXPECT_TRUE(bit_equal(depth, expected));
+}
+
+TEST(BilateralCpu, SizeMismatchThrowsAndEmptyIsNoOp) {
+  HostFrame guide(PixelFormat::RGBA, 10, 10, 0);
+  const cv::Mat depth(9, 10, CV_32FC1, cv::Scalar(0.5f));
+  cv::Mat out(9, 10, CV_32FC1);
+  EXPECT_THROW(bilateral_filter_cpu({}, guide.view(), depth_view_of(depth), depth_view_of(out)), cv::Exception);
+  HostFrame none(PixelFormat::RGBA, 0, 0, 0);
+  cv::Mat empty;
+  EXPECT_NO_THROW(bilateral_filter_cpu({}, none.view(), as_const(depth_view_of(empty)), depth_view_of(empty)));
+}
+
+// Every input format as guide: a real picture (Aloe, cropped to an odd size,
+// padded rows) guiding a random depth map, against the double reference.
+class BilateralFormats : public ::testing::TestWithParam<PixelFormat> {};
+
+TEST_P(BilateralFormats, AloeGuideMatchesReference) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  const cv::Mat crop = aloe(cv::Rect(201, 150, 97, 61)).clone();
+  const HostFrame guide = HostFrame::from_bgr(crop, GetParam(), 7);
+  const cv::Mat depth = random_depth(crop.cols, crop.rows, 77);
+  const BilateralParams p{5, 3.f, 12.f};
+  const cv::Mat out = filter(p, guide, depth);
+  EXPECT_LE(max_abs_diff(out, reference(p, guide.view(), depth)), kRefTol);
+}
+
+INSTANTIATE_TEST_SUITE_P(Bilateral, BilateralFormats, ::testing::ValuesIn(kAllFormats),
+                         [](const auto &info) { return std::string(test::format_name(info.param)); });
+
+TEST(BilateralCpu, FormatsWithTheSameLumaGiveTheSameResult) {
+  // The filter sees only load_luma(): packed formats of one picture agree
+  // bit for bit, as do the two YUV layouts.
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  const cv::Mat crop = aloe(cv::Rect(0, 0, 65, 33)).clone();
+  const cv::Mat depth = random_depth(crop.cols, crop.rows, 3);
+  const BilateralParams p{3, 2.f, 10.f};
+  const cv::Mat rgba = filter(p, HostFrame::from_bgr(crop, PixelFormat::RGBA, 0), depth);
+  for (PixelFormat f : test::kPackedFormats)
+    EXPECT_TRUE(bit_equal(rgba, filter(p, HostFrame::from_bgr(crop, f, 3), depth))) << test::format_name(f);
+  EXPECT_TRUE(bit_equal(filter(p, HostFrame::from_bgr(crop, PixelFormat::NV12, 1), depth),
+                        filter(p, HostFrame::from_bgr(crop, PixelFormat::I420, 2), depth)));
+}
+
+}  // namespace
+}  // namespace p3d

@@ -1,1 +1,258 @@
-// placeholder: implemented by the stage owner
+// Colour conversion parameters, packed-format swizzles, luma and plane
+// geometry (common/frame.h, common/colour.cpp).
+#include <gtest/gtest.h>
+
+#include "frame.h"
+#include "host_frame.h"
+#include "test_data.h"
+
+namespace p3d {
+namespace {
+
+// A 2x2 4:2:0 frame of one Y'CbCr value, read back through load_rgba.
+Rgba yuv_pixel(PixelFormat f, uint8_t y, uint8_t u, uint8_t v, const YuvToRgb &m) {
+  HostFrame h(f, 2, 2, 3);
+  const FrameView fv = h.view();
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) fv.plane[0][r * fv.stride[0] + c] = y;
+  if (f == PixelFormat::NV12) {
+    fv.plane[1][0] = u;
+    fv.plane[1][1] = v;
+  } else {
+    fv.plane[1][0] = u;
+    fv.plane[2][0] = v;
+  }
+  return load_rgba(fv, 1, 1, m);
+}
+
+void expect_rgb_near(Rgba c, int r, int g, int b, int tol, const char *what) {
+  EXPECT_NEAR(c.r, r, tol) << what;
+  EXPECT_NEAR(c.g, g, tol) << what;
+  EXPECT_NEAR(c.b, b, tol) << what;
+}
+
+TEST(ColourParams, Bt601Coefficients) {
+  const YuvToRgb m = yuv_to_rgb_params(0.299, 0.114, false);
+  EXPECT_NEAR(m.rv, 1.402f, 1e-6);
+  EXPECT_NEAR(m.gu, -0.344136f, 1e-6);
+  EXPECT_NEAR(m.gv, -0.714136f, 1e-6);
+  EXPECT_NEAR(m.bu, 1.772f, 1e-6);
+  EXPECT_EQ(m.y_offset, 16.f);
+  EXPECT_NEAR(m.y_scale, 255.0 / 219.0, 1e-6);
+  EXPECT_NEAR(m.c_scale, 255.0 / 224.0, 1e-6);
+  // The defaults of YuvToRgb are BT.601 limited range.
+  const YuvToRgb d;
+  EXPECT_NEAR(d.rv, m.rv, 1e-6);
+  EXPECT_NEAR(d.gu, m.gu, 1e-6);
+  EXPECT_NEAR(d.gv, m.gv, 1e-6);
+  EXPECT_NEAR(d.bu, m.bu, 1e-6);
+}
+
+TEST(ColourParams, Bt709Coefficients) {
+  const YuvToRgb m = yuv_to_rgb_params(0.2126, 0.0722, false);
+  EXPECT_NEAR(m.rv, 1.5748f, 1e-5);
+  EXPECT_NEAR(m.gu, -0.187324f, 1e-5);
+  EXPECT_NEAR(m.gv, -0.468124f, 1e-5);
+  EXPECT_NEAR(m.bu, 1.8556f, 1e-5);
+  const YuvToRgb full = yuv_to_rgb_params(0.2126, 0.0722, true);
+  EXPECT_EQ(full.y_offset, 0.f);
+  EXPECT_EQ(full.y_scale, 1.f);
+  EXPECT_EQ(full.c_scale, 1.f);
+  EXPECT_EQ(full.rv, m.rv);
+}
+
+TEST(ColourParams, LimitedRangeWhiteAndBlack) {
+  for (auto kr_kb : {std::pair{0.299, 0.114}, std::pair{0.2126, 0.0722}}) {
+    const YuvToRgb m = yuv_to_rgb_params(kr_kb.first, kr_kb.second, false);
+    for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420}) {
+      const Rgba white = yuv_pixel(f, 235, 128, 128, m);
+      EXPECT_EQ(white.r, 255);
+      EXPECT_EQ(white.g, 255);
+      EXPECT_EQ(white.b, 255);
+      EXPECT_EQ(white.a, 255);
+      const Rgba black = yuv_pixel(f, 16, 128, 128, m);
+      EXPECT_EQ(black.r, 0);
+      EXPECT_EQ(black.g, 0);
+      EXPECT_EQ(black.b, 0);
+      // Below black / above white saturates instead of wrapping.
+      EXPECT_EQ(yuv_pixel(f, 0, 128, 128, m).r, 0);
+      EXPECT_EQ(yuv_pixel(f, 255, 128, 128, m).g, 255);
+      // Mid grey: (126 - 16) * 255/219 = 128.08.
+      EXPECT_EQ(yuv_pixel(f, 126, 128, 128, m).b, 128);
+    }
+  }
+}
+
+TEST(ColourParams, FullRangeWhiteBlackGrey) {
+  const YuvToRgb m = yuv_to_rgb_params(0.2126, 0.0722, true);
+  const Rgba white = yuv_pixel(PixelFormat::NV12, 255, 128, 128, m);
+  EXPECT_EQ(white.r + white.g + white.b, 3 * 255);
+  const Rgba black = yuv_pixel(PixelFormat::I420, 0, 128, 128, m);
+  EXPECT_EQ(black.r + black.g + black.b, 0);
+  const Rgba grey = yuv_pixel(PixelFormat::NV12, 77, 128, 128, m);
+  EXPECT_EQ(grey.r, 77);
+  EXPECT_EQ(grey.g, 77);
+  EXPECT_EQ(grey.b, 77);
+}
+
+TEST(ColourParams, KnownPrimaries) {
+  // Limited-range codes of the primaries (Rec. 601 / Rec. 709 tables);
+  // 8-bit codes are rounded, so the decoded value may be 2 levels off.
+  const YuvToRgb m601 = yuv_to_rgb_params(0.299, 0.114, false);
+  expect_rgb_near(yuv_pixel(PixelFormat::NV12, 81, 90, 240, m601), 255, 0, 0, 2, "601 red");
+  expect_rgb_near(yuv_pixel(PixelFormat::NV12, 145, 54, 34, m601), 0, 255, 0, 2, "601 green");
+  expect_rgb_near(yuv_pixel(PixelFormat::I420, 41, 240, 110, m601), 0, 0, 255, 2, "601 blue");
+  const YuvToRgb m709 = yuv_to_rgb_params(0.2126, 0.0722, false);
+  expect_rgb_near(yuv_pixel(PixelFormat::NV12, 63, 102, 240, m709), 255, 0, 0, 2, "709 red");
+  expect_rgb_near(yuv_pixel(PixelFormat::NV12, 173, 42, 26, m709), 0, 255, 0, 2, "709 green");
+  expect_rgb_near(yuv_pixel(PixelFormat::I420, 32, 240, 118, m709), 0, 0, 255, 2, "709 blue");
+}
+
+TEST(ColourRoundTrip, PrimariesThroughYuvFrames) {
+  // from_bgr (OpenCV, BT.601 limited) then load_rgba with the default
+  // parameters: 8-bit quantisation twice, so up to 3 levels.
+  const cv::Vec3b colours[] = {{0, 0, 255}, {0, 255, 0}, {255, 0, 0}, {255, 255, 255},
+                               {0, 0, 0},   {40, 90, 200}, {128, 128, 128}};
+  for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420}) {
+    for (const cv::Vec3b &bgr : colours) {
+      const cv::Mat img(5, 3, CV_8UC3, cv::Scalar(bgr[0], bgr[1], bgr[2]));  // odd size: edge chroma
+      const cv::Mat back = HostFrame::from_bgr(img, f, 3).to_bgra();
+      for (int y = 0; y < back.rows; ++y)
+        for (int x = 0; x < back.cols; ++x) {
+          const cv::Vec4b p = back.at<cv::Vec4b>(y, x);
+          for (int c = 0; c < 3; ++c) ASSERT_NEAR(p[c], bgr[c], 3) << test::format_name(f) << " " << bgr;
+          ASSERT_EQ(p[3], 255);
+        }
+    }
+  }
+}
+
+TEST(ColourSwizzle, LoadRgbaOfEveryPackedFormat) {
+  struct Expect {
+    PixelFormat f;
+    uint8_t r, g, b, a;
+  };
+  // Memory bytes 10, 20, 30, 40 at the pixel.
+  const Expect cases[] = {{PixelFormat::RGBA, 10, 20, 30, 40},
+                          {PixelFormat::BGRA, 30, 20, 10, 40},
+                          {PixelFormat::RGBx, 10, 20, 30, 255},
+                          {PixelFormat::BGRx, 30, 20, 10, 255}};
+  for (const Expect &e : cases) {
+    HostFrame h(e.f, 3, 2, 6);
+    const FrameView v = h.view();
+    uint8_t *p = v.plane[0] + v.stride[0] + 4 * 2;  // pixel (2, 1): stride matters
+    p[0] = 10, p[1] = 20, p[2] = 30, p[3] = 40;
+    const Rgba c = load_rgba(v, 2, 1, YuvToRgb());
+    EXPECT_EQ(c.r, e.r) << test::format_name(e.f);
+    EXPECT_EQ(c.g, e.g) << test::format_name(e.f);
+    EXPECT_EQ(c.b, e.b) << test::format_name(e.f);
+    EXPECT_EQ(c.a, e.a) << test::format_name(e.f);
+  }
+}
+
+TEST(ColourSwizzle, StoreRgbaOfEveryPackedFormat) {
+  for (PixelFormat f : test::kPackedFormats) {
+    HostFrame h(f, 3, 2, 6);
+    h.fill(0);
+    const FrameView v = h.view();
+    store_rgba(v, 1, 1, Rgba{11, 22, 33, 44});
+    const uint8_t *p = v.plane[0] + v.stride[0] + 4;
+    const bool bgr = f == PixelFormat::BGRA || f == PixelFormat::BGRx;
+    EXPECT_EQ(p[0], bgr ? 33 : 11) << test::format_name(f);
+    EXPECT_EQ(p[1], 22) << test::format_name(f);
+    EXPECT_EQ(p[2], bgr ? 11 : 33) << test::format_name(f);
+    // Neighbours untouched.
+    EXPECT_EQ(p[-1], 0);
+    EXPECT_EQ(p[4], 0);
+    EXPECT_EQ(v.plane[0][4], 0);
+    const Rgba c = load_rgba(v, 1, 1, YuvToRgb());
+    EXPECT_EQ(c.r, 11);
+    EXPECT_EQ(c.g, 22);
+    EXPECT_EQ(c.b, 33);
+    EXPECT_EQ(c.a, is_packed_rgb(f) && (f == PixelFormat::RGBA || f == PixelFormat::BGRA) ? 44 : 255);
+  }
+}
+
+TEST(ColourSwizzle, StoreIsNoOpOnYuv) {
+  for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420}) {
+    HostFrame h(f, 4, 4, 2);
+    h.fill(7);
+    store_rgba(h.view(), 1, 1, Rgba{1, 2, 3, 4});
+    const cv::Mat back = h.to_bgra(yuv_to_rgb_params(0.299, 0.114, true));
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) ASSERT_EQ(back.at<cv::Vec4b>(y, x), back.at<cv::Vec4b>(0, 0));
+  }
+}
+
+TEST(ColourLuma, YuvIsThePlaneAndRgbIsBt601) {
+  HostFrame nv(PixelFormat::NV12, 3, 3, 1);
+  nv.fill(99);
+  nv.view().plane[0][nv.view().stride[0] * 2 + 1] = 201;
+  EXPECT_EQ(load_luma(nv.view(), 1, 2), 201);
+  EXPECT_EQ(load_luma(nv.view(), 0, 0), 99);
+  struct Case {
+    uint8_t r, g, b, y;
+  };
+  // 0.299 R + 0.587 G + 0.114 B, rounded.
+  const Case cases[] = {{255, 0, 0, 76}, {0, 255, 0, 150}, {0, 0, 255, 29}, {255, 255, 255, 255},
+                        {0, 0, 0, 0},    {100, 150, 200, 141}};
+  for (PixelFormat f : test::kPackedFormats)
+    for (const Case &c : cases) {
+      HostFrame h(f, 2, 1, 0);
+      store_rgba(h.view(), 1, 0, Rgba{c.r, c.g, c.b, 255});
+      EXPECT_EQ(load_luma(h.view(), 1, 0), c.y) << test::format_name(f) << " " << int(c.r) << "," << int(c.g)
+                                                 << "," << int(c.b);
+    }
+}
+
+TEST(ColourChroma, OneChromaSampleServesA2x2Block) {
+  for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420}) {
+    HostFrame h(f, 5, 3, 2);  // odd: the last column/row has a chroma sample of its own
+    h.fill_random(4);
+    const FrameView v = h.view();
+    int a[3], b[3];
+    load_native3(v, 2, 0, a);
+    load_native3(v, 3, 1, b);
+    EXPECT_EQ(a[1], b[1]);
+    EXPECT_EQ(a[2], b[2]);
+    load_native3(v, 4, 2, a);
+    const int cu = f == PixelFormat::NV12 ? v.plane[1][v.stride[1] + 4] : v.plane[1][v.stride[1] + 2];
+    EXPECT_EQ(a[1], cu);
+    EXPECT_EQ(a[0], v.plane[0][2 * v.stride[0] + 4]);
+  }
+}
+
+TEST(ColourPlanes, PlaneSizesOfOddFrames) {
+  int bpr = 0, rows = 0;
+  EXPECT_EQ(frame_plane_count(PixelFormat::NV12), 2);
+  EXPECT_EQ(frame_plane_count(PixelFormat::I420), 3);
+  for (PixelFormat f : test::kPackedFormats) {
+    EXPECT_EQ(frame_plane_count(f), 1);
+    frame_plane_size(f, 5, 3, 0, &bpr, &rows);
+    EXPECT_EQ(bpr, 20);
+    EXPECT_EQ(rows, 3);
+  }
+  frame_plane_size(PixelFormat::NV12, 5, 3, 0, &bpr, &rows);
+  EXPECT_EQ(bpr, 5);
+  EXPECT_EQ(rows, 3);
+  frame_plane_size(PixelFormat::NV12, 5, 3, 1, &bpr, &rows);
+  EXPECT_EQ(bpr, 6);  // 3 interleaved U,V pairs
+  EXPECT_EQ(rows, 2);
+  for (int plane : {1, 2}) {
+    frame_plane_size(PixelFormat::I420, 5, 3, plane, &bpr, &rows);
+    EXPECT_EQ(bpr, 3);
+    EXPECT_EQ(rows, 2);
+  }
+  frame_plane_size(PixelFormat::NV12, 1, 1, 1, &bpr, &rows);
+  EXPECT_EQ(bpr, 2);
+  EXPECT_EQ(rows, 1);
+  frame_plane_size(PixelFormat::I420, 1, 1, 2, &bpr, &rows);
+  EXPECT_EQ(bpr, 1);
+  EXPECT_EQ(rows, 1);
+  frame_plane_size(PixelFormat::I420, 4, 2, 1, &bpr, &rows);
+  EXPECT_EQ(bpr, 2);
+  EXPECT_EQ(rows, 1);
+}
+
+}  // namespace
+}  // namespace p3d

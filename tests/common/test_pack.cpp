@@ -1,1 +1,462 @@
-// placeholder: implemented by the stage owner
+// Stereo packing (common/pack.h): sizes, every layout on hand-made pairs with
+// known answers, the anaglyph matrices, format independence, and that
+// nothing is written outside the output rows.
+#include <cmath>
+#include <functional>
+#include <random>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "pack.h"
+#include "test_data.h"
+
+namespace p3d {
+namespace {
+
+using test::kPackedFormats;
+
+constexpr PackLayout kAllLayouts[] = {PackLayout::Anaglyph,       PackLayout::SideBySide,     PackLayout::SideBySideHalf,
+                                      PackLayout::TopBottom,      PackLayout::TopBottomHalf,  PackLayout::RowInterleaved,
+                                      PackLayout::ColumnInterleaved, PackLayout::Checkerboard, PackLayout::Left,
+                                      PackLayout::Right};
+constexpr AnaglyphGlasses kAllGlasses[] = {AnaglyphGlasses::RedCyan, AnaglyphGlasses::GreenMagenta,
+                                           AnaglyphGlasses::AmberBlue};
+constexpr AnaglyphMethod kAllMethods[] = {AnaglyphMethod::Dubois, AnaglyphMethod::Color, AnaglyphMethod::HalfColor,
+                                          AnaglyphMethod::Gray};
+constexpr uint8_t kPoison = 0xA5;
+
+using PixelFn = std::function<Rgba(int x, int y)>;
+
+// A W x H pair side by side (2W x H) with the given views.
+HostFrame make_pair(PixelFormat f, int w, int h, const PixelFn &left, const PixelFn &right, int padding = 0) {
+  HostFrame pair(f, 2 * w, h, padding);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      store_rgba(pair.view(), x, y, left(x, y));
+      store_rgba(pair.view(), w + x, y, right(x, y));
+    }
+  return pair;
+}
+
+PixelFn solid(Rgba c) {
+  return [c](int, int) { return c; };
+}
+
+// Packs `in` into a fresh output frame whose every byte (padding included)
+// starts as kPoison.
+HostFrame pack(const PackParams &p, const HostFrame &in, int padding = 0) {
+  int w = 0, h = 0;
+  pack_size(p.layout, in.width() / 2, in.height(), &w, &h);
+  HostFrame out(in.format(), w, h, padding);
+  out.fill(kPoison);
+  pack_cpu(p, in.view(), out.view());
+  return out;
+}
+
+PackParams layout_params(PackLayout l, bool swap = false) {
+  PackParams p;
+  p.layout = l;
+  p.swap_eyes = swap;
+  return p;
+}
+PackParams anaglyph_params(AnaglyphGlasses g, AnaglyphMethod m) {
+  PackParams p;
+  p.layout = PackLayout::Anaglyph;
+  p.glasses = g;
+  p.method = m;
+  return p;
+}
+
+Rgba at(const HostFrame &f, int x, int y) { return load_rgba(f.view(), x, y, YuvToRgb()); }
+
+::testing::AssertionResult same(Rgba got, Rgba want) {
+  if (got.r == want.r && got.g == want.g && got.b == want.b && got.a == want.a) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "got (" << int(got.r) << "," << int(got.g) << "," << int(got.b) << ","
+                                       << int(got.a) << ") want (" << int(want.r) << "," << int(want.g) << ","
+                                       << int(want.b) << "," << int(want.a) << ")";
+}
+
+// Every pixel of `f` equals want(x, y).
+::testing::AssertionResult all_pixels(const HostFrame &f, const PixelFn &want) {
+  for (int y = 0; y < f.height(); ++y)
+    for (int x = 0; x < f.width(); ++x) {
+      ::testing::AssertionResult r = same(at(f, x, y), want(x, y));
+      if (!r) return r << " at (" << x << "," << y << ")";
+    }
+  return ::testing::AssertionSuccess();
+}
+
+bool equal_bgra(const cv::Mat &a, const cv::Mat &b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+}
+
+// ---- sizes ------------------------------------------------------------------
+
+TEST(PackSize, EveryLayout) {
+  const int sizes[][2] = {{1, 1}, {3, 2}, {641, 555}, {1920, 1080}};
+  for (const auto &s : sizes) {
+    const int w = s[0], h = s[1];
+    for (PackLayout l : kAllLayouts) {
+      int ow = -1, oh = -1;
+      pack_size(l, w, h, &ow, &oh);
+      EXPECT_EQ(ow, l == PackLayout::SideBySide ? 2 * w : w) << "layout " << int(l) << " view " << w << "x" << h;
+      EXPECT_EQ(oh, l == PackLayout::TopBottom ? 2 * h : h) << "layout " << int(l) << " view " << w << "x" << h;
+    }
+  }
+}
+
+TEST(PackSize, HalfSplitKeepsTheOddColumnLeft) {
+  EXPECT_EQ(half_split(1), 1);
+  EXPECT_EQ(half_split(2), 1);
+  EXPECT_EQ(half_split(5), 3);
+  EXPECT_EQ(half_split(1920), 960);
+}
+
+// Every layout on 1x1 views: the output has the right size and every pixel
+// comes from the expected view.
+TEST(PackLayouts, OneByOneViews) {
+  const Rgba a{200, 10, 20, 255}, b{5, 150, 250, 255};
+  const HostFrame in = make_pair(PixelFormat::RGBA, 1, 1, solid(a), solid(b));
+  for (PackLayout l : kAllLayouts) {
+    if (l == PackLayout::Anaglyph) continue;
+    const HostFrame out = pack(layout_params(l), in);
+    int ow = 0, oh = 0;
+    pack_size(l, 1, 1, &ow, &oh);
+    ASSERT_EQ(out.width(), ow);
+    ASSERT_EQ(out.height(), oh);
+    EXPECT_TRUE(same(at(out, 0, 0), l == PackLayout::Right ? b : a)) << "layout " << int(l);
+    if (ow == 2) {
+      EXPECT_TRUE(same(at(out, 1, 0), b));
+    }
+    if (oh == 2) {
+      EXPECT_TRUE(same(at(out, 0, 1), b));
+    }
+  }
+}
+
+// ---- geometric layouts --------------------------------------------------------
+
+TEST(PackLayouts, SideBySideFullEqualsInput) {
+  for (PixelFormat f : kPackedFormats) {
+    HostFrame in(f, 2 * 33, 17, 12);
+    in.fill_random(11);
+    const HostFrame out = pack(layout_params(PackLayout::SideBySide), in, 4);
+    EXPECT_TRUE(equal_bgra(out.to_bgra(), in.to_bgra())) << test::format_name(f);
+  }
+}
+
+TEST(PackLayouts, SwapEyesSwapsTheViews) {
+  HostFrame in(PixelFormat::RGBA, 2 * 7, 5);
+  in.fill_random(12);
+  const HostFrame sbs = pack(layout_params(PackLayout::SideBySide, true), in);
+  EXPECT_TRUE(all_pixels(sbs, [&](int x, int y) { return at(in, (x + 7) % 14, y); }));
+  const HostFrame left = pack(layout_params(PackLayout::Left, true), in);
+  EXPECT_TRUE(all_pixels(left, [&](int x, int y) { return at(in, 7 + x, y); }));
+  const HostFrame right = pack(layout_params(PackLayout::Right, true), in);
+  EXPECT_TRUE(all_pixels(right, [&](int x, int y) { return at(in, x, y); }));
+  const HostFrame tb = pack(layout_params(PackLayout::TopBottom, true), in);
+  EXPECT_TRUE(all_pixels(tb, [&](int x, int y) { return y < 5 ? at(in, 7 + x, y) : at(in, x, y - 5); }));
+}
+
+TEST(PackLayouts, TopBottomFull) {
+  HostFrame in(PixelFormat::BGRA, 2 * 3, 2);
+  in.fill_random(13);
+  const HostFrame out = pack(layout_params(PackLayout::TopBottom), in);
+  ASSERT_EQ(out.width(), 3);
+  ASSERT_EQ(out.height(), 4);
+  EXPECT_TRUE(all_pixels(out, [&](int x, int y) { return y < 2 ? at(in, x, y) : at(in, 3 + x, y - 2); }));
+}
+
+// Sample values along the squeezed axis; the half formats must store the
+// rounded means (a + b + 1) / 2 of pairs, hand-computed below.
+const int kLeftRamp[5] = {10, 21, 30, 41, 50};
+const int kRightRamp[5] = {100, 103, 0, 255, 7};
+Rgba ramp_pixel(const int *ramp, int i, int other) {
+  const int v = ramp[i];
+  return Rgba{uint8_t(v), uint8_t(255 - v), uint8_t(20 * other), uint8_t(v / 2 + 1)};
+}
+
+TEST(PackLayouts, SideBySideHalfAveragesColumnPairs) {
+  const HostFrame in = make_pair(
+      PixelFormat::RGBA, 5, 3, [](int x, int y) { return ramp_pixel(kLeftRamp, x, y); },
+      [](int x, int y) { return ramp_pixel(kRightRamp, x, y); });
+  const HostFrame out = pack(layout_params(PackLayout::SideBySideHalf), in);
+  ASSERT_EQ(out.width(), 5);
+  ASSERT_EQ(out.height(), 3);
+  for (int y = 0; y < 3; ++y) {
+    const uint8_t b = uint8_t(20 * y);
+    // Left: columns (0,1), (2,3), (4,4 clamped). Alphas are v/2+1: 6,11 ; 16,21 ; 26.
+    EXPECT_TRUE(same(at(out, 0, y), Rgba{16, 240, b, 9}));
+    EXPECT_TRUE(same(at(out, 1, y), Rgba{36, 220, b, 19}));
+    EXPECT_TRUE(same(at(out, 2, y), Rgba{50, 205, b, 26}));
+    // Right gets floor(5/2) = 2 columns: (0,1), (2,3); its column 4 is dropped.
+    // Alphas: 51,52 ; 1,128.
+    EXPECT_TRUE(same(at(out, 3, y), Rgba{102, 154, b, 52}));
+    EXPECT_TRUE(same(at(out, 4, y), Rgba{128, 128, b, 65}));
+  }
+}
+
+TEST(PackLayouts, TopBottomHalfAveragesRowPairs) {
+  const HostFrame in = make_pair(
+      PixelFormat::BGRx, 2, 5, [](int x, int y) { return ramp_pixel(kLeftRamp, y, x); },
+      [](int x, int y) { return ramp_pixel(kRightRamp, y, x); });
+  const HostFrame out = pack(layout_params(PackLayout::TopBottomHalf), in);
+  ASSERT_EQ(out.width(), 2);
+  ASSERT_EQ(out.height(), 5);
+  for (int x = 0; x < 2; ++x) {
+    const uint8_t b = uint8_t(20 * x);
+    // BGRx has no alpha: 255 in, 255 out.
+    EXPECT_TRUE(same(at(out, x, 0), Rgba{16, 240, b, 255}));
+    EXPECT_TRUE(same(at(out, x, 1), Rgba{36, 220, b, 255}));
+    EXPECT_TRUE(same(at(out, x, 2), Rgba{50, 205, b, 255}));
+    EXPECT_TRUE(same(at(out, x, 3), Rgba{102, 154, b, 255}));
+    EXPECT_TRUE(same(at(out, x, 4), Rgba{128, 128, b, 255}));
+  }
+}
+
+TEST(PackLayouts, HalfFormatsOfOneSampleViews) {
+  // One column (one row): the left view keeps it, averaged with itself; the
+  // right view gets nothing.
+  const Rgba a{201, 3, 77, 255}, b{9, 9, 9, 255};
+  const HostFrame in = make_pair(PixelFormat::RGBx, 1, 3, solid(a), solid(b));
+  EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::SideBySideHalf), in), solid(a)));
+  const HostFrame row = make_pair(PixelFormat::RGBx, 3, 1, solid(a), solid(b));
+  EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::TopBottomHalf), row), solid(a)));
+}
+
+// Views of one colour each, so every output pixel tells which view it came from.
+TEST(PackLayouts, InterleavesPickTheRightView) {
+  const Rgba a{200, 10, 20, 255}, b{5, 150, 250, 128};
+  const int sizes[][2] = {{3, 2}, {4, 3}, {33, 17}};
+  for (const auto &s : sizes)
+    for (bool swap : {false, true}) {
+      const HostFrame in = make_pair(PixelFormat::RGBA, s[0], s[1], solid(a), solid(b));
+      const Rgba l = swap ? b : a, r = swap ? a : b;
+      EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::RowInterleaved, swap), in),
+                             [&](int, int y) { return y % 2 == 0 ? l : r; }));
+      EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::ColumnInterleaved, swap), in),
+                             [&](int x, int) { return x % 2 == 0 ? l : r; }));
+      EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::Checkerboard, swap), in),
+                             [&](int x, int y) { return (x + y) % 2 == 0 ? l : r; }));
+      EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::Left, swap), in), solid(l)));
+      EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::Right, swap), in), solid(r)));
+    }
+}
+
+TEST(PackLayouts, LeftAndRightOfARandomPair) {
+  HostFrame in(PixelFormat::RGBA, 2 * 9, 4, 8);
+  in.fill_random(14);
+  EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::Left), in), [&](int x, int y) { return at(in, x, y); }));
+  EXPECT_TRUE(all_pixels(pack(layout_params(PackLayout::Right), in), [&](int x, int y) { return at(in, 9 + x, y); }));
+}
+
+// ---- anaglyphs ------------------------------------------------------------------
+
+Rgba anaglyph_of(AnaglyphGlasses g, AnaglyphMethod m, Rgba l, Rgba r, PixelFormat f = PixelFormat::RGBA) {
+  const HostFrame in = make_pair(f, 1, 1, solid(l), solid(r));
+  return at(pack(anaglyph_params(g, m), in), 0, 0);
+}
+
+constexpr Rgba kWhite{255, 255, 255, 200}, kBlack{0, 0, 0, 100};
+
+TEST(PackAnaglyph, ColorPassesEachEyesChannels) {
+  // Alpha comes from the left view.
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::Color, kWhite, kBlack), Rgba{255, 0, 0, 200}));
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::Color, kBlack, kWhite), Rgba{0, 255, 255, 100}));
+  EXPECT_TRUE(
+      same(anaglyph_of(AnaglyphGlasses::GreenMagenta, AnaglyphMethod::Color, kWhite, kBlack), Rgba{0, 255, 0, 200}));
+  EXPECT_TRUE(
+      same(anaglyph_of(AnaglyphGlasses::GreenMagenta, AnaglyphMethod::Color, kBlack, kWhite), Rgba{255, 0, 255, 100}));
+  EXPECT_TRUE(
+      same(anaglyph_of(AnaglyphGlasses::AmberBlue, AnaglyphMethod::Color, kWhite, kBlack), Rgba{255, 255, 0, 200}));
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::AmberBlue, AnaglyphMethod::Color, kBlack, kWhite), Rgba{0, 0, 255, 100}));
+  // Colour views pass unchanged through their channels.
+  const Rgba l{200, 100, 50, 255}, r{10, 20, 30, 255};
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::Color, l, r), Rgba{200, 20, 30, 255}));
+}
+
+TEST(PackAnaglyph, GrayOfEqualViewsIsGrey) {
+  // luma(200, 100, 50) = 59.8 + 58.7 + 5.7 = 124.2
+  const Rgba c{200, 100, 50, 255};
+  ASSERT_EQ(to_u8(rgb_luma(200, 100, 50)), 124);
+  for (AnaglyphGlasses g : kAllGlasses)
+    EXPECT_TRUE(same(anaglyph_of(g, AnaglyphMethod::Gray, c, c), Rgba{124, 124, 124, 255})) << "glasses " << int(g);
+}
+
+TEST(PackAnaglyph, HalfColorLumaBehindTheSingleColourFilter) {
+  // luma(L) = 124.2, luma(R) = 2.99 + 11.74 + 3.42 = 18.15
+  const Rgba l{200, 100, 50, 255}, r{10, 20, 30, 255};
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::HalfColor, l, r), Rgba{124, 20, 30, 255}));
+  EXPECT_TRUE(
+      same(anaglyph_of(AnaglyphGlasses::GreenMagenta, AnaglyphMethod::HalfColor, l, r), Rgba{10, 124, 30, 255}));
+  // Amber-blue: the right eye looks through blue.
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::AmberBlue, AnaglyphMethod::HalfColor, l, r), Rgba{200, 100, 18, 255}));
+}
+
+TEST(PackAnaglyph, DuboisRedCyanHandComputed) {
+  // Row sums of the red-cyan matrices: left (1.050, -0.148, -0.115), right
+  // (-0.050, 1.147, 1.115). Grey L = 60, R = 180:
+  //   R = 63.0 - 9.0 = 54,  G = -8.88 + 206.46 = 197.58,  B = -6.9 + 200.7 = 193.8
+  const Rgba g60{60, 60, 60, 255}, g180{180, 180, 180, 255};
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois, g60, g180), Rgba{54, 198, 194, 255}));
+  // Saturation at both ends: L = 0, R = 255: R = -12.75 -> 0, G = 292.5 -> 255, B = 284.3 -> 255.
+  const Rgba g0{0, 0, 0, 255}, g255{255, 255, 255, 255};
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois, g0, g255), Rgba{0, 255, 255, 255}));
+  // A colour pair, L = (200, 100, 50), R = (10, 20, 30):
+  //   R = (87.4 + 44.9 + 8.2) + (-0.11 - 0.64 - 0.21) = 139.54
+  //   G = (-12.4 - 6.2 - 1.2) + (3.77 + 15.22 + 0.27) = -0.54
+  //   B = (-9.6 - 5.0 - 0.85) + (-0.26 - 1.86 + 37.02) = 19.45
+  const Rgba l{200, 100, 50, 77}, r{10, 20, 30, 255};
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois, l, r), Rgba{140, 0, 19, 77}));
+}
+
+TEST(PackAnaglyph, DuboisMatricesArePublishedOnes) {
+  const AnaglyphMatrices rc = anaglyph_matrices(AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois);
+  EXPECT_FLOAT_EQ(rc.left[0], 0.437f);
+  EXPECT_FLOAT_EQ(rc.right[8], 1.234f);
+  const AnaglyphMatrices gm = anaglyph_matrices(AnaglyphGlasses::GreenMagenta, AnaglyphMethod::Dubois);
+  EXPECT_FLOAT_EQ(gm.left[4], 0.668f);
+  EXPECT_FLOAT_EQ(gm.right[1], 0.705f);
+  const AnaglyphMatrices ab = anaglyph_matrices(AnaglyphGlasses::AmberBlue, AnaglyphMethod::Dubois);
+  EXPECT_FLOAT_EQ(ab.left[0], 1.062f);
+  EXPECT_FLOAT_EQ(ab.right[8], 0.911f);
+}
+
+// Color/HalfColor/Gray: each output channel is fed by exactly one eye, and
+// its row is either a unit vector or the luma weights.
+TEST(PackAnaglyph, FilterMatricesFeedEachChannelFromOneEye) {
+  for (AnaglyphGlasses g : kAllGlasses)
+    for (AnaglyphMethod m : kAllMethods) {
+      if (m == AnaglyphMethod::Dubois) continue;
+      const AnaglyphMatrices am = anaglyph_matrices(g, m);
+      for (int c = 0; c < 3; ++c) {
+        const float *rows[2] = {am.left + 3 * c, am.right + 3 * c};
+        int fed = 0;
+        for (const float *row : rows) {
+          const float sum = row[0] + row[1] + row[2];
+          if (sum == 0.f) continue;
+          ++fed;
+          const bool unit = row[c] == 1.f && sum == 1.f;
+          const bool luma = row[0] == 0.299f && row[1] == 0.587f && row[2] == 0.114f;
+          EXPECT_TRUE(unit || luma) << "glasses " << int(g) << " method " << int(m) << " channel " << c;
+          EXPECT_TRUE(m != AnaglyphMethod::Gray || luma);
+          EXPECT_TRUE(m != AnaglyphMethod::Color || unit);
+        }
+        EXPECT_EQ(fed, 1) << "glasses " << int(g) << " method " << int(m) << " channel " << c;
+      }
+    }
+}
+
+TEST(PackAnaglyph, MatricesFinite) {
+  for (AnaglyphGlasses g : kAllGlasses)
+    for (AnaglyphMethod m : kAllMethods) {
+      const AnaglyphMatrices am = anaglyph_matrices(g, m);
+      for (int i = 0; i < 9; ++i) {
+        EXPECT_TRUE(std::isfinite(am.left[i]));
+        EXPECT_TRUE(std::isfinite(am.right[i]));
+      }
+    }
+}
+
+// Both eyes of the real pair through red-cyan Color: R from aloeL, G and B
+// from aloeR, pixel for pixel.
+TEST(PackAnaglyph, ColorOfTheAloePair) {
+  const cv::Mat l = test::load_data_image("aloeL.jpg"), r = test::load_data_image("aloeR.jpg");
+  ASSERT_FALSE(l.empty());
+  ASSERT_FALSE(r.empty());
+  cv::Mat pair;
+  cv::hconcat(l, r, pair);
+  const HostFrame in = HostFrame::from_bgr(pair, PixelFormat::BGRx, 16);
+  const HostFrame out = pack(anaglyph_params(AnaglyphGlasses::RedCyan, AnaglyphMethod::Color), in, 8);
+  EXPECT_TRUE(all_pixels(out, [&](int x, int y) {
+    const cv::Vec3b a = l.at<cv::Vec3b>(y, x), b = r.at<cv::Vec3b>(y, x);
+    return Rgba{a[2], b[1], b[0], 255};
+  }));
+}
+
+// ---- every layout and format ---------------------------------------------------------
+
+std::vector<PackParams> every_params() {
+  std::vector<PackParams> all;
+  for (PackLayout l : kAllLayouts)
+    for (bool swap : {false, true}) {
+      if (l != PackLayout::Anaglyph) {
+        all.push_back(layout_params(l, swap));
+        continue;
+      }
+      for (AnaglyphGlasses g : kAllGlasses)
+        for (AnaglyphMethod m : kAllMethods) {
+          PackParams p = anaglyph_params(g, m);
+          p.swap_eyes = swap;
+          all.push_back(p);
+        }
+    }
+  return all;
+}
+
+TEST(PackFormats, EveryPackedFormatGivesTheSameResult) {
+  cv::Mat bgr(17, 2 * 33, CV_8UC3);
+  cv::randu(bgr, 0, 256);
+  for (const PackParams &p : every_params()) {
+    const cv::Mat want = pack(p, HostFrame::from_bgr(bgr, PixelFormat::RGBA)).to_bgra();
+    for (PixelFormat f : kPackedFormats) {
+      const cv::Mat got = pack(p, HostFrame::from_bgr(bgr, f, 12), 4).to_bgra();
+      EXPECT_TRUE(equal_bgra(got, want)) << test::format_name(f) << " layout " << int(p.layout) << " glasses "
+                                         << int(p.glasses) << " method " << int(p.method) << " swap " << p.swap_eyes;
+    }
+  }
+}
+
+// The output rows' padding (and the byte after the last row) must keep the
+// poison, and every output pixel must have been written.
+TEST(PackFormats, NoWriteOutsideTheRows) {
+  const int sizes[][2] = {{1, 1}, {3, 2}, {33, 17}};
+  for (const auto &s : sizes)
+    for (PixelFormat f : kPackedFormats)
+      for (const PackParams &p : every_params()) {
+        HostFrame in(f, 2 * s[0], s[1], 5);
+        in.fill_random(15);
+        const HostFrame out = pack(p, in, 7);
+        const FrameView v = out.view();
+        long long padding_hits = 0, unwritten = 0;
+        for (int y = 0; y < v.height; ++y) {
+          const uint8_t *row = v.plane[0] + static_cast<size_t>(y) * v.stride[0];
+          for (int i = 4 * v.width; i < v.stride[0]; ++i) padding_hits += row[i] != kPoison;
+          // A written pixel of an X format has 255 in its 4th byte; of an
+          // alpha format, a random alpha: all four bytes poison is vanishingly rare.
+          for (int x = 0; x < v.width; ++x)
+            unwritten += row[4 * x] == kPoison && row[4 * x + 1] == kPoison && row[4 * x + 2] == kPoison &&
+                         row[4 * x + 3] == kPoison;
+        }
+        padding_hits += v.plane[0][static_cast<size_t>(v.height) * v.stride[0]] != kPoison;
+        EXPECT_EQ(padding_hits, 0) << test::format_name(f) << " layout " << int(p.layout) << " " << s[0] << "x"
+                                   << s[1];
+        EXPECT_EQ(unwritten, 0) << test::format_name(f) << " layout " << int(p.layout) << " " << s[0] << "x" << s[1];
+      }
+}
+
+TEST(PackFormats, RejectsMismatchedFrames) {
+  HostFrame in(PixelFormat::RGBA, 2 * 4, 3);
+  HostFrame ok(PixelFormat::RGBA, 4, 3);
+  const PackParams p = layout_params(PackLayout::Left);
+  EXPECT_TRUE(pack_args_valid(p, in.view(), ok.view()));
+  HostFrame wrong_size(PixelFormat::RGBA, 8, 3);
+  EXPECT_THROW(pack_cpu(p, in.view(), wrong_size.view()), std::invalid_argument);
+  HostFrame wrong_format(PixelFormat::BGRA, 4, 3);
+  EXPECT_THROW(pack_cpu(p, in.view(), wrong_format.view()), std::invalid_argument);
+  HostFrame yuv_in(PixelFormat::NV12, 2 * 4, 3), yuv_out(PixelFormat::NV12, 4, 3);
+  EXPECT_THROW(pack_cpu(p, yuv_in.view(), yuv_out.view()), std::invalid_argument);
+  HostFrame odd_in(PixelFormat::RGBA, 7, 3), odd_out(PixelFormat::RGBA, 3, 3);
+  EXPECT_THROW(pack_cpu(p, odd_in.view(), odd_out.view()), std::invalid_argument);
+  PackParams bad = p;
+  bad.layout = static_cast<PackLayout>(99);
+  EXPECT_FALSE(pack_args_valid(bad, in.view(), ok.view()));
+  bad = p;
+  bad.method = static_cast<AnaglyphMethod>(-1);
+  EXPECT_FALSE(pack_args_valid(bad, in.view(), ok.view()));
+}
+
+}  // namespace
+}  // namespace p3d

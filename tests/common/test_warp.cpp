@@ -1,1 +1,601 @@
-// placeholder: implemented by the stage owner
+// DIBR warp (common/warp.h): known shifts (integer and sub-pixel), view
+// directions, depth ordering, disocclusion filling from the background,
+// NeighborAverage against a naive Jacobi written here, hole counts, every
+// source and output format, edge sizes, extreme and invalid parameters.
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "test_data.h"
+#include "warp.h"
+
+namespace p3d {
+namespace {
+
+using test::kAllFormats;
+using test::kPackedFormats;
+
+constexpr HoleFill kAllFills[] = {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None};
+constexpr StereoView kAllViews[] = {StereoView::Both, StereoView::Left, StereoView::Right};
+
+// Channels stay below 255, so a magenta pixel in an output is a hole.
+HostFrame textured(PixelFormat f, int w, int h, uint32_t seed, int padding = 0) {
+  std::mt19937 rng(seed);
+  cv::Mat bgr(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(rng() % 200 + 20, rng() % 200 + 20, rng() % 200 + 20);
+  return HostFrame::from_bgr(bgr, f, padding);
+}
+
+using DepthFn = std::function<float(int x, int y)>;
+cv::Mat make_depth(int w, int h, const DepthFn &fn) {
+  cv::Mat d(h, w, CV_32FC1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) d.at<float>(y, x) = fn(x, y);
+  return d;
+}
+cv::Mat flat_depth(int w, int h, float v) {
+  return make_depth(w, h, [v](int, int) { return v; });
+}
+cv::Mat noise_depth(int w, int h, uint32_t seed, bool binary) {
+  std::mt19937 rng(seed);
+  return make_depth(w, h, [&](int, int) {
+    return binary ? static_cast<float>(rng() & 1) : std::uniform_real_distribution<float>(0.f, 1.f)(rng);
+  });
+}
+
+WarpParams params(float max_disparity, float convergence, StereoView view, HoleFill fill) {
+  WarpParams p;
+  p.max_disparity = max_disparity;
+  p.convergence = convergence;
+  p.view = view;
+  p.fill = fill;
+  return p;
+}
+
+struct Rendered {
+  HostFrame out;
+  long long holes = 0;
+};
+
+// Renders into a fresh 2W x H frame whose every byte starts as `poison`.
+Rendered render(const WarpParams &p, const HostFrame &src, const cv::Mat &depth,
+                PixelFormat out_format = PixelFormat::BGRA, uint8_t poison = 0xA5, int padding = 4) {
+  Rendered r;
+  r.out = HostFrame(out_format, 2 * src.width(), src.height(), padding);
+  r.out.fill(poison);
+  r.holes = warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), r.out.view());
+  return r;
+}
+
+Rgba at(const HostFrame &f, int x, int y) { return load_rgba(f.view(), x, y, YuvToRgb()); }
+// View pixel: eye 0 = left (columns [0, W)), eye 1 = right.
+Rgba view_at(const HostFrame &out, int eye, int x, int y) { return at(out, eye * (out.width() / 2) + x, y); }
+
+bool equal(Rgba a, Rgba b) { return a.r == b.r && a.g == b.g && a.b == b.b && a.a == b.a; }
+
+::testing::AssertionResult same(Rgba got, Rgba want) {
+  if (equal(got, want)) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "got (" << int(got.r) << "," << int(got.g) << "," << int(got.b) << ","
+                                       << int(got.a) << ") want (" << int(want.r) << "," << int(want.g) << ","
+                                       << int(want.b) << "," << int(want.a) << ")";
+}
+
+using PixelFn = std::function<Rgba(int x, int y)>;
+// Every pixel of one view equals want(x, y).
+::testing::AssertionResult view_is(const HostFrame &out, int eye, const PixelFn &want) {
+  const int w = out.width() / 2;
+  for (int y = 0; y < out.height(); ++y)
+    for (int x = 0; x < w; ++x) {
+      ::testing::AssertionResult r = same(view_at(out, eye, x, y), want(x, y));
+      if (!r) return r << " at view " << eye << " (" << x << "," << y << ")";
+    }
+  return ::testing::AssertionSuccess();
+}
+PixelFn source_of(const HostFrame &src) {
+  return [&src](int x, int y) { return at(src, x, y); };
+}
+
+// Exact reference of linear interpolation at a dyadic fraction: a + (b-a)*f
+// is exact in float, then rounded half up.
+Rgba lerp_exact(Rgba a, Rgba b, double f) {
+  auto ch = [f](int p, int q) { return static_cast<uint8_t>(std::floor(p + (q - p) * f + 0.5)); };
+  return Rgba{ch(a.r, b.r), ch(a.g, b.g), ch(a.b, b.b), ch(a.a, b.a)};
+}
+
+bool same_bytes(const HostFrame &a, const HostFrame &b) {
+  const FrameView va = a.view(), vb = b.view();
+  if (va.width != vb.width || va.height != vb.height || va.format != vb.format) return false;
+  for (int y = 0; y < va.height; ++y)
+    if (std::memcmp(va.plane[0] + y * va.stride[0], vb.plane[0] + y * vb.stride[0], 4 * va.width) != 0) return false;
+  return true;
+}
+
+long long count_colour(const HostFrame &out, Rgba c) {
+  long long n = 0;
+  for (int y = 0; y < out.height(); ++y)
+    for (int x = 0; x < out.width(); ++x) n += equal(at(out, x, y), c);
+  return n;
+}
+
+// ---- known shifts -----------------------------------------------------------
+
+// W = 100, max_disparity 8 % -> D = 8; depth 1, convergence 0.5 -> p = 4:
+// view=both moves the left view right by 2 and the right view left by 2.
+TEST(WarpShift, ConstantDepthIntegerDisparity) {
+  const HostFrame src = textured(PixelFormat::BGRA, 100, 3, 1);
+  const Rendered r = render(params(8.f, 0.5f, StereoView::Both, HoleFill::Background), src, flat_depth(100, 3, 1.f));
+  EXPECT_EQ(r.holes, 2 * 2 * 3);  // two columns uncovered at one edge of each view
+  EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) { return at(src, x < 2 ? 0 : x - 2, y); }));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) { return at(src, x > 97 ? 99 : x + 2, y); }));
+}
+
+// D = 1, depth 1, convergence 0.5: p = 0.5, shifts +-0.25 px; the target X
+// takes the colour at u = X -+ 0.25, interpolated between its neighbours.
+TEST(WarpShift, SubPixelShiftInterpolates) {
+  const HostFrame src = textured(PixelFormat::RGBA, 100, 2, 2);
+  const Rendered r = render(params(1.f, 0.5f, StereoView::Both, HoleFill::None), src, flat_depth(100, 2, 1.f));
+  EXPECT_EQ(r.holes, 0);
+  EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) {
+    return x == 0 ? at(src, 0, y) : lerp_exact(at(src, x - 1, y), at(src, x, y), 0.75);
+  }));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) {
+    return x == 99 ? at(src, 99, y) : lerp_exact(at(src, x, y), at(src, x + 1, y), 0.25);
+  }));
+}
+
+// view=right: the left view is the source; the right takes x - p with
+// p = 1.5 * (1 - 0.5) = 0.75.
+TEST(WarpShift, SubPixelShiftSingleView) {
+  const HostFrame src = textured(PixelFormat::RGBx, 100, 2, 3);
+  const Rendered r = render(params(1.5f, 0.5f, StereoView::Right, HoleFill::None), src, flat_depth(100, 2, 1.f));
+  // Column 99 is uncovered: t(99) = 98.25 and only t(x) - 0.5 <= X < t(x) + 0.5 reaches past t(99).
+  EXPECT_EQ(r.holes, 2);
+  EXPECT_TRUE(view_is(r.out, 0, source_of(src)));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) {
+    return x == 99 ? kHoleColour : lerp_exact(at(src, x, y), at(src, x + 1, y), 0.75);
+  }));
+}
+
+// ---- view directions --------------------------------------------------------
+
+// p = 8 * (1 - 0.5) = 4 (in front of the screen): the left view moves right,
+// the right view left; view=left/right warp one eye by the whole p.
+TEST(WarpViews, DirectionsInFrontOfScreen) {
+  const HostFrame src = textured(PixelFormat::BGRA, 100, 2, 4);
+  const cv::Mat near = flat_depth(100, 2, 1.f);
+  const Rendered both = render(params(8.f, 0.5f, StereoView::Both, HoleFill::None), src, near);
+  const Rendered left = render(params(8.f, 0.5f, StereoView::Left, HoleFill::None), src, near);
+  const Rendered right = render(params(8.f, 0.5f, StereoView::Right, HoleFill::None), src, near);
+  auto or_hole = [&](int by) {
+    return [&src, by](int x, int y) { return x - by < 0 || x - by > 99 ? kHoleColour : at(src, x - by, y); };
+  };
+  EXPECT_TRUE(view_is(both.out, 0, or_hole(2)));
+  EXPECT_TRUE(view_is(both.out, 1, or_hole(-2)));
+  EXPECT_TRUE(view_is(left.out, 0, or_hole(4)));
+  EXPECT_TRUE(view_is(left.out, 1, source_of(src)));
+  EXPECT_TRUE(view_is(right.out, 0, source_of(src)));
+  EXPECT_TRUE(view_is(right.out, 1, or_hole(-4)));
+  EXPECT_EQ(both.holes, 2 * 2 * 2);
+  EXPECT_EQ(left.holes, 4 * 2);
+  EXPECT_EQ(right.holes, 4 * 2);
+}
+
+// Behind the screen (depth 0 < convergence 0.5, p = -4) everything mirrors.
+TEST(WarpViews, DirectionsBehindScreen) {
+  const HostFrame src = textured(PixelFormat::BGRA, 100, 2, 5);
+  const Rendered both = render(params(8.f, 0.5f, StereoView::Both, HoleFill::Background), src, flat_depth(100, 2, 0.f));
+  EXPECT_TRUE(view_is(both.out, 0, [&](int x, int y) { return at(src, x > 97 ? 99 : x + 2, y); }));
+  EXPECT_TRUE(view_is(both.out, 1, [&](int x, int y) { return at(src, x < 2 ? 0 : x - 2, y); }));
+}
+
+// ---- zero disparity ---------------------------------------------------------
+
+TEST(WarpZero, NoDisparityGivesTheSourceInEveryFormat) {
+  for (PixelFormat f : kAllFormats) {
+    SCOPED_TRACE(test::format_name(f));
+    const HostFrame src = textured(f, 37, 11, 6, 3);
+    const cv::Mat depth = noise_depth(37, 11, 7, false);
+    for (StereoView v : kAllViews) {
+      const Rendered zero = render(params(0.f, 0.5f, v, HoleFill::None), src, depth);
+      EXPECT_EQ(zero.holes, 0);
+      EXPECT_TRUE(view_is(zero.out, 0, source_of(src)));
+      EXPECT_TRUE(view_is(zero.out, 1, source_of(src)));
+      // Depth on the screen plane everywhere: p = 0 whatever D is.
+      const Rendered plane = render(params(20.f, 0.3f, v, HoleFill::None), src, flat_depth(37, 11, 0.3f));
+      EXPECT_EQ(plane.holes, 0);
+      EXPECT_TRUE(view_is(plane.out, 0, source_of(src)));
+      EXPECT_TRUE(view_is(plane.out, 1, source_of(src)));
+    }
+  }
+}
+
+// ---- depth ordering ---------------------------------------------------------
+
+// Convergence 0 keeps the far background (depth 0) in place; a near pixel
+// (depth 1, p = D = 4) at x = 10 lands on the background pixel 6 in the right
+// view and must win there. Its own place becomes a hole between two equally
+// far, equally distant neighbours: filled from the left one.
+TEST(WarpOrder, NearerPixelWins) {
+  const HostFrame src = textured(PixelFormat::BGRA, 100, 1, 8);
+  const cv::Mat depth = make_depth(100, 1, [](int x, int) { return x == 10 ? 1.f : 0.f; });
+  const Rendered r = render(params(4.f, 0.f, StereoView::Right, HoleFill::Background), src, depth);
+  EXPECT_EQ(r.holes, 1);
+  EXPECT_TRUE(view_is(r.out, 0, source_of(src)));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) { return at(src, x == 6 ? 10 : (x == 10 ? 9 : x), y); }));
+  // Mirrored: view=left moves it right onto pixel 14.
+  const Rendered l = render(params(4.f, 0.f, StereoView::Left, HoleFill::Background), src, depth);
+  EXPECT_EQ(l.holes, 1);
+  EXPECT_TRUE(view_is(l.out, 0, [&](int x, int y) { return at(src, x == 14 ? 10 : (x == 10 ? 9 : x), y); }));
+}
+
+// Two near pixels land on one target: pixel 20 at depth 1 (p = 8) and pixel
+// 16 at depth 0.5 (p = 4) both reach X = 12 in the right view; the nearer
+// one (20) wins whichever way the row is walked.
+TEST(WarpOrder, NearestOfSeveralWins) {
+  const HostFrame src = textured(PixelFormat::BGRA, 64, 1, 9);
+  const cv::Mat depth = make_depth(64, 1, [](int x, int) { return x == 20 ? 1.f : (x == 16 ? 0.5f : 0.f); });
+  const Rendered r = render(params(12.5f, 0.f, StereoView::Right, HoleFill::None), src, depth);
+  EXPECT_TRUE(same(view_at(r.out, 1, 12, 0), at(src, 20, 0)));
+  // Mirrored geometry in the left view: both reach X = 28 from 20 and 24.
+  const cv::Mat mirrored = make_depth(64, 1, [](int x, int) { return x == 20 ? 1.f : (x == 24 ? 0.5f : 0.f); });
+  const Rendered l = render(params(12.5f, 0.f, StereoView::Left, HoleFill::None), src, mirrored);
+  EXPECT_TRUE(same(view_at(l.out, 0, 28, 0), at(src, 20, 0)));
+}
+
+// ---- stretching ---------------------------------------------------------------
+
+// Depth 0.25 on columns 20..29, 0 elsewhere, D = 8, convergence 0, right
+// view: the step 29 -> 30 opens a gap of 1 + 8 * d. At d = 0.25 (gap 3 =
+// 1 + kMaxStretch) the surface is stretched over X = 27..29 with
+// u = 29 + (X - 27) / 3, kept in 1/256 steps: 29 + 85/256 and 29 + 171/256.
+// At d = 0.3125 (gap 3.5) it tears: X = 27..29 are holes.
+TEST(WarpStretch, GapUpToMaxStretchIsInterpolatedWiderIsAHole) {
+  const HostFrame src = textured(PixelFormat::BGRA, 64, 2, 28);
+  auto step = [](float d) { return make_depth(64, 2, [d](int x, int) { return x >= 20 && x <= 29 ? d : 0.f; }); };
+  const WarpParams p = params(12.5f, 0.f, StereoView::Right, HoleFill::None);
+  const Rendered stretched = render(p, src, step(0.25f));
+  EXPECT_EQ(stretched.holes, 0);
+  for (int y = 0; y < 2; ++y) {
+    EXPECT_TRUE(same(view_at(stretched.out, 1, 27, y), at(src, 29, y)));
+    EXPECT_TRUE(same(view_at(stretched.out, 1, 28, y), lerp_exact(at(src, 29, y), at(src, 30, y), 85 / 256.)));
+    EXPECT_TRUE(same(view_at(stretched.out, 1, 29, y), lerp_exact(at(src, 29, y), at(src, 30, y), 171 / 256.)));
+    EXPECT_TRUE(same(view_at(stretched.out, 1, 30, y), at(src, 30, y)));
+  }
+  const Rendered torn = render(p, src, step(0.3125f));
+  EXPECT_EQ(torn.holes, 3 * 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 27; x <= 29; ++x) EXPECT_TRUE(same(view_at(torn.out, 1, x, y), kHoleColour)) << x;
+}
+
+// The shared helpers on the stretched step above: pixel 29 (depth 0.25,
+// t = 27) connected to pixel 30 (depth 0, t = 30).
+TEST(WarpHelpers, StretchedSpanKeys) {
+  float depth[64];
+  for (int x = 0; x < 64; ++x) depth[x] = x >= 20 && x <= 29 ? 0.25f : 0.f;
+  const WarpSource s = warp_source(depth, 29, 64, -1.f, 8.f, 0.f);
+  EXPECT_TRUE(s.connected);
+  EXPECT_EQ(s.t0, 27.f);
+  EXPECT_EQ(s.t1, 30.f);
+  const WarpSpan span = warp_span(s, 64);
+  EXPECT_EQ(span.first, 27);
+  EXPECT_EQ(span.last, 29);
+  // Footprint target 27: u = 29, depth 0.25. Span targets: depth runs
+  // linearly from 0.25 to 0 with u (1/6 and 1/12 at u = 29 1/3, 29 2/3).
+  EXPECT_EQ(warp_key_u(warp_key_at(s, 27, 64)), 29.f);
+  EXPECT_EQ(warp_key_depth(warp_key_at(s, 27, 64)), 0.25f);
+  EXPECT_EQ(warp_key_u(warp_key_at(s, 28, 64)), 29.f + 85.f / 256.f);
+  EXPECT_NEAR(warp_key_depth(warp_key_at(s, 28, 64)), 0.25 / 1.5, 1e-6);
+  EXPECT_NEAR(warp_key_depth(warp_key_at(s, 29, 64)), 0.25 / 3, 1e-6);
+  // The clipped span at the view's edges.
+  const WarpSpan left_edge = warp_span(warp_source(depth, 0, 64, -1.f, 8.f, 0.f), 64);
+  EXPECT_EQ(left_edge.first, 0);
+  EXPECT_EQ(left_edge.last, 0);
+  const WarpSpan out = warp_span(warp_source(depth, 25, 64, -1.f, 80.f, 0.f), 64);  // t = 5
+  EXPECT_EQ(out.first, 5);
+}
+
+TEST(WarpHelpers, KeysOrderByDepthThenPosition) {
+  EXPECT_GT(warp_key(0.5f, 3.f), warp_key(0.25f, 60.f));
+  EXPECT_GT(warp_key(0.5f, 3.5f), warp_key(0.5f, 3.f));
+  EXPECT_GT(warp_key(0.f, 0.f), 0ull);  // 0 stays "hole"
+  EXPECT_EQ(warp_key(-1.f, 2.f), warp_key(0.f, 2.f));
+  EXPECT_EQ(warp_key_u(warp_key(0.7f, 1234.5f)), 1234.5f);
+  EXPECT_EQ(warp_key_depth(warp_key(0.7f, 1234.5f)), 0.7f);
+}
+
+TEST(WarpHelpers, BackgroundSourcePicksFartherThenCloserThenLeft) {
+  const unsigned long long far = warp_key(0.1f, 0.f), near = warp_key(0.9f, 0.f);
+  EXPECT_EQ(background_source(10, 5, far, 11, near), 5);
+  EXPECT_EQ(background_source(10, 9, near, 20, far), 20);
+  EXPECT_EQ(background_source(10, 7, far, 12, far), 12);  // equal depth: closer
+  EXPECT_EQ(background_source(10, 8, far, 12, far), 8);   // equal distance too: left
+  EXPECT_EQ(background_source(10, -1, 0, 12, near), 12);
+  EXPECT_EQ(background_source(10, 3, near, -1, 0), 3);
+  EXPECT_EQ(background_source(10, -1, 0, -1, 0), -1);
+}
+
+TEST(WarpHelpers, SanitizeAndDepth) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(warp_depth(nan), 0.f);
+  EXPECT_EQ(warp_depth(-0.5f), 0.f);
+  EXPECT_EQ(warp_depth(1.5f), 1.f);
+  EXPECT_EQ(warp_depth(0.375f), 0.375f);
+  WarpParams p = params(nan, nan, StereoView::Left, HoleFill::None);
+  EXPECT_EQ(warp_sanitize(p).max_disparity, 0.f);
+  EXPECT_EQ(warp_sanitize(p).convergence, 0.f);
+  p = params(30.f, 2.f, StereoView::Left, HoleFill::None);
+  EXPECT_EQ(warp_sanitize(p).max_disparity, kMaxDisparityPercent);
+  EXPECT_EQ(warp_sanitize(p).convergence, 1.f);
+  EXPECT_EQ(warp_sanitize(p).view, StereoView::Left);
+  EXPECT_EQ(warp_eye_shift(p, 0.f, 0), 0.f);
+  EXPECT_EQ(warp_eye_shift(p, 2.f, 0), 1.f);
+  EXPECT_EQ(warp_eye_shift(p, 2.f, 1), 0.f);
+}
+
+// ---- disocclusions ----------------------------------------------------------
+
+// A near square (depth 1, columns 24..39, rows 2..5) over a far background
+// (depth 0), convergence 0, D = 8: the square moves +4 in the left view
+// (uncovering columns 24..27) and -4 in the right view (uncovering 36..39).
+constexpr int kSceneW = 64, kSceneH = 8;
+bool in_square(int x, int y) { return x >= 24 && x <= 39 && y >= 2 && y <= 5; }
+cv::Mat square_depth() {
+  return make_depth(kSceneW, kSceneH, [](int x, int y) { return in_square(x, y) ? 1.f : 0.f; });
+}
+HostFrame two_colour_scene(Rgba bg, Rgba fg) {
+  HostFrame f(PixelFormat::BGRA, kSceneW, kSceneH);
+  for (int y = 0; y < kSceneH; ++y)
+    for (int x = 0; x < kSceneW; ++x) store_rgba(f.view(), x, y, in_square(x, y) ? fg : bg);
+  return f;
+}
+const WarpParams kSceneParams = params(12.5f, 0.f, StereoView::Both, HoleFill::Background);
+bool left_hole(int x, int y) { return x >= 24 && x <= 27 && y >= 2 && y <= 5; }
+bool right_hole(int x, int y) { return x >= 36 && x <= 39 && y >= 2 && y <= 5; }
+
+TEST(WarpFill, BackgroundFillsDisocclusionWithBackground) {
+  const Rgba bg{20, 180, 40, 255}, fg{220, 30, 10, 255};
+  const Rendered r = render(kSceneParams, two_colour_scene(bg, fg), square_depth());
+  EXPECT_EQ(r.holes, 2 * 4 * 4);
+  EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) { return in_square(x - 4, y) ? fg : bg; }));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) { return in_square(x + 4, y) ? fg : bg; }));
+}
+
+// Textured: the hole copies the nearest background pixel, which sits left of
+// the hole in the left view (column 23) and right of it in the right view
+// (column 40, while the foreground is on its left).
+TEST(WarpFill, BackgroundTakesTheFartherSide) {
+  const HostFrame src = textured(PixelFormat::BGRA, kSceneW, kSceneH, 10);
+  const Rendered r = render(kSceneParams, src, square_depth());
+  EXPECT_EQ(r.holes, 2 * 4 * 4);
+  EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) {
+    return left_hole(x, y) ? at(src, 23, y) : in_square(x - 4, y) ? at(src, x - 4, y) : at(src, x, y);
+  }));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) {
+    return right_hole(x, y) ? at(src, 40, y) : in_square(x + 4, y) ? at(src, x + 4, y) : at(src, x, y);
+  }));
+}
+
+TEST(WarpFill, NonePaintsHolesMagenta) {
+  const HostFrame src = textured(PixelFormat::BGRA, kSceneW, kSceneH, 11);
+  WarpParams p = kSceneParams;
+  p.fill = HoleFill::None;
+  const Rendered r = render(p, src, square_depth());
+  EXPECT_EQ(r.holes, 2 * 4 * 4);
+  EXPECT_EQ(count_colour(r.out, kHoleColour), r.holes);
+  EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) {
+    return left_hole(x, y) ? kHoleColour : in_square(x - 4, y) ? at(src, x - 4, y) : at(src, x, y);
+  }));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) {
+    return right_hole(x, y) ? kHoleColour : in_square(x + 4, y) ? at(src, x + 4, y) : at(src, x, y);
+  }));
+}
+
+// Independent NeighborAverage: from the None rendering (holes = magenta, the
+// source never is), Jacobi steps over each view with a plain hole mask.
+HostFrame naive_neighbour_average(const HostFrame &none_render) {
+  HostFrame out(PixelFormat::BGRA, none_render.width(), none_render.height());
+  const int w = none_render.width() / 2, h = none_render.height();
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < 2 * w; ++x) store_rgba(out.view(), x, y, at(none_render, x, y));
+  for (int eye = 0; eye < 2; ++eye) {
+    std::vector<std::vector<bool>> hole(h, std::vector<bool>(w));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) hole[y][x] = equal(view_at(none_render, eye, x, y), kHoleColour);
+    for (bool changed = true; changed;) {
+      changed = false;
+      auto next = hole;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          if (!hole[y][x]) continue;
+          int n = 0, s[4] = {0, 0, 0, 0};
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int xx = x + dx, yy = y + dy;
+              if ((!dx && !dy) || xx < 0 || yy < 0 || xx >= w || yy >= h || hole[yy][xx]) continue;
+              const Rgba c = view_at(out, eye, xx, yy);
+              s[0] += c.r, s[1] += c.g, s[2] += c.b, s[3] += c.a, ++n;
+            }
+          if (n == 0) continue;
+          auto mean = [n](int v) { return static_cast<uint8_t>((v + n / 2) / n); };
+          store_rgba(out.view(), eye * w + x, y, Rgba{mean(s[0]), mean(s[1]), mean(s[2]), mean(s[3])});
+          next[y][x] = false;
+          changed = true;
+        }
+      hole = next;
+    }
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (hole[y][x]) store_rgba(out.view(), eye * w + x, y, kFillBlack);
+  }
+  return out;
+}
+
+void expect_neighbour_average_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
+  WarpParams p = base;
+  p.fill = HoleFill::None;
+  const Rendered none = render(p, src, depth);
+  p.fill = HoleFill::NeighborAverage;
+  const Rendered avg = render(p, src, depth);
+  EXPECT_EQ(avg.holes, none.holes);
+  EXPECT_EQ(count_colour(avg.out, kHoleColour), 0);
+  const HostFrame want = naive_neighbour_average(none.out);
+  for (int eye = 0; eye < 2; ++eye)
+    EXPECT_TRUE(view_is(avg.out, eye, [&](int x, int y) { return view_at(want, eye, x, y); }));
+}
+
+TEST(WarpFill, NeighborAverageFillsAllHoles) {
+  expect_neighbour_average_matches_naive(kSceneParams, textured(PixelFormat::BGRA, kSceneW, kSceneH, 12),
+                                         square_depth());
+  const HostFrame src = textured(PixelFormat::I420, 61, 37, 13);
+  expect_neighbour_average_matches_naive(params(15.f, 0.4f, StereoView::Both, HoleFill::None), src,
+                                         noise_depth(61, 37, 14, true));
+  expect_neighbour_average_matches_naive(params(25.f, 0.f, StereoView::Right, HoleFill::None), src,
+                                         noise_depth(61, 37, 15, false));
+}
+
+TEST(WarpFill, NeighborAverageOfOneColourIsThatColour) {
+  const Rgba c{90, 60, 30, 255};
+  const Rendered r = render(params(12.5f, 0.f, StereoView::Both, HoleFill::NeighborAverage), two_colour_scene(c, c),
+                            square_depth());
+  EXPECT_EQ(r.holes, 2 * 4 * 4);
+  for (int eye = 0; eye < 2; ++eye) EXPECT_TRUE(view_is(r.out, eye, [&](int, int) { return c; }));
+}
+
+// ---- hole counts ------------------------------------------------------------
+
+// The returned count is the number of pixels None paints magenta, in every
+// view mode, on random depth.
+TEST(WarpHoles, CountEqualsPaintedHoles) {
+  const HostFrame src = textured(PixelFormat::NV12, 83, 29, 16);
+  for (StereoView v : kAllViews)
+    for (bool binary : {false, true}) {
+      const Rendered r = render(params(10.f, 0.5f, v, HoleFill::None), src, noise_depth(83, 29, 17, binary));
+      EXPECT_GT(r.holes, 0);
+      EXPECT_EQ(count_colour(r.out, kHoleColour), r.holes);
+    }
+}
+
+// ---- formats and sizes ------------------------------------------------------
+
+// The warp reads the source through load_rgba only, so every format gives
+// the rendering of its own BGRA conversion; every packed output format
+// holds the same colours.
+TEST(WarpFormats, EverySourceAndOutputFormat) {
+  const cv::Mat depth = noise_depth(45, 21, 18, false);
+  for (PixelFormat f : kAllFormats) {
+    SCOPED_TRACE(test::format_name(f));
+    const HostFrame src = textured(f, 45, 21, 19, 5);
+    const cv::Mat bgra = src.to_bgra();
+    const HostFrame as_bgra = HostFrame::from_bgr(bgra, PixelFormat::BGRA);
+    for (HoleFill fill : kAllFills) {
+      const WarpParams p = params(12.f, 0.5f, StereoView::Both, fill);
+      const Rendered want = render(p, as_bgra, depth);
+      for (PixelFormat of : kPackedFormats) {
+        SCOPED_TRACE(test::format_name(of));
+        const Rendered got = render(p, src, depth, of);
+        EXPECT_EQ(got.holes, want.holes);
+        for (int eye = 0; eye < 2; ++eye)
+          EXPECT_TRUE(view_is(got.out, eye, [&](int x, int y) { return view_at(want.out, eye, x, y); }));
+      }
+    }
+  }
+}
+
+// 1x1: D = 0.25, the only pixel moves by at most 0.25 and stays covered.
+TEST(WarpSizes, OneByOne) {
+  for (PixelFormat f : kAllFormats) {
+    const HostFrame src = textured(f, 1, 1, 20);
+    for (StereoView v : kAllViews)
+      for (float d : {0.f, 1.f}) {
+        const Rendered r = render(params(25.f, 1.f - d, v, HoleFill::None), src, flat_depth(1, 1, d));
+        EXPECT_EQ(r.holes, 0);
+        EXPECT_TRUE(view_is(r.out, 0, source_of(src)));
+        EXPECT_TRUE(view_is(r.out, 1, source_of(src)));
+      }
+  }
+}
+
+// Every pixel is written: two renderings into outputs poisoned differently
+// give the same bytes (alpha/padding byte included).
+void expect_fully_written(const WarpParams &p, const HostFrame &src, const cv::Mat &depth) {
+  const Rendered a = render(p, src, depth, PixelFormat::RGBx, 0x00);
+  const Rendered b = render(p, src, depth, PixelFormat::RGBx, 0xFF);
+  EXPECT_GE(a.holes, 0);
+  EXPECT_EQ(a.holes, b.holes);
+  EXPECT_TRUE(same_bytes(a.out, b.out));
+  EXPECT_EQ(count_colour(a.out, kHoleColour), p.fill == HoleFill::None ? a.holes : 0);
+}
+
+TEST(WarpSizes, OddSizesEveryModeFullyWritten) {
+  const int sizes[][2] = {{1, 1}, {3, 2}, {2, 3}, {33, 17}, {1001, 7}};
+  for (const auto &s : sizes) {
+    SCOPED_TRACE(::testing::Message() << s[0] << "x" << s[1]);
+    const HostFrame src = textured(PixelFormat::I420, s[0], s[1], 21);
+    const cv::Mat depth = noise_depth(s[0], s[1], 22, true);
+    for (StereoView v : kAllViews)
+      for (HoleFill fill : kAllFills) expect_fully_written(params(25.f, 0.5f, v, fill), src, depth);
+  }
+}
+
+// max_disparity 25 % with depth at 0/1 extremes and convergence at both ends.
+TEST(WarpExtremes, FullDisparityBinaryDepth) {
+  const HostFrame src = textured(PixelFormat::BGRx, 97, 31, 23);
+  const cv::Mat depth = noise_depth(97, 31, 24, true);
+  for (float c : {0.f, 0.5f, 1.f})
+    for (StereoView v : kAllViews)
+      for (HoleFill fill : kAllFills) expect_fully_written(params(25.f, c, v, fill), src, depth);
+}
+
+// Out-of-range parameters are clamped; NaN depth reads as 0 and depth
+// outside 0..1 is clamped.
+TEST(WarpExtremes, InvalidParametersAndDepthAreClamped) {
+  const HostFrame src = textured(PixelFormat::BGRA, 57, 9, 25);
+  const cv::Mat depth = noise_depth(57, 9, 26, false);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  auto same_render = [&](const WarpParams &a, const cv::Mat &da, const WarpParams &b, const cv::Mat &db) {
+    const Rendered ra = render(a, src, da), rb = render(b, src, db);
+    EXPECT_EQ(ra.holes, rb.holes);
+    EXPECT_TRUE(same_bytes(ra.out, rb.out));
+  };
+  const StereoView v = StereoView::Both;
+  const HoleFill f = HoleFill::Background;
+  same_render(params(80.f, 0.5f, v, f), depth, params(25.f, 0.5f, v, f), depth);
+  same_render(params(inf, 0.5f, v, f), depth, params(25.f, 0.5f, v, f), depth);
+  same_render(params(-3.f, 0.5f, v, f), depth, params(0.f, 0.5f, v, f), depth);
+  same_render(params(nan, 0.5f, v, f), depth, params(0.f, 0.5f, v, f), depth);
+  same_render(params(10.f, nan, v, f), depth, params(10.f, 0.f, v, f), depth);
+  same_render(params(10.f, 7.f, v, f), depth, params(10.f, 1.f, v, f), depth);
+  same_render(params(10.f, -1.f, v, f), depth, params(10.f, 0.f, v, f), depth);
+  same_render(params(10.f, 0.5f, v, f), flat_depth(57, 9, nan), params(10.f, 0.5f, v, f), flat_depth(57, 9, 0.f));
+  same_render(params(10.f, 0.5f, v, f), flat_depth(57, 9, -inf), params(10.f, 0.5f, v, f), flat_depth(57, 9, 0.f));
+  same_render(params(10.f, 0.5f, v, f), flat_depth(57, 9, 3.f), params(10.f, 0.5f, v, f), flat_depth(57, 9, 1.f));
+  // Max disparity 0 is the source even with NaN depth.
+  const Rendered zero = render(params(0.f, 0.5f, v, f), src, flat_depth(57, 9, nan));
+  EXPECT_EQ(zero.holes, 0);
+  EXPECT_TRUE(view_is(zero.out, 0, source_of(src)));
+}
+
+TEST(WarpFrames, MismatchedFramesAreRefused) {
+  const HostFrame src = textured(PixelFormat::BGRA, 8, 4, 27);
+  const cv::Mat depth = flat_depth(8, 4, 1.f);
+  HostFrame narrow(PixelFormat::BGRA, 8, 4);
+  narrow.fill(0x5A);
+  EXPECT_EQ(warp_render_cpu(WarpParams(), src.view(), YuvToRgb(), depth_view_of(depth), narrow.view()), -1);
+  EXPECT_EQ(count_colour(narrow, Rgba{0x5A, 0x5A, 0x5A, 0x5A}), 8 * 4);  // untouched
+  HostFrame yuv_out(PixelFormat::NV12, 16, 4);
+  EXPECT_EQ(warp_render_cpu(WarpParams(), src.view(), YuvToRgb(), depth_view_of(depth), yuv_out.view()), -1);
+  HostFrame out(PixelFormat::BGRA, 16, 4);
+  const cv::Mat small = flat_depth(7, 4, 1.f);
+  EXPECT_EQ(warp_render_cpu(WarpParams(), src.view(), YuvToRgb(), depth_view_of(small), out.view()), -1);
+}
+
+}  // namespace
+}  // namespace p3d

@@ -1,1 +1,431 @@
-// placeholder: implemented by the stage owner
+// GPU depth estimation against the CPU reference (common/depth_estimate.h).
+//
+// Tolerances: labels, temporal decisions and the mean difference must be
+// identical (integer sums, a connected-components result defined by the
+// smallest index, a fixed-point difference sum). Block depth and full depth
+// are allowed 1e-6: both sides run the same P3D_HD functions in the same
+// operation order (no FMA contraction on either side, IEEE division and
+// sqrtf), so they are expected bitwise equal; 1e-6 (about 8 ulp at 1.0) only
+// forgives a compiler reassociating a float expression, while the smallest
+// real error (one hypothesis quantum, 1/65535 = 1.5e-5, or a block in the
+// wrong region) is far larger. Every output starts poisoned with NaN, so an
+// unwritten pixel counts as non-finite and fails.
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "depth_estimate_gpu.h"
+#include "gpu_util.h"
+#include "test_data.h"
+
+namespace p3d {
+namespace {
+
+using test::check_cuda;
+using test::DeviceDepth;
+using test::DeviceFrame;
+using test::format_name;
+using test::kAllFormats;
+
+constexpr double kDepthTolerance = 1e-6;  // see the file comment
+
+uint32_t fresh_seed() { return std::random_device{}(); }
+
+struct Result {
+  cv::Mat depth;
+  std::vector<int> labels;
+  std::vector<float> block_depth;
+  TemporalDecision decision = TemporalDecision::Cut;
+  float diff = -1.f;
+};
+
+Result run_cpu(DepthEstimatorCpu &est, const DepthParams &p, const HostFrame &f) {
+  Result r;
+  r.depth = cv::Mat(f.height(), f.width(), CV_32FC1, cv::Scalar(NAN));
+  r.decision = est.estimate(p, f.view(), depth_view_of(r.depth));
+  r.labels = est.labels();
+  r.block_depth = est.block_depth();
+  r.diff = est.last_diff();
+  return r;
+}
+
+class GpuRunner {
+ public:
+  GpuRunner() { EXPECT_EQ(cudaSuccess, cudaStreamCreate(&stream_)); }
+  ~GpuRunner() { cudaStreamDestroy(stream_); }
+  GpuRunner(const GpuRunner &) = delete;
+  GpuRunner &operator=(const GpuRunner &) = delete;
+
+  Result run(const DepthParams &p, const HostFrame &f) {
+    Result r;
+    const DeviceFrame frame = DeviceFrame::upload(f);
+    DeviceDepth depth(f.width(), f.height());
+    depth.poison();
+    check_cuda(est_.estimate(p, frame.view(), depth.view(), stream_));
+    check_cuda(est_.download_labels(r.labels, stream_));
+    check_cuda(est_.download_block_depth(r.block_depth, stream_));
+    check_cuda(est_.last_decision(&r.decision, stream_));
+    check_cuda(est_.last_diff(&r.diff, stream_));
+    r.depth = depth.download();
+    return r;
+  }
+  DepthEstimatorGpu &estimator() { return est_; }
+  cudaStream_t stream() const { return stream_; }
+
+ private:
+  DepthEstimatorGpu est_;
+  cudaStream_t stream_ = nullptr;
+};
+
+void expect_same(const Result &cpu, const Result &gpu, const std::string &what) {
+  ASSERT_EQ(cpu.labels.size(), gpu.labels.size()) << what;
+  long long label_mismatch = 0;
+  size_t first = 0;
+  for (size_t k = 0; k < cpu.labels.size(); ++k)
+    if (cpu.labels[k] != gpu.labels[k] && label_mismatch++ == 0) first = k;
+  EXPECT_EQ(label_mismatch, 0) << what << ": first at block " << first << " cpu " << cpu.labels[first] << " gpu "
+                               << gpu.labels[first];
+  ASSERT_EQ(cpu.block_depth.size(), gpu.block_depth.size()) << what;
+  double block_max = 0;
+  long long block_nonfinite = 0;
+  for (size_t k = 0; k < cpu.block_depth.size(); ++k) {
+    if (!std::isfinite(gpu.block_depth[k])) ++block_nonfinite;
+    else block_max = std::max(block_max, double(std::fabs(cpu.block_depth[k] - gpu.block_depth[k])));
+  }
+  EXPECT_EQ(block_nonfinite, 0) << what;
+  EXPECT_LE(block_max, kDepthTolerance) << what;
+  const test::FloatDiff d = test::compare_f32(cpu.depth, gpu.depth);
+  EXPECT_EQ(d.nonfinite, 0) << what;
+  EXPECT_LE(d.max_abs, kDepthTolerance) << what;
+  EXPECT_EQ(cpu.decision, gpu.decision) << what;
+  EXPECT_EQ(cpu.diff, gpu.diff) << what;
+}
+
+// One fresh CPU and GPU estimator on one frame.
+void compare_one(const DepthParams &p, const HostFrame &f, const std::string &what) {
+  DepthEstimatorCpu cpu;
+  GpuRunner gpu;
+  expect_same(run_cpu(cpu, p, f), gpu.run(p, f), what);
+}
+
+std::string describe(const HostFrame &f, const DepthParams &p) {
+  return std::string(format_name(f.format())) + " " + std::to_string(f.width()) + "x" + std::to_string(f.height()) +
+         " B=" + std::to_string(p.block_size) + " thr=" + std::to_string(p.edge_threshold) +
+         " hyp=" + std::to_string(static_cast<int>(p.hypothesis));
+}
+
+// A picture of cell x cell squares, each one of two colours with probability
+// near the site-percolation threshold: regions that sprawl across many tiles
+// of the GPU union-find, with long and branching shapes.
+cv::Mat percolation_picture(int w, int h, int cell, uint32_t seed) {
+  std::mt19937 rng(seed);
+  cv::Mat bgr(h, w, CV_8UC3);
+  for (int y = 0; y < h; y += cell)
+    for (int x = 0; x < w; x += cell) {
+      const bool a = rng() % 1000 < 593;
+      bgr(cv::Rect(x, y, std::min(cell, w - x), std::min(cell, h - y)))
+          .setTo(a ? cv::Scalar(30, 60, 200) : cv::Scalar(220, 200, 40));
+    }
+  return bgr;
+}
+
+// One region shaped as a serpentine of `cell`-high stripes: the longest
+// union-find chains a frame can make, winding through every tile.
+cv::Mat serpentine_picture(int w, int h, int cell) {
+  cv::Mat bgr(h, w, CV_8UC3, cv::Scalar(0, 0, 0));
+  for (int r = 0; r * cell < h; r += 2) {
+    bgr(cv::Rect(0, r * cell, w, std::min(cell, h - r * cell))).setTo(cv::Scalar(255, 255, 255));
+    const int link_y = (r + 1) * cell;
+    if (link_y >= h) break;
+    const int link_x = (r / 2) % 2 == 0 ? w - cell : 0;
+    bgr(cv::Rect(link_x, link_y, cell, std::min(cell, h - link_y))).setTo(cv::Scalar(255, 255, 255));
+  }
+  return bgr;
+}
+
+TEST(GpuDepth, RandomFramesAllFormatsAndBlockSizes) {
+  std::mt19937 rng(fresh_seed());
+  const int sizes[][2] = {{33, 17}, {640, 360}, {1001, 97}};
+  for (PixelFormat fmt : kAllFormats)
+    for (const auto &s : sizes)
+      for (int B : {2, 3, 4, 7, 16, 64})
+        for (float thr : {8.f, 24.f, 60.f}) {
+          HostFrame f(fmt, s[0], s[1], 3);
+          f.fill_random(rng());
+          DepthParams p;
+          p.block_size = B;
+          p.edge_threshold = thr;
+          p.hypothesis = static_cast<Hypothesis>(rng() % 4);
+          compare_one(p, f, describe(f, p));
+        }
+}
+
+TEST(GpuDepth, SmoothRandomFrames) {
+  // Blurred noise: gradients make regions of every size, not just noise specks.
+  std::mt19937 rng(fresh_seed());
+  for (PixelFormat fmt : kAllFormats) {
+    cv::Mat bgr(480, 700, CV_8UC3);
+    cv::randu(bgr, 0, 256);
+    cv::GaussianBlur(bgr, bgr, cv::Size(0, 0), 6);
+    cv::normalize(bgr, bgr, 0, 255, cv::NORM_MINMAX);
+    const HostFrame f = HostFrame::from_bgr(bgr, fmt, 1);
+    for (int B : {2, 4, 8}) {
+      DepthParams p;
+      p.block_size = B;
+      p.edge_threshold = 2.f + rng() % 12;
+      compare_one(p, f, describe(f, p));
+    }
+  }
+}
+
+TEST(GpuDepth, PercolationMazes) {
+  std::mt19937 rng(fresh_seed());
+  const int sizes[][2] = {{500, 300}, {1920, 1080}};
+  for (const auto &s : sizes)
+    for (int B : {2, 4}) {
+      const HostFrame f = HostFrame::from_bgr(percolation_picture(s[0], s[1], B, rng()), PixelFormat::RGBA);
+      DepthParams p;
+      p.block_size = B;
+      compare_one(p, f, "percolation " + describe(f, p));
+    }
+}
+
+TEST(GpuDepth, SerpentineRegion) {
+  for (int B : {2, 4}) {
+    const HostFrame f = HostFrame::from_bgr(serpentine_picture(3840, 2160, B), PixelFormat::BGRx);
+    DepthParams p;
+    p.block_size = B;
+    DepthEstimatorCpu cpu;
+    GpuRunner gpu;
+    const Result c = run_cpu(cpu, p, f), g = gpu.run(p, f);
+    expect_same(c, g, "serpentine " + describe(f, p));
+    // White block rows are the even ones, all one snake through block 0.
+    const int bx = cpu.blocks_x(), last_white = (cpu.blocks_y() - 1) & ~1;
+    EXPECT_EQ(c.labels[static_cast<size_t>(last_white) * bx], 0);
+    EXPECT_EQ(c.labels[static_cast<size_t>(last_white) * bx + bx - 1], 0);
+  }
+}
+
+TEST(GpuDepth, AloeAllFormats) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  for (PixelFormat fmt : kAllFormats) {
+    const HostFrame f = HostFrame::from_bgr(aloe, fmt, 7);
+    for (int h = 0; h < 4; ++h)
+      for (int B : {2, 4, 9}) {
+        DepthParams p;
+        p.hypothesis = static_cast<Hypothesis>(h);
+        p.block_size = B;
+        compare_one(p, f, "aloe " + describe(f, p));
+      }
+  }
+}
+
+TEST(GpuDepth, OddSizes) {
+  std::mt19937 rng(fresh_seed());
+  const int sizes[][2] = {{1, 1}, {3, 2}, {2, 3}, {33, 17}, {1001, 7}, {7, 1001}, {65, 65}};
+  for (PixelFormat fmt : kAllFormats)
+    for (const auto &s : sizes)
+      for (int B : {2, 4, 5, 64}) {
+        HostFrame f(fmt, s[0], s[1], 1);
+        f.fill_random(rng());
+        DepthParams p;
+        p.block_size = B;
+        p.edge_threshold = 40.f;
+        compare_one(p, f, describe(f, p));
+      }
+}
+
+TEST(GpuDepth, Size3840x2160) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  cv::Mat big;
+  cv::resize(aloe, big, cv::Size(3840, 2160), 0, 0, cv::INTER_LINEAR);
+  for (PixelFormat fmt : {PixelFormat::NV12, PixelFormat::RGBA}) {
+    const HostFrame f = HostFrame::from_bgr(big, fmt);
+    for (int B : {2, 4, 8}) {
+      DepthParams p;
+      p.block_size = B;
+      compare_one(p, f, "aloe " + describe(f, p));
+    }
+    HostFrame r(fmt, 3840, 2160);
+    r.fill_random(fresh_seed());
+    DepthParams p;
+    p.edge_threshold = 60.f;
+    compare_one(p, r, "random " + describe(r, p));
+  }
+}
+
+TEST(GpuDepth, Size7680x4320) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  cv::Mat big;
+  cv::resize(aloe, big, cv::Size(7680, 4320), 0, 0, cv::INTER_LINEAR);
+  for (PixelFormat fmt : {PixelFormat::I420, PixelFormat::BGRx}) {
+    const HostFrame f = HostFrame::from_bgr(big, fmt);
+    for (int B : {2, 4}) {
+      DepthParams p;
+      p.block_size = B;
+      compare_one(p, f, "aloe " + describe(f, p));
+    }
+  }
+  HostFrame r(PixelFormat::NV12, 7680, 4320);
+  r.fill_random(fresh_seed());
+  DepthParams p;
+  p.block_size = 2;
+  p.edge_threshold = 90.f;
+  compare_one(p, r, "random " + describe(r, p));
+}
+
+// Brightness shifted by `delta` levels (saturating).
+cv::Mat shifted(const cv::Mat &bgr, int delta) {
+  cv::Mat out;
+  bgr.convertTo(out, -1, 1.0, delta);
+  return out;
+}
+
+TEST(GpuDepth, TemporalSequenceMatches) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  cv::Mat inverted = cv::Scalar(255, 255, 255) - aloe;
+  cv::Mat cropped = aloe(cv::Rect(0, 0, 600, 500)).clone();
+  struct Step {
+    cv::Mat picture;
+    Hypothesis hypothesis;
+    TemporalDecision expected;
+  };
+  const std::vector<Step> steps = {
+      {aloe, Hypothesis::TopBottom, TemporalDecision::Cut},                 // first frame
+      {aloe, Hypothesis::LeftRight, TemporalDecision::Reuse},               // static (new params ignored)
+      {shifted(aloe, 6), Hypothesis::LeftRight, TemporalDecision::Smooth},  // small change
+      {shifted(aloe, 6), Hypothesis::LeftRight, TemporalDecision::Reuse},
+      {shifted(aloe, 12), Hypothesis::CenterNear, TemporalDecision::Smooth},
+      {inverted, Hypothesis::CenterNear, TemporalDecision::Cut},            // scene cut
+      {shifted(inverted, -5), Hypothesis::TopBottom, TemporalDecision::Smooth},
+      {cropped, Hypothesis::TopBottom, TemporalDecision::Cut},              // size change
+      {cropped, Hypothesis::TopBottom, TemporalDecision::Reuse},
+  };
+  for (PixelFormat fmt : kAllFormats) {
+    DepthEstimatorCpu cpu;
+    GpuRunner gpu;
+    for (size_t i = 0; i < steps.size(); ++i) {
+      const HostFrame f = HostFrame::from_bgr(steps[i].picture, fmt, 2);
+      DepthParams p;
+      p.hypothesis = steps[i].hypothesis;
+      const std::string what = std::string(format_name(fmt)) + " step " + std::to_string(i);
+      const Result c = run_cpu(cpu, p, f), g = gpu.run(p, f);
+      EXPECT_EQ(c.decision, steps[i].expected) << what << " (cpu diff " << c.diff << ")";
+      expect_same(c, g, what);
+    }
+  }
+}
+
+TEST(GpuDepth, TemporalRandomSequenceAndReset) {
+  std::mt19937 rng(fresh_seed());
+  for (PixelFormat fmt : {PixelFormat::NV12, PixelFormat::RGBx}) {
+    DepthEstimatorCpu cpu;
+    GpuRunner gpu;
+    const uint32_t base_seed = rng();
+    DepthParams p;
+    p.block_size = 3;
+    p.static_threshold = 0.5f;
+    p.cut_threshold = 8.f;
+    for (int i = 0; i < 12; ++i) {
+      // Change a random share of the bytes: diff lands anywhere around the thresholds.
+      HostFrame f(fmt, 321, 203, 3);  // not a copy of a base frame: a HostFrame copy shares the planes
+      f.fill_random(base_seed);
+      const FrameView v = f.view();
+      std::uniform_int_distribution<int> row(0, v.height - 1);
+      const int changes = rng() % 20000;
+      for (int k = 0; k < changes; ++k) v.plane[0][static_cast<size_t>(row(rng)) * v.stride[0] + rng() % v.width] ^= 0x40;
+      if (i == 6) {
+        cpu.reset();
+        gpu.estimator().reset();
+      }
+      expect_same(run_cpu(cpu, p, f), gpu.run(p, f), std::string(format_name(fmt)) + " frame " + std::to_string(i));
+    }
+  }
+}
+
+TEST(GpuDepth, DepthFromGreyMatchesCpu) {
+  std::mt19937 rng(fresh_seed());
+  const int sizes[][2] = {{1, 1}, {3, 2}, {33, 17}, {1001, 7}, {3840, 2160}};
+  cudaStream_t stream;
+  ASSERT_EQ(cudaSuccess, cudaStreamCreate(&stream));
+  for (PixelFormat fmt : kAllFormats)
+    for (const auto &s : sizes) {
+      HostFrame f(fmt, s[0], s[1], 5);
+      f.fill_random(rng());
+      const YuvToRgb m = yuv_to_rgb_params(0.2126, 0.0722, rng() % 2 == 0);
+      cv::Mat want(s[1], s[0], CV_32FC1, cv::Scalar(NAN));
+      depth_from_grey_cpu(f.view(), m, depth_view_of(want));
+      const DeviceFrame df = DeviceFrame::upload(f);
+      DeviceDepth dd(s[0], s[1]);
+      check_cuda(depth_from_grey_gpu(df.view(), m, dd.view(), stream));
+      ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream));
+      const test::FloatDiff d = test::compare_f32(want, dd.download());
+      const std::string what = std::string(format_name(fmt)) + " " + std::to_string(s[0]) + "x" + std::to_string(s[1]);
+      EXPECT_EQ(d.nonfinite, 0) << what;
+      EXPECT_LE(d.max_abs, kDepthTolerance) << what;  // one shared P3D_HD function
+    }
+  cudaStreamDestroy(stream);
+}
+
+// Not a pass/fail test of speed (machines differ): prints the time of one
+// estimate at 4K and 8K for the record, and checks that a steady stream of
+// frames keeps giving the CPU's answer with the buffers reused.
+TEST(GpuDepth, TimingLargeFrames) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  struct Case {
+    int w, h, block;
+    PixelFormat fmt;
+  };
+  const Case cases[] = {{3840, 2160, 4, PixelFormat::NV12},
+                        {3840, 2160, 4, PixelFormat::RGBA},
+                        {7680, 4320, 2, PixelFormat::NV12}};
+  for (const Case &k : cases) {
+    cv::Mat big;
+    cv::resize(aloe, big, cv::Size(k.w, k.h));
+    const HostFrame f = HostFrame::from_bgr(big, k.fmt);
+    const DeviceFrame frame = DeviceFrame::upload(f);
+    DeviceDepth depth(f.width(), f.height());
+    GpuRunner gpu;
+    DepthParams p;
+    p.block_size = k.block;
+    p.static_threshold = -1.f;  // never reuse: time the full computation
+    cudaEvent_t start, stop;
+    ASSERT_EQ(cudaSuccess, cudaEventCreate(&start));
+    ASSERT_EQ(cudaSuccess, cudaEventCreate(&stop));
+    for (int i = 0; i < 3; ++i) check_cuda(gpu.estimator().estimate(p, frame.view(), depth.view(), gpu.stream()));
+    const int runs = 20;
+    ASSERT_EQ(cudaSuccess, cudaEventRecord(start, gpu.stream()));
+    for (int i = 0; i < runs; ++i) check_cuda(gpu.estimator().estimate(p, frame.view(), depth.view(), gpu.stream()));
+    ASSERT_EQ(cudaSuccess, cudaEventRecord(stop, gpu.stream()));
+    ASSERT_EQ(cudaSuccess, cudaEventSynchronize(stop));
+    float ms = 0;
+    ASSERT_EQ(cudaSuccess, cudaEventElapsedTime(&ms, start, stop));
+    const std::string name = std::to_string(k.w) + "x" + std::to_string(k.h) + "_" + format_name(k.fmt) + "_B" +
+                             std::to_string(k.block);
+    std::printf("[ timing   ] depth estimate %s: %.3f ms/frame\n", name.c_str(), ms / runs);
+    RecordProperty("ms_per_frame_" + name, std::to_string(ms / runs));
+    cudaEventDestroy(start);
+    cudaEventDestroy(stop);
+    DepthEstimatorCpu cpu;
+    const Result c = run_cpu(cpu, p, f);
+    std::vector<int> labels;
+    check_cuda(gpu.estimator().download_labels(labels, gpu.stream()));
+    EXPECT_EQ(labels, c.labels) << name;
+    const test::FloatDiff d = test::compare_f32(c.depth, depth.download());
+    EXPECT_EQ(d.nonfinite, 0) << name;
+    EXPECT_LE(d.max_abs, kDepthTolerance) << name;
+  }
+}
+
+}  // namespace
+}  // namespace p3d

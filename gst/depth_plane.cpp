@@ -1,0 +1,94 @@
+#include "depth_plane.h"
+
+namespace p3d::gst {
+
+DepthPlane::~DepthPlane() {
+#if HAVE_CUDA
+  if (context) {
+    // Device memory belongs to a non-primary context: free it there.
+    if (gst_cuda_context_push(context)) {
+      device.release();
+      gst_cuda_context_pop(nullptr);
+    }
+    gst_object_unref(context);
+  }
+#endif
+}
+
+ImageView<float> DepthPlane::view() {
+#if HAVE_CUDA
+  if (on_device) return ImageView<float>{device.as<float>(), width, height, device.pitch()};
+#endif
+  return ImageView<float>{host.data(), width, height, static_cast<size_t>(width) * sizeof(float)};
+}
+
+DepthPlanePool::DepthPlanePool() : state_(std::make_shared<State>()) {}
+
+void DepthPlanePool::clear() {
+  std::lock_guard<std::mutex> g(state_->lock);
+  state_->idle.clear();
+}
+
+#if HAVE_CUDA
+DepthPlanePtr DepthPlanePool::acquire(int width, int height, GstCudaContext *context, std::string *error) {
+#else
+DepthPlanePtr DepthPlanePool::acquire(int width, int height, std::nullptr_t context, std::string *error) {
+#endif
+  const bool device = context != nullptr;
+  std::unique_ptr<DepthPlane> plane;
+  {
+    std::lock_guard<std::mutex> g(state_->lock);
+    auto &idle = state_->idle;
+    for (auto it = idle.begin(); it != idle.end(); ++it) {
+      DepthPlane &p = **it;
+      bool same = p.width == width && p.height == height && p.on_device == device;
+#if HAVE_CUDA
+      same = same && p.context == context;
+#endif
+      if (same) {
+        plane = std::move(*it);
+        idle.erase(it);
+        break;
+      }
+    }
+    // Idle planes of another size are of no further use (caps changed).
+    if (!plane) idle.clear();
+  }
+  if (!plane) {
+    plane = std::make_unique<DepthPlane>();
+    plane->width = width;
+    plane->height = height;
+    plane->on_device = device;
+    if (device) {
+#if HAVE_CUDA
+      plane->context = static_cast<GstCudaContext *>(gst_object_ref(context));
+      const CudaStatus st = plane->device.ensure_2d(static_cast<size_t>(width) * sizeof(float), height);
+      if (!st.ok()) {
+        if (error) *error = st.message();
+        return nullptr;
+      }
+#endif
+    } else {
+      try {
+        plane->host.resize(static_cast<size_t>(width) * height);
+      } catch (const std::bad_alloc &) {
+        if (error) *error = "out of host memory for a depth plane";
+        return nullptr;
+      }
+    }
+  }
+  // Back into the pool when the last user lets go (if the pool still lives).
+  std::weak_ptr<State> weak = state_;
+  return DepthPlanePtr(plane.release(), [weak](DepthPlane *p) {
+    if (auto st = weak.lock()) {
+      std::lock_guard<std::mutex> g(st->lock);
+      if (st->idle.size() < 8) {
+        st->idle.emplace_back(p);
+        return;
+      }
+    }
+    delete p;
+  });
+}
+
+}  // namespace p3d::gst

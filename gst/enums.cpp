@@ -1,0 +1,65 @@
+#include "enums.h"
+
+#include "bilateral.h"
+#include "depth_estimate.h"
+#include "pack.h"
+#include "warp.h"
+
+// One registration helper for every enum: the tables below are the only
+// per-type code.
+#define P3D_DEFINE_ENUM(func, TypeName, ...)                              \
+  GType func(void) {                                                      \
+    static GType type = 0;                                                \
+    if (g_once_init_enter(&type)) {                                       \
+      static const GEnumValue values[] = {__VA_ARGS__, {0, NULL, NULL}};  \
+      GType t = g_enum_register_static(TypeName, values);                 \
+      g_once_init_leave(&type, t);                                        \
+    }                                                                     \
+    return type;                                                          \
+  }
+
+P3D_DEFINE_ENUM(gst_pseudo3d_hypothesis_get_type, "GstPseudo3DHypothesis",
+                {(gint)p3d::Hypothesis::TopBottom, "Far at the top, near at the bottom", "top-bottom"},
+                {(gint)p3d::Hypothesis::LeftRight, "Far at the left, near at the right", "left-right"},
+                {(gint)p3d::Hypothesis::CenterNear, "Near in the centre, far at the edges", "center-near"},
+                {(gint)p3d::Hypothesis::Flat, "No gradient (regions only)", "flat"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_depth_method_get_type, "GstPseudo3DDepthMethod",
+                {GST_PSEUDO3D_DEPTH_METHOD_EDGES, "Estimate from edges and a depth-gradient hypothesis", "edges"},
+                {GST_PSEUDO3D_DEPTH_METHOD_RGBD,
+                 "Input holds colour (left half) and depth as grey (right half, white = near)", "rgbd"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_view_get_type, "GstPseudo3DView",
+                {(gint)p3d::StereoView::Both, "Synthesize both views, half the parallax each", "both"},
+                {(gint)p3d::StereoView::Left, "Input is the right view; synthesize the left", "left"},
+                {(gint)p3d::StereoView::Right, "Input is the left view; synthesize the right", "right"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_fill_get_type, "GstPseudo3DFill",
+                {(gint)p3d::HoleFill::Background, "Extend the background side (depth-aware)", "background"},
+                {(gint)p3d::HoleFill::NeighborAverage, "Iterative neighbour-average inpainting", "neighbor-average"},
+                {(gint)p3d::HoleFill::None, "Leave holes, painted magenta (diagnostics)", "none"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_layout_get_type, "GstPseudo3DLayout",
+                {(gint)p3d::PackLayout::Anaglyph, "Anaglyph (see glasses and anaglyph-method)", "anaglyph"},
+                {(gint)p3d::PackLayout::SideBySide, "Side by side, full resolution (2W x H)", "side-by-side"},
+                {(gint)p3d::PackLayout::SideBySideHalf, "Side by side, half width (anamorphic)", "side-by-side-half"},
+                {(gint)p3d::PackLayout::TopBottom, "Top and bottom, full resolution (W x 2H)", "top-bottom"},
+                {(gint)p3d::PackLayout::TopBottomHalf, "Top and bottom, half height (anamorphic)", "top-bottom-half"},
+                {(gint)p3d::PackLayout::RowInterleaved, "Even rows left view, odd rows right view", "row-interleaved"},
+                {(gint)p3d::PackLayout::ColumnInterleaved, "Even columns left, odd columns right",
+                 "column-interleaved"},
+                {(gint)p3d::PackLayout::Checkerboard, "Checkerboard of the two views", "checkerboard"},
+                {(gint)p3d::PackLayout::Left, "Left view only", "left"},
+                {(gint)p3d::PackLayout::Right, "Right view only", "right"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_glasses_get_type, "GstPseudo3DGlasses",
+                {(gint)p3d::AnaglyphGlasses::RedCyan, "Red (left) / cyan (right)", "red-cyan"},
+                {(gint)p3d::AnaglyphGlasses::GreenMagenta, "Green (left) / magenta (right)", "green-magenta"},
+                {(gint)p3d::AnaglyphGlasses::AmberBlue, "Amber (left) / blue (right)", "amber-blue"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_anaglyph_method_get_type, "GstPseudo3DAnaglyphMethod",
+                {(gint)p3d::AnaglyphMethod::Dubois, "Dubois least-squares (least ghosting)", "dubois"},
+                {(gint)p3d::AnaglyphMethod::Color, "Full colour through the filters", "color"},
+                {(gint)p3d::AnaglyphMethod::HalfColor, "Half colour (luma behind the single-colour filter)",
+                 "half-color"},
+                {(gint)p3d::AnaglyphMethod::Gray, "Grey (luma for both eyes)", "gray"})

@@ -1,0 +1,27 @@
+// GEnum types for the elements' enumerated properties (values mirror the
+// common/ parameter enums one to one).
+#pragma once
+
+#include <glib-object.h>
+
+G_BEGIN_DECLS
+
+#define GST_TYPE_PSEUDO3D_HYPOTHESIS (gst_pseudo3d_hypothesis_get_type())
+GType gst_pseudo3d_hypothesis_get_type(void);
+#define GST_TYPE_PSEUDO3D_DEPTH_METHOD (gst_pseudo3d_depth_method_get_type())
+GType gst_pseudo3d_depth_method_get_type(void);
+#define GST_TYPE_PSEUDO3D_VIEW (gst_pseudo3d_view_get_type())
+GType gst_pseudo3d_view_get_type(void);
+#define GST_TYPE_PSEUDO3D_FILL (gst_pseudo3d_fill_get_type())
+GType gst_pseudo3d_fill_get_type(void);
+#define GST_TYPE_PSEUDO3D_LAYOUT (gst_pseudo3d_layout_get_type())
+GType gst_pseudo3d_layout_get_type(void);
+#define GST_TYPE_PSEUDO3D_GLASSES (gst_pseudo3d_glasses_get_type())
+GType gst_pseudo3d_glasses_get_type(void);
+#define GST_TYPE_PSEUDO3D_ANAGLYPH_METHOD (gst_pseudo3d_anaglyph_method_get_type())
+GType gst_pseudo3d_anaglyph_method_get_type(void);
+
+// pseudo3ddepth's method property.
+typedef enum { GST_PSEUDO3D_DEPTH_METHOD_EDGES = 0, GST_PSEUDO3D_DEPTH_METHOD_RGBD = 1 } GstPseudo3DDepthMethod;
+
+G_END_DECLS

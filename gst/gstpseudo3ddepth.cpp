@@ -1,0 +1,337 @@
+/**
+ * SECTION:element-pseudo3ddepth
+ * @title: pseudo3ddepth
+ *
+ * Estimates a depth map from each frame and attaches it to the buffer as a
+ * Pseudo3DDepthMeta; the frame itself passes on unchanged. method=edges
+ * groups blocks into regions along image edges and gives each region depth
+ * from a depth-gradient hypothesis, smoothed over time (reused while the
+ * scene is static, reset at scene cuts). method=rgbd takes frames holding
+ * colour in the left half and depth as grey in the right half (white = near)
+ * and outputs the colour half with that depth attached. A buffer that
+ * already carries depth passes through untouched.
+ *
+ * ## Example launch line
+ * |[
+ * gst-launch-1.0 videotestsrc ! pseudo3ddepth hypothesis=top-bottom ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack ! videoconvert ! autovideosink
+ * ]|
+ */
+#include "gstpseudo3ddepth.h"
+
+#include <memory>
+#include <string>
+
+#include "depth_estimate.h"
+#include "depth_meta.h"
+#include "depth_plane.h"
+#include "enums.h"
+#include "video_util.h"
+
+#if HAVE_CUDA
+#include "depth_estimate_gpu.h"
+#endif
+
+GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_depth_debug);
+#define GST_CAT_DEFAULT gst_pseudo3d_depth_debug
+
+enum {
+  PROP_0,
+  PROP_METHOD,
+  PROP_HYPOTHESIS,
+  PROP_BLOCK_SIZE,
+  PROP_EDGE_THRESHOLD,
+  PROP_REGION_WEIGHT,
+  PROP_TEMPORAL_SMOOTHING,
+  PROP_STATIC_THRESHOLD,
+  PROP_CUT_THRESHOLD,
+};
+
+#define DEFAULT_METHOD GST_PSEUDO3D_DEPTH_METHOD_EDGES
+
+struct DepthState {
+  p3d::DepthEstimatorCpu cpu;
+#if HAVE_CUDA
+  p3d::DepthEstimatorGpu gpu;
+#endif
+  p3d::gst::DepthPlanePool pool;
+};
+
+struct _GstPseudo3DDepth {
+  GstPseudo3DBase parent;
+  GstPseudo3DDepthMethod method;
+  p3d::DepthParams params;
+  DepthState *state;
+};
+
+#define gst_pseudo3d_depth_parent_class parent_class
+G_DEFINE_TYPE(GstPseudo3DDepth, gst_pseudo3d_depth, GST_TYPE_PSEUDO3D_BASE);
+GST_ELEMENT_REGISTER_DEFINE(pseudo3ddepth, "pseudo3ddepth", GST_RANK_NONE, GST_TYPE_PSEUDO3D_DEPTH);
+
+static void get_size_ratio(GstPseudo3DBase *base, gint *wn, gint *wd, gint *hn, gint *hd) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
+  GST_OBJECT_LOCK(self);
+  const bool rgbd = self->method == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
+  GST_OBJECT_UNLOCK(self);
+  *wn = 1;
+  *wd = rgbd ? 2 : 1;  // the colour half
+  *hn = *hd = 1;
+}
+
+static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
+  if (self->method == GST_PSEUDO3D_DEPTH_METHOD_RGBD) {
+    // 4:2:0 halves must start on a chroma sample: the colour half's width must be even.
+    if (GST_VIDEO_INFO_WIDTH(out) * 2 != GST_VIDEO_INFO_WIDTH(in) ||
+        (!GST_VIDEO_FORMAT_INFO_IS_RGB(in->finfo) && GST_VIDEO_INFO_WIDTH(out) % 2 != 0)) {
+      GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, ("RGBD input must be twice as wide as its colour half"),
+                        ("input %dx%d (YUV formats need a width that is a multiple of 4)", GST_VIDEO_INFO_WIDTH(in),
+                         GST_VIDEO_INFO_HEIGHT(in)));
+      return FALSE;
+    }
+  }
+  self->state->cpu.reset();
+#if HAVE_CUDA
+  self->state->gpu.reset();
+#endif
+  return TRUE;
+}
+
+static p3d::DepthParams read_params(GstPseudo3DDepth *self) {
+  GST_OBJECT_LOCK(self);
+  const p3d::DepthParams p = self->params;
+  GST_OBJECT_UNLOCK(self);
+  return p;
+}
+
+static p3d::gst::DepthPlanePtr new_plane(GstPseudo3DDepth *self, gboolean gpu, int w, int h) {
+  std::string error;
+#if HAVE_CUDA
+  p3d::gst::DepthPlanePtr plane = self->state->pool.acquire(w, h, gpu ? self->parent.context : nullptr, &error);
+#else
+  (void)gpu;
+  p3d::gst::DepthPlanePtr plane = self->state->pool.acquire(w, h, nullptr, &error);
+#endif
+  if (!plane)
+    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT, ("Could not allocate a %dx%d depth map", w, h), ("%s", error.c_str()));
+  return plane;
+}
+
+// method=edges: frame unchanged, depth attached.
+static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *buf, GstVideoFrame *frame) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
+  if (pseudo3d_buffer_get_depth(buf)) return GST_FLOW_OK;  // supplied upstream: nothing to estimate
+  const p3d::FrameView view = p3d::gst::frame_view(frame);
+  p3d::gst::DepthPlanePtr plane = new_plane(self, gpu, view.width, view.height);
+  if (!plane) return GST_FLOW_ERROR;
+  const p3d::DepthParams params = read_params(self);
+#if HAVE_CUDA
+  if (gpu) {
+    const p3d::CudaStatus st = self->state->gpu.estimate(params, view, plane->view(), base->stream);
+    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "estimating depth");
+    const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
+    if (ret != GST_FLOW_OK) return ret;
+  } else
+#endif
+  {
+    const p3d::TemporalDecision d = self->state->cpu.estimate(params, view, plane->view());
+    GST_LOG_OBJECT(self, "temporal decision %d", static_cast<int>(d));
+  }
+  pseudo3d_buffer_set_depth(buf, std::move(plane));
+  return GST_FLOW_OK;
+}
+
+// Sub-view of the right half of an RGBD frame (the caller checked that the
+// offset is a whole chroma sample for 4:2:0 formats).
+static p3d::FrameView right_half(p3d::FrameView v, int half) {
+  if (p3d::is_packed_rgb(v.format)) {
+    v.plane[0] += 4 * half;
+  } else {
+    v.plane[0] += half;
+    if (v.format == p3d::PixelFormat::NV12) {
+      v.plane[1] += half;  // half/2 chroma pairs of 2 bytes
+    } else {
+      v.plane[1] += half / 2;
+      v.plane[2] += half / 2;
+    }
+  }
+  v.width = half;
+  return v;
+}
+
+// method=rgbd: copy the colour half, attach the grey half as depth.
+static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *, GstVideoFrame *in,
+                             GstVideoFrame *out) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
+  const int half = GST_VIDEO_FRAME_WIDTH(out);
+  const p3d::FrameView grey = right_half(p3d::gst::frame_view(in), half);
+  const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
+  p3d::gst::DepthPlanePtr plane = new_plane(self, gpu, half, GST_VIDEO_FRAME_HEIGHT(out));
+  if (!plane) return GST_FLOW_ERROR;
+#if HAVE_CUDA
+  if (gpu) {
+    for (guint i = 0; i < GST_VIDEO_FRAME_N_PLANES(out); ++i) {
+      const cudaError_t err = cudaMemcpy2DAsync(
+          GST_VIDEO_FRAME_PLANE_DATA(out, i), GST_VIDEO_FRAME_PLANE_STRIDE(out, i), GST_VIDEO_FRAME_PLANE_DATA(in, i),
+          GST_VIDEO_FRAME_PLANE_STRIDE(in, i),
+          GST_VIDEO_FRAME_COMP_WIDTH(out, i) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, i), GST_VIDEO_FRAME_COMP_HEIGHT(out, i),
+          cudaMemcpyDeviceToDevice, base->stream);
+      if (err != cudaSuccess)
+        return gst_pseudo3d_base_cuda_error(base, p3d::CudaStatus{err, "cudaMemcpy2DAsync(colour half)", __FILE__, __LINE__},
+                                            "copying the colour half");
+    }
+    const p3d::CudaStatus st = p3d::depth_from_grey_gpu(grey, yuv, plane->view(), base->stream);
+    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "reading RGBD depth");
+    const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
+    if (ret != GST_FLOW_OK) return ret;
+  } else
+#endif
+  {
+    (void)gpu;
+    // The colour half is the left part of every plane: a plain copy.
+    for (guint i = 0; i < GST_VIDEO_FRAME_N_PLANES(out); ++i) {
+      const gsize row = GST_VIDEO_FRAME_COMP_WIDTH(out, i) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, i);
+      for (gint y = 0; y < GST_VIDEO_FRAME_COMP_HEIGHT(out, i); ++y)
+        memcpy(static_cast<guint8 *>(GST_VIDEO_FRAME_PLANE_DATA(out, i)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(out, i),
+               static_cast<guint8 *>(GST_VIDEO_FRAME_PLANE_DATA(in, i)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(in, i),
+               row);
+    }
+    p3d::depth_from_grey_cpu(grey, yuv, plane->view());
+  }
+  if (!pseudo3d_buffer_set_depth(out->buffer, std::move(plane))) return GST_FLOW_ERROR;
+  return GST_FLOW_OK;
+}
+
+static void update_in_place(GstPseudo3DDepth *self) {
+  gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), self->method == GST_PSEUDO3D_DEPTH_METHOD_EDGES);
+}
+
+static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(object);
+  gboolean reconfigure = FALSE;
+  GST_OBJECT_LOCK(self);
+  switch (prop_id) {
+    case PROP_METHOD:
+      self->method = static_cast<GstPseudo3DDepthMethod>(g_value_get_enum(value));
+      reconfigure = TRUE;
+      break;
+    case PROP_HYPOTHESIS: self->params.hypothesis = static_cast<p3d::Hypothesis>(g_value_get_enum(value)); break;
+    case PROP_BLOCK_SIZE: self->params.block_size = g_value_get_int(value); break;
+    case PROP_EDGE_THRESHOLD: self->params.edge_threshold = g_value_get_float(value); break;
+    case PROP_REGION_WEIGHT: self->params.region_weight = g_value_get_float(value); break;
+    case PROP_TEMPORAL_SMOOTHING: self->params.temporal_smoothing = g_value_get_float(value); break;
+    case PROP_STATIC_THRESHOLD: self->params.static_threshold = g_value_get_float(value); break;
+    case PROP_CUT_THRESHOLD: self->params.cut_threshold = g_value_get_float(value); break;
+    default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
+  }
+  GST_OBJECT_UNLOCK(self);
+  if (reconfigure) {
+    update_in_place(self);
+    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
+  }
+}
+
+static void gst_pseudo3d_depth_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(object);
+  GST_OBJECT_LOCK(self);
+  switch (prop_id) {
+    case PROP_METHOD: g_value_set_enum(value, self->method); break;
+    case PROP_HYPOTHESIS: g_value_set_enum(value, static_cast<gint>(self->params.hypothesis)); break;
+    case PROP_BLOCK_SIZE: g_value_set_int(value, self->params.block_size); break;
+    case PROP_EDGE_THRESHOLD: g_value_set_float(value, self->params.edge_threshold); break;
+    case PROP_REGION_WEIGHT: g_value_set_float(value, self->params.region_weight); break;
+    case PROP_TEMPORAL_SMOOTHING: g_value_set_float(value, self->params.temporal_smoothing); break;
+    case PROP_STATIC_THRESHOLD: g_value_set_float(value, self->params.static_threshold); break;
+    case PROP_CUT_THRESHOLD: g_value_set_float(value, self->params.cut_threshold); break;
+    default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_pseudo3d_depth_finalize(GObject *object) {
+  delete GST_PSEUDO3D_DEPTH(object)->state;
+  G_OBJECT_CLASS(parent_class)->finalize(object);
+}
+
+static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
+  GObjectClass *gobject_class = G_OBJECT_CLASS(klass);
+  GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
+  GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
+  const p3d::DepthParams d;
+  const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
+
+  gobject_class->set_property = gst_pseudo3d_depth_set_property;
+  gobject_class->get_property = gst_pseudo3d_depth_get_property;
+  gobject_class->finalize = gst_pseudo3d_depth_finalize;
+
+  g_object_class_install_property(
+      gobject_class, PROP_METHOD,
+      g_param_spec_enum("method", "Method",
+                        "Where depth comes from: estimated from edges, or read from the right half of RGBD frames "
+                        "(changes the output size, so the caps are renegotiated)",
+                        GST_TYPE_PSEUDO3D_DEPTH_METHOD, DEFAULT_METHOD,
+                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
+  g_object_class_install_property(
+      gobject_class, PROP_HYPOTHESIS,
+      g_param_spec_enum("hypothesis", "Depth-gradient hypothesis",
+                        "Global depth layout assumed for the scene; regions take its mean over their area",
+                        GST_TYPE_PSEUDO3D_HYPOTHESIS, static_cast<gint>(d.hypothesis), flags));
+  g_object_class_install_property(
+      gobject_class, PROP_BLOCK_SIZE,
+      g_param_spec_int("block-size", "Block size",
+                       "Side in pixels of the blocks that are grouped into regions (smaller: finer regions, slower)",
+                       2, 64, d.block_size, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_EDGE_THRESHOLD,
+      g_param_spec_float("edge-threshold", "Edge threshold",
+                         "Colour difference (sum over 3 channels of 8-bit block means) at which neighbouring "
+                         "blocks are split by an edge; 0 makes every block its own region",
+                         0.f, 765.f, d.edge_threshold, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_REGION_WEIGHT,
+      g_param_spec_float("region-weight", "Region weight",
+                         "Share of the region's mean depth in a block's depth (the rest is the hypothesis at the "
+                         "block): 1 = flat regions, 0 = pure hypothesis",
+                         0.f, 1.f, d.region_weight, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_TEMPORAL_SMOOTHING,
+      g_param_spec_float("temporal-smoothing", "Temporal smoothing",
+                         "Weight of the previous frame's depth in video (0 = none); reset at scene cuts",
+                         0.f, 0.99f, d.temporal_smoothing, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_STATIC_THRESHOLD,
+      g_param_spec_float("static-threshold", "Static threshold",
+                         "Mean absolute block difference (8-bit levels) up to which the scene counts as static "
+                         "and the previous depth is reused without estimating",
+                         0.f, 255.f, d.static_threshold, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_CUT_THRESHOLD,
+      g_param_spec_float("cut-threshold", "Scene-cut threshold",
+                         "Mean absolute block difference (8-bit levels) from which a frame is a scene cut and the "
+                         "depth history is dropped",
+                         0.f, 255.f, d.cut_threshold, flags));
+
+  gst_element_class_set_static_metadata(element_class, "pseudo3d depth estimation", "Filter/Effect/Video",
+                                        "Estimates a depth map (or reads it from RGBD frames) and attaches it to "
+                                        "each frame for pseudo-stereo rendering",
+                                        "pseudo3d developers");
+  GstCaps *caps = p3d::gst::caps_all_domains(P3D_ALL_FORMATS);
+  gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, caps));
+  gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
+  gst_caps_unref(caps);
+
+  base_class->get_size_ratio = get_size_ratio;
+  base_class->set_info = set_info;
+  base_class->process = process;
+  base_class->process_ip = process_ip;
+
+  GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_depth_debug, "pseudo3ddepth", 0, "pseudo3d depth estimation");
+  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_DEPTH_METHOD, (GstPluginAPIFlags)0);
+  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_HYPOTHESIS, (GstPluginAPIFlags)0);
+}
+
+static void gst_pseudo3d_depth_init(GstPseudo3DDepth *self) {
+  self->method = DEFAULT_METHOD;
+  self->params = p3d::DepthParams();
+  self->state = new DepthState();
+  update_in_place(self);
+}

@@ -1,0 +1,172 @@
+/**
+ * SECTION:element-pseudo3dfilter
+ * @title: pseudo3dfilter
+ *
+ * Cross-bilateral filter of the depth map attached by pseudo3ddepth, guided
+ * by the frame's luma, so that depth edges follow image edges. The frame
+ * passes on unchanged with the filtered depth attached. radius=0 passes
+ * buffers through untouched.
+ *
+ * ## Example launch line
+ * |[
+ * gst-launch-1.0 filesrc location=in.png ! pngdec ! videoconvert ! pseudo3ddepth ! pseudo3dfilter radius=8 sigma-range=10 ! pseudo3dwarp ! pseudo3dpack ! videoconvert ! pngenc ! filesink location=out.png
+ * ]|
+ */
+#include "gstpseudo3dfilter.h"
+
+#include <string>
+
+#include "bilateral.h"
+#include "depth_meta.h"
+#include "video_util.h"
+
+#if HAVE_CUDA
+#include "bilateral_gpu.h"
+#endif
+
+GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_filter_debug);
+#define GST_CAT_DEFAULT gst_pseudo3d_filter_debug
+
+enum { PROP_0, PROP_RADIUS, PROP_SIGMA_SPACE, PROP_SIGMA_RANGE };
+
+struct FilterState {
+#if HAVE_CUDA
+  p3d::BilateralFilterGpu gpu;
+#endif
+  p3d::gst::DepthPlanePool pool;
+};
+
+struct _GstPseudo3DFilter {
+  GstPseudo3DBase parent;
+  p3d::BilateralParams params;
+  FilterState *state;
+};
+
+#define gst_pseudo3d_filter_parent_class parent_class
+G_DEFINE_TYPE(GstPseudo3DFilter, gst_pseudo3d_filter, GST_TYPE_PSEUDO3D_BASE);
+GST_ELEMENT_REGISTER_DEFINE(pseudo3dfilter, "pseudo3dfilter", GST_RANK_NONE, GST_TYPE_PSEUDO3D_FILTER);
+
+static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *buf, GstVideoFrame *frame) {
+  GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(base);
+  p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(buf);
+  if (!depth) {
+    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Frame carries no depth map"),
+                      ("put pseudo3ddepth before pseudo3dfilter"));
+    return GST_FLOW_ERROR;
+  }
+  const p3d::FrameView guide = p3d::gst::frame_view(frame);
+  if (depth->width != guide.width || depth->height != guide.height || depth->on_device != (gpu == TRUE)) {
+    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Depth map does not match the frame"),
+                      ("depth %dx%d (%s), frame %dx%d (%s)", depth->width, depth->height,
+                       depth->on_device ? "device" : "host", guide.width, guide.height, gpu ? "device" : "host"));
+    return GST_FLOW_ERROR;
+  }
+  GST_OBJECT_LOCK(self);
+  const p3d::BilateralParams params = self->params;
+  GST_OBJECT_UNLOCK(self);
+
+  std::string error;
+#if HAVE_CUDA
+  p3d::gst::DepthPlanePtr out = self->state->pool.acquire(depth->width, depth->height, gpu ? base->context : nullptr, &error);
+#else
+  p3d::gst::DepthPlanePtr out = self->state->pool.acquire(depth->width, depth->height, nullptr, &error);
+#endif
+  if (!out) {
+    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT, ("Could not allocate a depth map"), ("%s", error.c_str()));
+    return GST_FLOW_ERROR;
+  }
+#if HAVE_CUDA
+  if (gpu) {
+    const p3d::CudaStatus st = self->state->gpu.run(params, guide, p3d::as_const(depth->view()), out->view(), base->stream);
+    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "filtering depth");
+    const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
+    if (ret != GST_FLOW_OK) return ret;
+  } else
+#endif
+  {
+    p3d::bilateral_filter_cpu(params, guide, p3d::as_const(depth->view()), out->view());
+  }
+  pseudo3d_buffer_set_depth(buf, std::move(out));
+  return GST_FLOW_OK;
+}
+
+static void update_passthrough(GstPseudo3DFilter *self) {
+  // radius 0 is the identity: leave buffers untouched.
+  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), self->params.radius == 0);
+}
+
+static void gst_pseudo3d_filter_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
+  GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(object);
+  GST_OBJECT_LOCK(self);
+  switch (prop_id) {
+    case PROP_RADIUS: self->params.radius = g_value_get_int(value); break;
+    case PROP_SIGMA_SPACE: self->params.sigma_space = g_value_get_float(value); break;
+    case PROP_SIGMA_RANGE: self->params.sigma_range = g_value_get_float(value); break;
+    default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
+  }
+  GST_OBJECT_UNLOCK(self);
+  if (prop_id == PROP_RADIUS) update_passthrough(self);
+}
+
+static void gst_pseudo3d_filter_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
+  GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(object);
+  GST_OBJECT_LOCK(self);
+  switch (prop_id) {
+    case PROP_RADIUS: g_value_set_int(value, self->params.radius); break;
+    case PROP_SIGMA_SPACE: g_value_set_float(value, self->params.sigma_space); break;
+    case PROP_SIGMA_RANGE: g_value_set_float(value, self->params.sigma_range); break;
+    default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_pseudo3d_filter_finalize(GObject *object) {
+  delete GST_PSEUDO3D_FILTER(object)->state;
+  G_OBJECT_CLASS(parent_class)->finalize(object);
+}
+
+static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
+  GObjectClass *gobject_class = G_OBJECT_CLASS(klass);
+  GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
+  GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
+  const p3d::BilateralParams d;
+  const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
+
+  gobject_class->set_property = gst_pseudo3d_filter_set_property;
+  gobject_class->get_property = gst_pseudo3d_filter_get_property;
+  gobject_class->finalize = gst_pseudo3d_filter_finalize;
+
+  g_object_class_install_property(
+      gobject_class, PROP_RADIUS,
+      g_param_spec_int("radius", "Radius",
+                       "Half width of the filter window in pixels (0 = off: buffers pass through)", 0,
+                       p3d::kMaxBilateralRadius, d.radius, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_SIGMA_SPACE,
+      g_param_spec_float("sigma-space", "Spatial sigma",
+                         "Standard deviation of the spatial Gaussian, in pixels", 0.1f, 100.f, d.sigma_space, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_SIGMA_RANGE,
+      g_param_spec_float("sigma-range", "Range sigma",
+                         "Standard deviation of the guide-luma Gaussian, in 8-bit levels: smaller keeps depth edges "
+                         "sharper at image edges; 0 averages only over pixels of identical luma",
+                         0.f, 1000.f, d.sigma_range, flags));
+
+  gst_element_class_set_static_metadata(element_class, "pseudo3d depth filter", "Filter/Effect/Video",
+                                        "Cross-bilateral filtering of a frame's depth map guided by the frame",
+                                        "pseudo3d developers");
+  GstCaps *caps = p3d::gst::caps_all_domains(P3D_ALL_FORMATS);
+  gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, caps));
+  gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
+  gst_caps_unref(caps);
+
+  base_class->process_ip = process_ip;
+  GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_filter_debug, "pseudo3dfilter", 0, "pseudo3d depth filter");
+}
+
+static void gst_pseudo3d_filter_init(GstPseudo3DFilter *self) {
+  self->params = p3d::BilateralParams();
+  self->state = new FilterState();
+  gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), TRUE);
+  update_passthrough(self);
+}

@@ -1,0 +1,141 @@
+#include "element_helpers.h"
+
+#include <cstdlib>
+#include <cstring>
+
+#include <glib/gstdio.h>
+
+#include "depth_meta.h"
+
+namespace p3d::test {
+
+const char *gst_format_name(PixelFormat f) {
+  switch (f) {
+    case PixelFormat::NV12: return "NV12";
+    case PixelFormat::I420: return "I420";
+    case PixelFormat::RGBA: return "RGBA";
+    case PixelFormat::BGRA: return "BGRA";
+    case PixelFormat::RGBx: return "RGBx";
+    case PixelFormat::BGRx: return "BGRx";
+  }
+  return "?";
+}
+
+std::string raw_caps(PixelFormat f, int width, int height, const char *extra) {
+  // HostFrame::from_bgr writes BT.601 limited-range YUV; say so, since
+  // GStreamer would assume BT.709 for HD sizes.
+  const char *colorimetry = is_packed_rgb(f) ? "" : ",colorimetry=bt601";
+  return std::string("video/x-raw,format=") + gst_format_name(f) + ",width=" + std::to_string(width) +
+         ",height=" + std::to_string(height) + ",framerate=30/1" + colorimetry + extra;
+}
+
+GstBuffer *buffer_from_frame(const HostFrame &frame) {
+  GstVideoInfo info;
+  gst_video_info_set_format(&info, gst_video_format_from_string(gst_format_name(frame.format())), frame.width(),
+                            frame.height());
+  GstBuffer *buf = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+  GstVideoFrame vf;
+  gst_video_frame_map(&vf, &info, buf, GST_MAP_WRITE);
+  const FrameView src = frame.view();
+  for (int p = 0; p < frame_plane_count(frame.format()); ++p) {
+    int row = 0, rows = 0;
+    frame_plane_size(frame.format(), frame.width(), frame.height(), p, &row, &rows);
+    for (int y = 0; y < rows; ++y)
+      memcpy(static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&vf, p)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(&vf, p),
+             src.plane[p] + y * src.stride[p], row);
+  }
+  gst_video_frame_unmap(&vf);
+  gst_buffer_add_video_meta_full(buf, GST_VIDEO_FRAME_FLAG_NONE, GST_VIDEO_INFO_FORMAT(&info), frame.width(),
+                                 frame.height(), GST_VIDEO_INFO_N_PLANES(&info), info.offset, info.stride);
+  return buf;
+}
+
+cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps) {
+  GstVideoInfo info;
+  if (!gst_video_info_from_caps(&info, caps)) return cv::Mat();
+  GstVideoFrame vf;
+  if (!gst_video_frame_map(&vf, &info, buf, GST_MAP_READ)) return cv::Mat();
+  FrameView v;
+  const char *name = gst_video_format_to_string(GST_VIDEO_INFO_FORMAT(&info));
+  for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420, PixelFormat::RGBA, PixelFormat::BGRA, PixelFormat::RGBx,
+                        PixelFormat::BGRx})
+    if (!strcmp(name, gst_format_name(f))) v.format = f;
+  v.width = info.width;
+  v.height = info.height;
+  for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(&vf); ++p) {
+    v.plane[p] = static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&vf, p));
+    v.stride[p] = GST_VIDEO_FRAME_PLANE_STRIDE(&vf, p);
+  }
+  cv::Mat out(v.height, v.width, CV_8UC4);
+  const YuvToRgb m;
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) {
+      const Rgba c = load_rgba(v, x, y, m);
+      out.at<cv::Vec4b>(y, x) = cv::Vec4b(c.b, c.g, c.r, c.a);
+    }
+  gst_video_frame_unmap(&vf);
+  return out;
+}
+
+// The plugin is a loaded module, not linked into the tests: find the meta
+// by its registered API name and read the plane's fields directly.
+cv::Mat buffer_depth(GstBuffer *buf) {
+  const GType api = g_type_from_name("Pseudo3DDepthMetaAPI");
+  if (!api) return cv::Mat();
+  auto *meta = reinterpret_cast<Pseudo3DDepthMeta *>(gst_buffer_get_meta(buf, api));
+  if (!meta || !meta->plane || !*meta->plane) return cv::Mat();
+  const p3d::gst::DepthPlane &d = **meta->plane;
+  if (d.on_device) return cv::Mat();
+  cv::Mat m(d.height, d.width, CV_32FC1);
+  memcpy(m.data, d.host.data(), d.host.size() * sizeof(float));
+  return m;
+}
+
+std::string run_to_eos(const std::string &launch, int timeout_s) {
+  GError *err = nullptr;
+  GstElement *pipeline = gst_parse_launch(launch.c_str(), &err);
+  if (!pipeline) {
+    std::string msg = err ? err->message : "parse failed";
+    g_clear_error(&err);
+    return msg;
+  }
+  if (err) {  // a recoverable parse warning (e.g. unknown property) is a failure here
+    std::string msg = err->message;
+    g_clear_error(&err);
+    gst_object_unref(pipeline);
+    return msg;
+  }
+  std::string result;
+  if (gst_element_set_state(pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE) result = "state change failed";
+  GstBus *bus = gst_element_get_bus(pipeline);
+  if (result.empty()) {
+    GstMessage *msg = gst_bus_timed_pop_filtered(bus, (GstClockTime)timeout_s * GST_SECOND,
+                                                 (GstMessageType)(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+    if (!msg) {
+      result = "timeout";
+    } else {
+      if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR) {
+        GError *e = nullptr;
+        gchar *dbg = nullptr;
+        gst_message_parse_error(msg, &e, &dbg);
+        result = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
+        g_clear_error(&e);
+        g_free(dbg);
+      }
+      gst_message_unref(msg);
+    }
+  }
+  gst_object_unref(bus);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(pipeline);
+  return result;
+}
+
+std::string output_dir() {
+  const char *env = std::getenv("P3D_OUT_DIR");
+  std::string dir = env && *env ? env : "test-output";
+  g_mkdir_with_parents(dir.c_str(), 0755);
+  return dir;
+}
+
+}  // namespace p3d::test

@@ -1,0 +1,33 @@
+// Shared helpers of the element tests: buffers from HostFrames and back,
+// caps strings, reading the depth meta, running a launch line to EOS.
+#pragma once
+
+#include <string>
+
+#include <gst/check/gstharness.h>
+#include <gst/gst.h>
+#include <gst/video/video.h>
+
+#include <opencv2/core.hpp>
+
+#include "frame.h"
+#include "host_frame.h"
+
+namespace p3d::test {
+
+const char *gst_format_name(PixelFormat f);
+std::string raw_caps(PixelFormat f, int width, int height, const char *extra = "");
+// A GstBuffer (system memory) holding the frame, laid out as GstVideoInfo
+// says (with its strides), plus a GstVideoMeta.
+GstBuffer *buffer_from_frame(const HostFrame &frame);
+// The buffer's pixels as BGRA through load_rgba (info from caps).
+cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps);
+// The depth meta as a CV_32FC1 copy; empty if none.
+cv::Mat buffer_depth(GstBuffer *buf);
+// Runs a launch line to EOS (timeout in seconds); returns the error message
+// or "" on success.
+std::string run_to_eos(const std::string &launch, int timeout_s = 60);
+// Folder for files tests write (pictures of outputs).
+std::string output_dir();
+
+}  // namespace p3d::test
