@@ -15,16 +15,11 @@
 namespace p3d {
 namespace {
 
+using test::kAllLayouts;
+using test::kAllGlasses;
+using test::kAllMethods;
 using test::kPackedFormats;
 
-constexpr PackLayout kAllLayouts[] = {PackLayout::Anaglyph,       PackLayout::SideBySide,     PackLayout::SideBySideHalf,
-                                      PackLayout::TopBottom,      PackLayout::TopBottomHalf,  PackLayout::RowInterleaved,
-                                      PackLayout::ColumnInterleaved, PackLayout::Checkerboard, PackLayout::Left,
-                                      PackLayout::Right};
-constexpr AnaglyphGlasses kAllGlasses[] = {AnaglyphGlasses::RedCyan, AnaglyphGlasses::GreenMagenta,
-                                           AnaglyphGlasses::AmberBlue};
-constexpr AnaglyphMethod kAllMethods[] = {AnaglyphMethod::Dubois, AnaglyphMethod::Color, AnaglyphMethod::HalfColor,
-                                          AnaglyphMethod::Gray};
 constexpr uint8_t kPoison = 0xA5;
 
 using PixelFn = std::function<Rgba(int x, int y)>;

@@ -18,11 +18,11 @@
 namespace p3d {
 namespace {
 
+using test::kAllFills;
+using test::kAllViews;
 using test::kAllFormats;
 using test::kPackedFormats;
 
-constexpr HoleFill kAllFills[] = {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None};
-constexpr StereoView kAllViews[] = {StereoView::Both, StereoView::Left, StereoView::Right};
 
 // Channels stay below 255, so a magenta pixel in an output is a hole.
 HostFrame textured(PixelFormat f, int w, int h, uint32_t seed, int padding = 0) {

@@ -1,5 +1,7 @@
 #include "element_helpers.h"
 
+#include "test_data.h"
+
 #include <cstdlib>
 #include <cstring>
 
@@ -9,17 +11,7 @@
 
 namespace p3d::test {
 
-const char *gst_format_name(PixelFormat f) {
-  switch (f) {
-    case PixelFormat::NV12: return "NV12";
-    case PixelFormat::I420: return "I420";
-    case PixelFormat::RGBA: return "RGBA";
-    case PixelFormat::BGRA: return "BGRA";
-    case PixelFormat::RGBx: return "RGBx";
-    case PixelFormat::BGRx: return "BGRx";
-  }
-  return "?";
-}
+const char *gst_format_name(PixelFormat f) { return format_name(f); }  // same spelling as GStreamer
 
 std::string raw_caps(PixelFormat f, int width, int height, const char *extra) {
   // HostFrame::from_bgr writes BT.601 limited-range YUV; say so, since

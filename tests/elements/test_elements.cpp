@@ -35,6 +35,12 @@ struct Size {
   int w, h;
 };
 
+// gtest names of (format, size) parameterised cases, e.g. "NV12_3x2".
+std::string format_and_size_name(const ::testing::TestParamInfo<std::tuple<PixelFormat, Size>> &info) {
+  const Size s = std::get<1>(info.param);
+  return std::string(format_name(std::get<0>(info.param))) + "_" + std::to_string(s.w) + "x" + std::to_string(s.h);
+}
+
 }  // namespace
 
 TEST(Plugin, RegistersFiveElements) {
@@ -118,11 +124,7 @@ TEST_P(DepthFormats, AttachesDepthAndKeepsFrame) {
 INSTANTIATE_TEST_SUITE_P(AllFormatsAndSizes, DepthFormats,
                          ::testing::Combine(::testing::ValuesIn(kAllFormats),
                                             ::testing::Values(Size{1, 1}, Size{3, 2}, Size{64, 48}, Size{4097, 2161})),
-                         [](const auto &info) {
-                           const Size s = std::get<1>(info.param);
-                           return std::string(format_name(std::get<0>(info.param))) + "_" + std::to_string(s.w) + "x" +
-                                  std::to_string(s.h);
-                         });
+                         format_and_size_name);
 
 // top-bottom hypothesis: the top of the picture is farther than the bottom.
 TEST(Depth, TopIsFartherThanBottom) {
@@ -226,11 +228,7 @@ TEST_P(FilterFormats, FiltersDepth) {
 INSTANTIATE_TEST_SUITE_P(AllFormatsAndSizes, FilterFormats,
                          ::testing::Combine(::testing::ValuesIn(kAllFormats),
                                             ::testing::Values(Size{1, 1}, Size{3, 2}, Size{64, 48})),
-                         [](const auto &info) {
-                           const Size s = std::get<1>(info.param);
-                           return std::string(format_name(std::get<0>(info.param))) + "_" + std::to_string(s.w) + "x" +
-                                  std::to_string(s.h);
-                         });
+                         format_and_size_name);
 
 class WarpFormats : public ::testing::TestWithParam<std::tuple<PixelFormat, Size>> {};
 
@@ -260,11 +258,7 @@ TEST_P(WarpFormats, ZeroDisparityGivesTwoCopies) {
 INSTANTIATE_TEST_SUITE_P(AllFormatsAndSizes, WarpFormats,
                          ::testing::Combine(::testing::ValuesIn(kAllFormats),
                                             ::testing::Values(Size{1, 1}, Size{3, 2}, Size{64, 48}, Size{4097, 2161})),
-                         [](const auto &info) {
-                           const Size s = std::get<1>(info.param);
-                           return std::string(format_name(std::get<0>(info.param))) + "_" + std::to_string(s.w) + "x" +
-                                  std::to_string(s.h);
-                         });
+                         format_and_size_name);
 
 // With disparity, the two views differ and nothing is left unfilled (no magenta).
 TEST(Warp, ViewsDifferAndHolesAreFilled) {

@@ -25,11 +25,11 @@
 namespace p3d {
 namespace {
 
+using test::kAllFills;
+using test::kAllViews;
 using test::kAllFormats;
 using test::kPackedFormats;
 
-constexpr HoleFill kAllFills[] = {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None};
-constexpr StereoView kAllViews[] = {StereoView::Both, StereoView::Left, StereoView::Right};
 constexpr uint8_t kCpuPoison = 0x5A;  // DeviceFrame poisons with 0xA5: unwritten bytes differ
 
 constexpr double kPi = 3.14159265358979323846;

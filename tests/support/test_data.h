@@ -8,6 +8,8 @@
 
 #include "frame.h"
 #include "host_frame.h"
+#include "pack.h"
+#include "warp.h"
 
 namespace p3d::test {
 
@@ -39,5 +41,17 @@ inline constexpr PixelFormat kAllFormats[] = {PixelFormat::NV12, PixelFormat::I4
 inline constexpr PixelFormat kPackedFormats[] = {PixelFormat::RGBA, PixelFormat::BGRA, PixelFormat::RGBx,
                                                  PixelFormat::BGRx};
 const char *format_name(PixelFormat f);
+
+// Every value of the stage enums, for exhaustive CPU and GPU tests.
+inline constexpr PackLayout kAllLayouts[] = {
+    PackLayout::Anaglyph,      PackLayout::SideBySide,     PackLayout::SideBySideHalf,    PackLayout::TopBottom,
+    PackLayout::TopBottomHalf, PackLayout::RowInterleaved, PackLayout::ColumnInterleaved, PackLayout::Checkerboard,
+    PackLayout::Left,          PackLayout::Right};
+inline constexpr AnaglyphGlasses kAllGlasses[] = {AnaglyphGlasses::RedCyan, AnaglyphGlasses::GreenMagenta,
+                                                  AnaglyphGlasses::AmberBlue};
+inline constexpr AnaglyphMethod kAllMethods[] = {AnaglyphMethod::Dubois, AnaglyphMethod::Color,
+                                                 AnaglyphMethod::HalfColor, AnaglyphMethod::Gray};
+inline constexpr HoleFill kAllFills[] = {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None};
+inline constexpr StereoView kAllViews[] = {StereoView::Both, StereoView::Left, StereoView::Right};
 
 }  // namespace p3d::test
