@@ -63,3 +63,8 @@ P3D_DEFINE_ENUM(gst_pseudo3d_anaglyph_method_get_type, "GstPseudo3DAnaglyphMetho
                 {(gint)p3d::AnaglyphMethod::HalfColor, "Half colour (luma behind the single-colour filter)",
                  "half-color"},
                 {(gint)p3d::AnaglyphMethod::Gray, "Grey (luma for both eyes)", "gray"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_processing_get_type, "GstPseudo3DProcessing",
+                {GST_PSEUDO3D_PROCESSING_AUTO, "GPU when a CUDA device and nvcodec are available, else CPU", "auto"},
+                {GST_PSEUDO3D_PROCESSING_CPU, "CPU (CUDA-memory input still runs on the GPU)", "cpu"},
+                {GST_PSEUDO3D_PROCESSING_GPU, "GPU; an error if none is available", "gpu"})

@@ -21,6 +21,16 @@ GType gst_pseudo3d_glasses_get_type(void);
 #define GST_TYPE_PSEUDO3D_ANAGLYPH_METHOD (gst_pseudo3d_anaglyph_method_get_type())
 GType gst_pseudo3d_anaglyph_method_get_type(void);
 
+#define GST_TYPE_PSEUDO3D_PROCESSING (gst_pseudo3d_processing_get_type())
+GType gst_pseudo3d_processing_get_type(void);
+
+// pseudo3dconvert's processing property.
+typedef enum {
+  GST_PSEUDO3D_PROCESSING_AUTO = 0,
+  GST_PSEUDO3D_PROCESSING_CPU = 1,
+  GST_PSEUDO3D_PROCESSING_GPU = 2
+} GstPseudo3DProcessing;
+
 // pseudo3ddepth's method property.
 typedef enum { GST_PSEUDO3D_DEPTH_METHOD_EDGES = 0, GST_PSEUDO3D_DEPTH_METHOD_RGBD = 1 } GstPseudo3DDepthMethod;
 

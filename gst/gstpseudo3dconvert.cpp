@@ -7,6 +7,14 @@
  * the same names. Usable wherever one video filter is expected, such as
  * playbin's video-filter.
  *
+ * With processing=auto (default) and a CUDA device with nvcodec's
+ * cudaupload/cudadownload available, the chain is wrapped as cudaupload !
+ * ... ! cudadownload: system-memory video is uploaded once, every stage runs
+ * on the GPU with the frames kept in device memory, and the result is
+ * downloaded once (CUDA-memory input and output pass through the two
+ * untouched). Otherwise the stages run on the CPU. The choice is made when
+ * the element goes from NULL to READY.
+ *
  * ## Example launch lines
  * |[
  * gst-launch-1.0 playbin uri=file:///path/movie.mp4 video-filter="pseudo3dconvert layout=anaglyph"
@@ -14,6 +22,15 @@
  * ]|
  */
 #include "gstpseudo3dconvert.h"
+
+#include "config.h"
+
+#include <gst/video/video.h>
+#include "enums.h"
+
+#if HAVE_CUDA
+#include <gst/cuda/gstcudaloader.h>
+#endif
 
 #include "gstpseudo3ddepth.h"
 #include "gstpseudo3dfilter.h"
@@ -37,10 +54,16 @@ static const struct {
     {STAGE_PACK, "anaglyph-method"},  {STAGE_PACK, "swap-eyes"},
 };
 #define PROP_CUDA_DEVICE_ID (G_N_ELEMENTS(kProxied) + 1)
+#define PROP_PROCESSING (G_N_ELEMENTS(kProxied) + 2)
+#define DEFAULT_PROCESSING GST_PSEUDO3D_PROCESSING_AUTO
 
 struct _GstPseudo3DConvert {
   GstBin parent;
   GstElement *stage[N_STAGES];
+  GstElement *upload, *to_cuda, *download; /* present while the chain runs on the GPU */
+  GstPad *sinkpad, *srcpad;       /* ghost pads */
+  GstPseudo3DProcessing processing;
+  gint device_id;
 };
 
 #define gst_pseudo3d_convert_parent_class parent_class
@@ -71,7 +94,10 @@ static GParamSpec *clone_pspec(GParamSpec *p) {
 static void gst_pseudo3d_convert_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DConvert *self = GST_PSEUDO3D_CONVERT(object);
   if (prop_id == PROP_CUDA_DEVICE_ID) {
+    self->device_id = g_value_get_int(value);
     for (GstElement *e : self->stage) g_object_set_property(G_OBJECT(e), "cuda-device-id", value);
+  } else if (prop_id == PROP_PROCESSING) {
+    self->processing = static_cast<GstPseudo3DProcessing>(g_value_get_enum(value));
   } else if (prop_id >= 1 && prop_id <= G_N_ELEMENTS(kProxied)) {
     g_object_set_property(G_OBJECT(self->stage[kProxied[prop_id - 1].stage]), kProxied[prop_id - 1].name, value);
   } else {
@@ -83,11 +109,89 @@ static void gst_pseudo3d_convert_get_property(GObject *object, guint prop_id, GV
   GstPseudo3DConvert *self = GST_PSEUDO3D_CONVERT(object);
   if (prop_id == PROP_CUDA_DEVICE_ID) {
     g_object_get_property(G_OBJECT(self->stage[STAGE_DEPTH]), "cuda-device-id", value);
+  } else if (prop_id == PROP_PROCESSING) {
+    g_value_set_enum(value, self->processing);
   } else if (prop_id >= 1 && prop_id <= G_N_ELEMENTS(kProxied)) {
     g_object_get_property(G_OBJECT(self->stage[kProxied[prop_id - 1].stage]), kProxied[prop_id - 1].name, value);
   } else {
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
   }
+}
+
+// Whether cudaupload/cudadownload can run here: nvcodec registers them only
+// when a CUDA device was found.
+static gboolean gpu_available(void) {
+#if HAVE_CUDA
+  if (!gst_cuda_load_library()) return FALSE;
+  GstElementFactory *up = gst_element_factory_find("cudaupload");
+  GstElementFactory *down = gst_element_factory_find("cudadownload");
+  const gboolean ok = up && down;
+  if (up) gst_object_unref(up);
+  if (down) gst_object_unref(down);
+  return ok;
+#else
+  return FALSE;
+#endif
+}
+
+// Puts the stages between cudaupload and cudadownload, or takes those out.
+static gboolean configure_processing(GstPseudo3DConvert *self) {
+  const gboolean want_gpu = self->processing != GST_PSEUDO3D_PROCESSING_CPU && gpu_available();
+  if (self->processing == GST_PSEUDO3D_PROCESSING_GPU && !want_gpu) {
+    GST_ELEMENT_ERROR(self, RESOURCE, NOT_FOUND, ("processing=gpu but no CUDA device or no cudaupload/cudadownload"),
+                      ("install gstreamer1.0-plugins-bad (nvcodec) and an NVIDIA driver, or use processing=auto"));
+    return FALSE;
+  }
+  GstElement *first = self->stage[STAGE_DEPTH], *last = self->stage[STAGE_PACK];
+  if (want_gpu && !self->upload) {
+    self->upload = gst_element_factory_make("cudaupload", "upload");
+    self->to_cuda = gst_element_factory_make("capsfilter", "to_cuda");
+    self->download = gst_element_factory_make("cudadownload", "download");
+    if (!self->upload || !self->to_cuda || !self->download) {
+      gst_clear_object(&self->upload);
+      gst_clear_object(&self->to_cuda);
+      gst_clear_object(&self->download);
+      return self->processing != GST_PSEUDO3D_PROCESSING_GPU;
+    }
+    // cudaupload also offers system memory: insist on device memory after it.
+    GstCaps *cuda_caps = gst_caps_from_string("video/x-raw(memory:CUDAMemory)");
+    g_object_set(self->to_cuda, "caps", cuda_caps, NULL);
+    gst_caps_unref(cuda_caps);
+    g_object_set(self->upload, "cuda-device-id", self->device_id, NULL);
+    g_object_set(self->download, "cuda-device-id", self->device_id, NULL);
+    gst_bin_add_many(GST_BIN(self), self->upload, self->to_cuda, self->download, NULL);
+    // Retarget the ghost pads first: a ghost pad's target is linked to it.
+    GstPad *in = gst_element_get_static_pad(self->upload, "sink"), *out = gst_element_get_static_pad(self->download, "src");
+    const gboolean retargeted = gst_ghost_pad_set_target(GST_GHOST_PAD(self->sinkpad), in) &&
+                                gst_ghost_pad_set_target(GST_GHOST_PAD(self->srcpad), out);
+    gst_object_unref(in);
+    gst_object_unref(out);
+    if (!retargeted || !gst_element_link_many(self->upload, self->to_cuda, first, NULL) ||
+        !gst_element_link(last, self->download)) {
+      GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, ("Could not put the stages between cudaupload and cudadownload"),
+                        (nullptr));
+      return FALSE;
+    }
+    GST_INFO_OBJECT(self, "processing on the GPU (cudaupload ! stages ! cudadownload)");
+  } else if (!want_gpu && self->upload) {
+    gst_element_unlink_many(self->upload, self->to_cuda, first, NULL);
+    gst_element_unlink(last, self->download);
+    GstPad *in = gst_element_get_static_pad(first, "sink"), *out = gst_element_get_static_pad(last, "src");
+    gst_ghost_pad_set_target(GST_GHOST_PAD(self->sinkpad), in);
+    gst_ghost_pad_set_target(GST_GHOST_PAD(self->srcpad), out);
+    gst_object_unref(in);
+    gst_object_unref(out);
+    gst_bin_remove_many(GST_BIN(self), self->upload, self->to_cuda, self->download, NULL);
+    self->upload = self->to_cuda = self->download = nullptr;
+    GST_INFO_OBJECT(self, "processing on the CPU");
+  }
+  return TRUE;
+}
+
+static GstStateChangeReturn gst_pseudo3d_convert_change_state(GstElement *element, GstStateChange transition) {
+  GstPseudo3DConvert *self = GST_PSEUDO3D_CONVERT(element);
+  if (transition == GST_STATE_CHANGE_NULL_TO_READY && !configure_processing(self)) return GST_STATE_CHANGE_FAILURE;
+  return GST_ELEMENT_CLASS(parent_class)->change_state(element, transition);
 }
 
 static void gst_pseudo3d_convert_class_init(GstPseudo3DConvertClass *klass) {
@@ -108,6 +212,15 @@ static void gst_pseudo3d_convert_class_init(GstPseudo3DConvertClass *klass) {
   g_object_class_install_property(gobject_class, PROP_CUDA_DEVICE_ID,
                                   clone_pspec(g_object_class_find_property(depth_class, "cuda-device-id")));
   g_type_class_unref(depth_class);
+  g_object_class_install_property(
+      gobject_class, PROP_PROCESSING,
+      g_param_spec_enum("processing", "Processing",
+                        "Where system-memory video is processed: auto puts the chain between cudaupload and "
+                        "cudadownload when a CUDA device is available; read when going from NULL to READY",
+                        GST_TYPE_PSEUDO3D_PROCESSING, DEFAULT_PROCESSING,
+                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
+  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_PROCESSING, (GstPluginAPIFlags)0);
+  element_class->change_state = GST_DEBUG_FUNCPTR(gst_pseudo3d_convert_change_state);
 
   gst_element_class_set_static_metadata(element_class, "pseudo3d 2D-to-3D conversion", "Filter/Effect/Video",
                                         "Turns 2D video into stereo 3D: depth estimation, depth filtering, view "
@@ -136,10 +249,12 @@ static void gst_pseudo3d_convert_init(GstPseudo3DConvert *self) {
   GstPad *sink = gst_element_get_static_pad(self->stage[STAGE_DEPTH], "sink");
   GstPad *src = gst_element_get_static_pad(self->stage[STAGE_PACK], "src");
   GstElementClass *klass = GST_ELEMENT_GET_CLASS(self);
-  gst_element_add_pad(GST_ELEMENT(self), gst_ghost_pad_new_from_template(
-                                             "sink", sink, gst_element_class_get_pad_template(klass, "sink")));
-  gst_element_add_pad(GST_ELEMENT(self), gst_ghost_pad_new_from_template(
-                                             "src", src, gst_element_class_get_pad_template(klass, "src")));
+  self->sinkpad = gst_ghost_pad_new_from_template("sink", sink, gst_element_class_get_pad_template(klass, "sink"));
+  self->srcpad = gst_ghost_pad_new_from_template("src", src, gst_element_class_get_pad_template(klass, "src"));
+  gst_element_add_pad(GST_ELEMENT(self), self->sinkpad);
+  gst_element_add_pad(GST_ELEMENT(self), self->srcpad);
+  self->processing = DEFAULT_PROCESSING;
+  self->device_id = -1;
   gst_object_unref(sink);
   gst_object_unref(src);
 }

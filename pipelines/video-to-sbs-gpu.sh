@@ -7,5 +7,5 @@ set -euo pipefail
 in=${1:?input H.264 mp4}; out=${2:?output mkv}; shift 2
 gst-launch-1.0 -q filesrc location="$in" ! qtdemux ! h264parse ! nvh264dec ! \
   "video/x-raw(memory:CUDAMemory)" ! pseudo3dconvert layout=side-by-side-half "$@" ! cudadownload ! \
-  videoconvert ! x264enc speed-preset=veryfast frame-packing=auto ! h264parse ! matroskamux ! \
+  videoconvert ! video/x-raw,format=I420 ! x264enc speed-preset=veryfast frame-packing=auto ! h264parse ! matroskamux ! \
   filesink location="$out"

@@ -6,5 +6,5 @@ set -euo pipefail
 . "$(dirname "$0")/env.sh"
 in=${1:?input video}; out=${2:?output mp4}; shift 2
 gst-launch-1.0 -q filesrc location="$in" ! decodebin ! videoconvert ! video/x-raw,format=I420 ! \
-  pseudo3dconvert layout=side-by-side-half "$@" ! videoconvert ! \
+  pseudo3dconvert layout=side-by-side-half "$@" ! videoconvert ! video/x-raw,format=I420 ! \
   x264enc speed-preset=veryfast frame-packing=auto ! h264parse ! mp4mux ! filesink location="$out"

@@ -4,7 +4,7 @@
 #   scripts/gpu-check.sh prepare        (here, no GPU needed) builds build-gpu/
 #       for sm_90, bundles GStreamer + the project's binaries + test data into
 #       .gpu/payload.tar.gz with ../shared/gpu/make-gst-runtime.
-#   scripts/gpu-check.sh run [OUTDIR]   (on the GPU machine, from the repo
+#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|all]]   (on the GPU machine, from the repo
 #       root, with .gpu carried) unpacks, runs the GPU suites, compute-sanitizer
 #       memcheck and racecheck on the kernel suite (large sizes filtered out:
 #       the sanitizer is ~100x slower), pseudo3d-bench, and prints a table.
@@ -25,14 +25,13 @@ prepare() {
   "$top/../shared/gpu/make-gst-runtime" .gpu/payload/gstrt build-gpu/gst/libgstpseudo3d.so "${bins[@]}" >/dev/null
   cp "${bins[@]}" build-gpu/gst/libgstpseudo3d.so .gpu/payload/bin/
   strip --strip-unneeded .gpu/payload/bin/* 2>/dev/null || true
-  cp data/aloeL.jpg data/aloeR.jpg data/aloeGT.png .gpu/payload/data/
+  cp build-gpu/tests/raw-data/*.p3draw .gpu/payload/data/  # decoded here: no image codecs there
   tar czf .gpu/payload.tar.gz -C .gpu payload && rm -rf .gpu/payload
-  grep -qx '/.gpu/' .git/info/exclude 2>/dev/null || echo '/.gpu/' >> .git/info/exclude
   echo "prepared .gpu/payload.tar.gz ($(du -h .gpu/payload.tar.gz | cut -f1))"
 }
 
 run() {
-  local out=${1:-gpu-results}
+  local out=${1:-gpu-results} what=${2:-all}
   mkdir -p "$out"
   local work=/tmp/p3d-gpu
   rm -rf "$work" && mkdir -p "$work" && tar xzf .gpu/payload.tar.gz -C "$work"
@@ -46,23 +45,26 @@ run() {
 
   local big='*Uhd*:*7680*:*3840*:*EightK*:*UltraHd*:*Timing*:*Large*:*8k*:*4k*'
   declare -A rc
+  if [ "$what" != sanitize ]; then
   "$p/bin/test_gpu" --gtest_output=xml:"$out/test_gpu.xml" >"$out/test_gpu.log" 2>&1; rc[kernels]=$?
   "$p/bin/test_gpu_elements" --gtest_output=xml:"$out/test_gpu_elements.xml" >"$out/test_gpu_elements.log" 2>&1; rc[elements]=$?
+  "$p/bin/pseudo3d-bench" --out "$out/bench.jsonl" >"$out/bench.txt" 2>&1; rc[bench]=$?
+  fi
+  if [ "$what" != tests ]; then
   compute-sanitizer --tool memcheck --leak-check full --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
     >"$out/memcheck.log" 2>&1; rc[memcheck]=$?
   compute-sanitizer --tool racecheck --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
     >"$out/racecheck.log" 2>&1; rc[racecheck]=$?
   compute-sanitizer --tool memcheck --error-exitcode 3 "$p/bin/test_gpu_elements" --gtest_filter='*RGBA_333x177*:*BGRx_1001x7*' \
     >"$out/memcheck-elements.log" 2>&1; rc[memcheck_elements]=$?
-  "$p/bin/pseudo3d-bench" --out "$out/bench.jsonl" >"$out/bench.txt" 2>&1; rc[bench]=$?
+  fi
 
   {
     echo "== GPU: $(cat "$out/gpu.txt")"
-    for k in kernels elements memcheck racecheck memcheck_elements bench; do printf '%-18s exit %s\n' "$k" "${rc[$k]}"; done
-    grep -hE '^\[  (PASSED|FAILED) ' "$out/test_gpu.log" "$out/test_gpu_elements.log"
-    grep -hE 'ERROR SUMMARY|RACECHECK SUMMARY' "$out"/memcheck*.log "$out/racecheck.log"
-    echo "== benchmark"
-    cat "$out/bench.txt"
+    for k in "${!rc[@]}"; do printf '%-18s exit %s\n' "$k" "${rc[$k]}"; done
+    grep -hE '^\[  (PASSED|FAILED) |^\[  FAILED  \]' "$out"/test_gpu*.log 2>/dev/null
+    grep -hE 'ERROR SUMMARY|RACECHECK SUMMARY' "$out"/memcheck*.log "$out"/racecheck.log 2>/dev/null
+    [ -f "$out/bench.txt" ] && { echo "== benchmark"; cat "$out/bench.txt"; }
   } | tee "$out/summary.txt"
   local fail=0
   for k in "${!rc[@]}"; do [ "${rc[$k]}" -ne 0 ] && fail=1; done

@@ -9,13 +9,19 @@ cd "$top"
 "$top/scripts/build.sh" || exit 1
 meson test -C build --print-errorlogs --num-processes 2 "$@"
 rc=$?
-python3 - "$top/build/meson-logs/testlog.json" <<'PY'
-import json, sys
-counts = {"OK": 0, "FAIL": 0, "SKIP": 0, "TIMEOUT": 0, "ERROR": 0, "EXPECTEDFAIL": 0, "UNEXPECTEDPASS": 0}
-for line in open(sys.argv[1]):
-    r = json.loads(line)
-    counts[r["result"]] = counts.get(r["result"], 0) + 1
-failed = counts["FAIL"] + counts["TIMEOUT"] + counts["ERROR"] + counts["UNEXPECTEDPASS"]
-print(f"{counts['OK']} passed, {failed} failed, {counts['SKIP']} skipped")
+# Closing line over every test case (gtest cases as meson's JUnit log lists them).
+python3 - "$top/build/meson-logs/testlog.junit.xml" <<'PY'
+import sys
+import xml.etree.ElementTree as ET
+passed = failed = skipped = 0
+for case in ET.parse(sys.argv[1]).getroot().iter("testcase"):
+    kinds = {child.tag for child in case}
+    if kinds & {"failure", "error"}:
+        failed += 1
+    elif "skipped" in kinds:
+        skipped += 1
+    else:
+        passed += 1
+print(f"{passed} passed, {failed} failed, {skipped} skipped")
 PY
 exit $rc

@@ -28,7 +28,7 @@ TEST(Pipeline, BinWithDecodedVideo) {
   const std::string avi = data_dir() + "/vtest.avi";
   ASSERT_TRUE(g_file_test(avi.c_str(), G_FILE_TEST_EXISTS)) << "run scripts/get-test-data.sh";
   const std::string out = output_dir() + "/vtest-sbs.mkv";
-  EXPECT_EQ("", run_to_eos("filesrc location=" + avi + " ! decodebin ! videoconvert ! video/x-raw,format=I420 ! "
+  EXPECT_EQ("", run_to_eos("filesrc location=" + avi + " ! decodebin ! identity eos-after=60 ! videoconvert ! video/x-raw,format=I420 ! "
                            "pseudo3dconvert layout=side-by-side-half ! videoconvert ! x264enc speed-preset=ultrafast "
                            "frame-packing=auto ! h264parse ! matroskamux ! filesink location=" + out,
                            180));

@@ -23,7 +23,7 @@ const char *kStages = "pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp max-dispari
 std::string chain(bool gpu, const char *layout, const char *out_format) {
   char stages[256];
   snprintf(stages, sizeof stages, kStages, layout);
-  std::string s = gpu ? std::string("cudaupload ! ") + stages + " ! cudadownload" : std::string(stages);
+  std::string s = gpu ? std::string("cudaupload ! video/x-raw(memory:CUDAMemory) ! ") + stages + " ! cudadownload" : std::string(stages);
   return s + " ! capsfilter caps=video/x-raw,format=" + out_format;
 }
 
@@ -133,6 +133,17 @@ TEST(GpuChainReal, AloeMatchesCpu) {
   const auto gpu = run_chain(chain(true, "anaglyph", "RGBA"), PixelFormat::NV12, aloe.cols, aloe.rows, frames);
   const auto cpu = run_chain(chain(false, "anaglyph", "RGBA"), PixelFormat::NV12, aloe.cols, aloe.rows, frames);
   expect_same(gpu, cpu, "aloe");
+}
+
+// The bin on system memory: processing=gpu (cudaupload ! stages ! cudadownload
+// inside) gives the CPU bin's output exactly.
+TEST(GpuConvertBin, SystemMemoryOnGpuMatchesCpu) {
+  std::vector<HostFrame> frames;
+  for (uint32_t s = 0; s < 3; ++s) frames.push_back(picture(PixelFormat::I420, 720, 480, 300 + s));
+  const char *tail = " layout=top-bottom-half ! capsfilter caps=video/x-raw,format=RGBA";
+  const auto gpu = run_chain(std::string("pseudo3dconvert processing=gpu") + tail, PixelFormat::I420, 720, 480, frames);
+  const auto cpu = run_chain(std::string("pseudo3dconvert processing=cpu") + tail, PixelFormat::I420, 720, 480, frames);
+  expect_same(gpu, cpu, "pseudo3dconvert");
 }
 
 // Device memory stays flat over 1000 frames (pools, no per-frame allocation).

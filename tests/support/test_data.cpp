@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <cstdio>
+#include <fstream>
+
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 namespace p3d::test {
 
@@ -13,10 +15,29 @@ std::string data_dir() {
   return P3D_DATA_DIR;
 }
 
+bool write_raw_image(const std::string &path, const cv::Mat &m) {
+  std::ofstream f(path, std::ios::binary);
+  f << "P3DRAW " << m.cols << " " << m.rows << " " << m.type() << "\n";
+  for (int y = 0; y < m.rows; ++y) f.write(m.ptr<char>(y), static_cast<std::streamsize>(m.cols * m.elemSize()));
+  return static_cast<bool>(f);
+}
+
+cv::Mat read_raw_image(const std::string &path) {
+  std::ifstream f(path, std::ios::binary);
+  std::string magic;
+  int cols = 0, rows = 0, type = 0;
+  if (!(f >> magic >> cols >> rows >> type) || magic != "P3DRAW" || cols <= 0 || rows <= 0) return cv::Mat();
+  f.get();  // the newline
+  cv::Mat m(rows, cols, type);
+  f.read(m.ptr<char>(), static_cast<std::streamsize>(m.total() * m.elemSize()));
+  return f ? m : cv::Mat();
+}
+
 cv::Mat load_data_image(const std::string &name) {
   const std::string path = data_dir() + "/" + name;
-  cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (m.empty()) ADD_FAILURE() << "missing test data " << path << " (run scripts/get-test-data.sh)";
+  cv::Mat m = read_raw_image(path + ".p3draw");
+  if (m.empty()) m = read_image_file(path);
+  if (m.empty()) ADD_FAILURE() << "missing test data " << path << " (or its .p3draw dump; run scripts/get-test-data.sh)";
   return m;
 }
 

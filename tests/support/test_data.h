@@ -16,9 +16,19 @@ namespace p3d::test {
 // Folder holding aloeL.jpg, aloeR.jpg, aloeGT.png, vtest.avi. Env
 // P3D_DATA_DIR overrides the build-time default.
 std::string data_dir();
-// Loads a file from data_dir() (cv::IMREAD_UNCHANGED); fails the test
-// (ADD_FAILURE) and returns an empty Mat when missing.
+// Loads a file from data_dir() (as cv::IMREAD_UNCHANGED would); fails the
+// test (ADD_FAILURE) and returns an empty Mat when missing. A raw dump
+// "<name>.p3draw" (write_raw_image) is read first when present: the GPU
+// suites read only those, so they need no image codecs (Debian's
+// libopencv-imgcodecs pulls in GDAL, too big to carry to a GPU machine).
 cv::Mat load_data_image(const std::string &name);
+
+// Decodes an image file; empty on failure. Two implementations: OpenCV's
+// imread (CPU suites) and none (GPU suites, raw dumps only).
+cv::Mat read_image_file(const std::string &path);
+// Raw dump: a text line "P3DRAW <cols> <rows> <cv type>\n", then the rows.
+bool write_raw_image(const std::string &path, const cv::Mat &m);
+cv::Mat read_raw_image(const std::string &path);
 
 // Largest |a - b| over all pixels and channels of two 8-bit images and the
 // number of samples that differ by more than `tolerance`.

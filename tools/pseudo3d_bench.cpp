@@ -1,0 +1,635 @@
+// pseudo3d-bench: times every stage (convert, depth, filter, warp, pack) and
+// the whole chain on the CPU and, when built with CUDA, on the GPU, plus a
+// device-to-device copy that gives the card's achievable bandwidth. Writes
+// one JSON line per measurement and prints a short table.
+//
+// Byte counts are the minimum a stage must move: every input read once,
+// every output written once (W x H frame, F = the input frame's bytes,
+// luma = W*H for YUV input, 4*W*H for packed RGB whose luma needs all of it):
+//   convert  F + 4WH                 (frame -> RGBA)
+//   depth    F + 4WH                 (float depth written)
+//   filter   4WH + luma + 4WH        (depth and guide read, depth written)
+//   warp     F + 4WH + 8WH           (frame and depth read, 2W x H pair written)
+//   pack     8WH + packed output     (pair read, layout's output written)
+//   chain    depth + filter + warp + pack
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <unistd.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench_gpu.h"  // types only unless P3D_BENCH_GPU
+
+namespace p3d::bench {
+namespace {
+
+constexpr int kFrames = 4;  // distinct inputs the timings rotate through
+constexpr int kExitUsage = 64;
+constexpr int kExitNoGpu = 2;
+
+struct Size {
+  int width, height;
+};
+
+struct Options {
+  bool want_cpu = true, want_gpu = true, device_given = false;
+  std::vector<Size> sizes;
+  PixelFormat format = PixelFormat::NV12;
+  StageParams params;
+  int iterations = 0;  // 0: the per-device defaults
+  int gpu_warmup = 10;
+  int cpu_warmup = 1;
+  int cpu_threads = -1;  // -1: OpenCV's default
+  size_t copy_bytes = size_t{1} << 30;
+  std::string out_path = "bench-results.jsonl";
+  std::string argv;
+};
+
+// ---- command line -----------------------------------------------------------
+
+const std::map<std::string, PixelFormat> kFormats = {
+    {"NV12", PixelFormat::NV12}, {"I420", PixelFormat::I420}, {"RGBA", PixelFormat::RGBA},
+    {"BGRA", PixelFormat::BGRA}, {"RGBx", PixelFormat::RGBx}, {"BGRx", PixelFormat::BGRx}};
+
+const std::map<std::string, PackLayout> kLayouts = {
+    {"anaglyph", PackLayout::Anaglyph},
+    {"side-by-side", PackLayout::SideBySide},
+    {"side-by-side-half", PackLayout::SideBySideHalf},
+    {"top-bottom", PackLayout::TopBottom},
+    {"top-bottom-half", PackLayout::TopBottomHalf},
+    {"row-interleaved", PackLayout::RowInterleaved},
+    {"column-interleaved", PackLayout::ColumnInterleaved},
+    {"checkerboard", PackLayout::Checkerboard},
+    {"left", PackLayout::Left},
+    {"right", PackLayout::Right}};
+
+const std::map<std::string, HoleFill> kFills = {
+    {"background", HoleFill::Background}, {"neighbor-average", HoleFill::NeighborAverage}, {"none", HoleFill::None}};
+
+template <typename T>
+std::string name_of(const std::map<std::string, T> &table, T value) {
+  for (const auto &kv : table)
+    if (kv.second == value) return kv.first;
+  return "?";
+}
+
+const std::vector<Size> kDefaultSizes = {{1280, 720}, {1920, 1080}, {3840, 2160}, {7680, 4320}};
+
+void print_usage(std::ostream &os) {
+  os << "Usage: pseudo3d-bench [options]\n"
+        "  --device cpu|gpu        time only one device (default: both; GPU skipped if absent)\n"
+        "  --size WxH              one frame size (repeatable or comma separated; default\n"
+        "                          1280x720,1920x1080,3840x2160,7680x4320)\n"
+        "  --format F              input format: NV12 (default), I420, RGBA, BGRA, RGBx, BGRx\n"
+        "  --layout L              pack layout (default anaglyph): side-by-side, side-by-side-half,\n"
+        "                          top-bottom, top-bottom-half, row-interleaved, column-interleaved,\n"
+        "                          checkerboard, left, right\n"
+        "  --radius N              bilateral radius (default 5)\n"
+        "  --max-disparity P       percent of width (default 3)\n"
+        "  --fill F                background (default), neighbor-average, none\n"
+        "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
+        "  --warmup N              GPU warm-up iterations (default 10; CPU always 1)\n"
+        "  --cpu-threads N         OpenCV worker threads for the CPU timings\n"
+        "  --copy-mib N            size of the device-to-device copy (default 1024)\n"
+        "  --quick                 smoke test: 3 iterations, 1280x720 and 1920x1080\n"
+        "  --out FILE              JSON lines appended here (default bench-results.jsonl)\n"
+        "Exit status: 0 ok, 1 runtime/CUDA error, 2 GPU requested but none usable, 64 bad usage.\n";
+}
+
+[[noreturn]] void usage_error(const std::string &msg) {
+  std::cerr << "pseudo3d-bench: " << msg << "\n";
+  print_usage(std::cerr);
+  std::exit(kExitUsage);
+}
+
+int parse_int(const std::string &opt, const std::string &v, int lo, int hi) {
+  char *end = nullptr;
+  const long n = std::strtol(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || n < lo || n > hi)
+    usage_error(opt + " wants an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" + v + "'");
+  return static_cast<int>(n);
+}
+
+float parse_float(const std::string &opt, const std::string &v) {
+  char *end = nullptr;
+  const float f = std::strtof(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !std::isfinite(f)) usage_error(opt + " wants a number, got '" + v + "'");
+  return f;
+}
+
+void parse_sizes(const std::string &v, std::vector<Size> *sizes) {
+  std::stringstream ss(v);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const size_t x = item.find_first_of("xX");
+    if (x == std::string::npos) usage_error("--size wants WxH, got '" + item + "'");
+    sizes->push_back({parse_int("--size", item.substr(0, x), 1, 65536), parse_int("--size", item.substr(x + 1), 1, 65536)});
+  }
+}
+
+template <typename T>
+T parse_name(const std::string &opt, const std::string &v, const std::map<std::string, T> &table) {
+  const auto it = table.find(v);
+  if (it == table.end()) usage_error("unknown " + opt + " '" + v + "'");
+  return it->second;
+}
+
+Options parse_args(int argc, char **argv) {
+  Options o;
+  bool quick = false;
+  for (int i = 0; i < argc; ++i) o.argv += (i ? " " : "") + std::string(argv[i]);
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      print_usage(std::cout);
+      std::exit(0);
+    }
+    if (a == "--quick") {
+      quick = true;
+      continue;
+    }
+    if (i + 1 >= argc) usage_error("missing value after " + a);
+    const std::string v = argv[++i];
+    if (a == "--device") {
+      if (v != "cpu" && v != "gpu") usage_error("--device wants cpu or gpu");
+      o.device_given = true;
+      o.want_cpu = v == "cpu";
+      o.want_gpu = v == "gpu";
+    } else if (a == "--size") {
+      parse_sizes(v, &o.sizes);
+    } else if (a == "--format") {
+      o.format = parse_name(a, v, kFormats);
+    } else if (a == "--layout") {
+      o.params.pack.layout = parse_name(a, v, kLayouts);
+    } else if (a == "--radius") {
+      o.params.filter.radius = parse_int(a, v, 0, kMaxBilateralRadius);
+    } else if (a == "--max-disparity") {
+      o.params.warp.max_disparity = parse_float(a, v);
+    } else if (a == "--fill") {
+      o.params.warp.fill = parse_name(a, v, kFills);
+    } else if (a == "--iterations") {
+      o.iterations = parse_int(a, v, 1, 100000);
+    } else if (a == "--warmup") {
+      o.gpu_warmup = parse_int(a, v, 0, 100000);
+    } else if (a == "--cpu-threads") {
+      o.cpu_threads = parse_int(a, v, 1, 1024);
+    } else if (a == "--copy-mib") {
+      o.copy_bytes = static_cast<size_t>(parse_int(a, v, 1, 65536)) << 20;
+    } else if (a == "--out") {
+      o.out_path = v;
+    } else {
+      usage_error("unknown option " + a);
+    }
+  }
+  if (quick) {
+    if (o.iterations == 0) o.iterations = 3;
+    if (o.sizes.empty()) o.sizes = {{1280, 720}, {1920, 1080}};
+  }
+  if (o.sizes.empty()) o.sizes = kDefaultSizes;
+  return o;
+}
+
+int cpu_iterations(const Options &o, Size s) {
+  if (o.iterations > 0) return o.iterations;
+  return static_cast<long long>(s.width) * s.height > 1920LL * 1080 ? 5 : 10;
+}
+
+// ---- synthetic input ----------------------------------------------------------
+
+// A smooth picture with edges, different per frame k but related like
+// consecutive video frames: colour ramps whose phase moves with k, a few
+// rectangles and discs that drift, and mild Gaussian noise. Region grouping,
+// the guide's edges and the warp's disocclusions then all have work to do.
+cv::Mat synthetic_bgr(int w, int h, int k) {
+  cv::Mat img(h, w, CV_8UC3);
+  const float phase = 0.07f * static_cast<float>(k);
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const float fy = static_cast<float>(y) / static_cast<float>(h);
+      cv::Vec3b *row = img.ptr<cv::Vec3b>(y);
+      for (int x = 0; x < w; ++x) {
+        const float fx = static_cast<float>(x) / static_cast<float>(w);
+        const float t = fx * 0.8f + fy * 0.3f + phase;
+        row[x] = cv::Vec3b(cv::saturate_cast<uint8_t>(40.f + 150.f * fx),
+                           cv::saturate_cast<uint8_t>(60.f + 130.f * fy),
+                           cv::saturate_cast<uint8_t>(30.f + 190.f * (t - std::floor(t))));
+      }
+    }
+  });
+  cv::RNG layout(12345);  // same shapes in every frame, drifting with k
+  const int drift = std::max(1, w / 200) * k;
+  for (int i = 0; i < 8; ++i) {
+    const int x0 = layout.uniform(0, w), y0 = layout.uniform(0, h);
+    const int rw = layout.uniform(w / 20 + 1, w / 4 + 2), rh = layout.uniform(h / 20 + 1, h / 4 + 2);
+    const cv::Scalar colour(layout.uniform(0, 256), layout.uniform(0, 256), layout.uniform(0, 256));
+    const int dir = i % 2 ? 1 : -1;
+    cv::rectangle(img, cv::Rect(x0 + dir * drift, y0, rw, rh), colour, cv::FILLED);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const cv::Point c(layout.uniform(0, w) + drift, layout.uniform(0, h));
+    const int r = layout.uniform(std::min(w, h) / 30 + 1, std::min(w, h) / 8 + 2);
+    cv::circle(img, c, r, cv::Scalar(layout.uniform(0, 256), layout.uniform(0, 256), layout.uniform(0, 256)),
+               cv::FILLED, cv::LINE_AA);
+  }
+  cv::Mat noise(h, w, CV_16SC3);
+  cv::RNG(1000 + k).fill(noise, cv::RNG::NORMAL, 0, 3);
+  cv::Mat noisy;
+  cv::add(img, noise, noisy, cv::noArray(), CV_8UC3);
+  return noisy;
+}
+
+std::vector<HostFrame> make_frames(PixelFormat format, Size s) {
+  std::vector<HostFrame> frames;
+  for (int k = 0; k < kFrames; ++k) frames.push_back(HostFrame::from_bgr(synthetic_bgr(s.width, s.height, k), format));
+  return frames;
+}
+
+// ---- byte counts ----------------------------------------------------------------
+
+double frame_bytes(PixelFormat f, int w, int h) {
+  double total = 0;
+  for (int i = 0; i < frame_plane_count(f); ++i) {
+    int row = 0, rows = 0;
+    frame_plane_size(f, w, h, i, &row, &rows);
+    total += static_cast<double>(row) * rows;
+  }
+  return total;
+}
+
+double stage_bytes(const std::string &stage, PixelFormat f, Size s, const PackParams &pack) {
+  const double wh = static_cast<double>(s.width) * s.height;
+  const double frame = frame_bytes(f, s.width, s.height);
+  const double luma = is_packed_rgb(f) ? 4 * wh : wh;
+  int pw = 0, ph = 0;
+  pack_size(pack.layout, s.width, s.height, &pw, &ph);
+  const double packed = 4.0 * pw * ph;
+  if (stage == "convert" || stage == "depth") return frame + 4 * wh;
+  if (stage == "filter") return 4 * wh + luma + 4 * wh;
+  if (stage == "warp") return frame + 4 * wh + 8 * wh;
+  if (stage == "pack") return 8 * wh + packed;
+  if (stage == "chain") {
+    double sum = 0;
+    for (const char *st : {"depth", "filter", "warp", "pack"}) sum += stage_bytes(st, f, s, pack);
+    return sum;
+  }
+  return 0;
+}
+
+// ---- statistics and output --------------------------------------------------------
+
+struct Stats {
+  double median_ms = 0, min_ms = 0;
+};
+
+Stats stats_of(std::vector<double> ms) {
+  Stats st;
+  if (ms.empty()) return st;
+  std::sort(ms.begin(), ms.end());
+  const size_t n = ms.size();
+  st.median_ms = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+  st.min_ms = ms.front();
+  return st;
+}
+
+std::string json_escape(const std::string &s) {
+  std::string o;
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      o += '\\';
+      o += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      o += buf;
+    } else {
+      o += c;
+    }
+  }
+  return o;
+}
+
+// One JSON object on one line; non-finite numbers become null (JSON has no NaN).
+class JsonLine {
+ public:
+  JsonLine &str(const std::string &k, const std::string &v) { return raw(k, "\"" + json_escape(v) + "\""); }
+  JsonLine &num(const std::string &k, double v) {
+    if (!std::isfinite(v)) return raw(k, "null");
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return raw(k, buf);
+  }
+  JsonLine &integer(const std::string &k, long long v) { return raw(k, std::to_string(v)); }
+  JsonLine &raw(const std::string &k, const std::string &v) {
+    body_ += (body_.empty() ? "" : ", ") + ("\"" + json_escape(k) + "\": ") + v;
+    return *this;
+  }
+  std::string text() const { return "{" + body_ + "}"; }
+
+ private:
+  std::string body_;
+};
+
+struct Measurement {
+  std::string stage, device, gpu_name;
+  Size size{0, 0};
+  int iterations = 0;
+  Stats st;
+  double bytes = 0;
+  double share = -1;  // < 0: not applicable (CPU lines)
+  double gbps() const { return st.median_ms > 0 ? bytes / (st.median_ms * 1e6) : 0; }
+  double fps() const { return st.median_ms > 0 ? 1000.0 / st.median_ms : 0; }
+};
+
+class Reporter {
+ public:
+  Reporter(const Options &o, std::ofstream &out) : o_(o), out_(out) {}
+
+  void header(const std::string &run_id, const std::string &date, const std::string &git) {
+    run_id_ = run_id;
+    JsonLine j;
+    j.str("run", run_id).str("date", date);
+    if (git.empty())
+      j.raw("git", "null");
+    else
+      j.str("git", git);
+    j.str("args", o_.argv).str("format", name_of(kFormats, o_.format));
+    out_ << j.text() << "\n" << std::flush;
+    std::printf("%-8s %-9s %-6s %10s %10s %9s %8s %6s\n", "stage", "size", "device", "median ms", "min ms", "fps",
+                "GB/s", "share");
+    std::fflush(stdout);
+  }
+
+  void emit(const Measurement &m) {
+    JsonLine j;
+    j.str("run", run_id_).str("stage", m.stage).integer("width", m.size.width).integer("height", m.size.height);
+    j.str("device", m.device).str("gpu_name", m.gpu_name);
+    if (m.device == "cpu") j.integer("cpu_threads", cv::getNumThreads());
+    j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kLayouts, o_.params.pack.layout));
+    j.integer("iterations", m.iterations);
+    j.num("median_ms", m.st.median_ms).num("min_ms", m.st.min_ms).num("fps", m.fps());
+    j.integer("bytes", std::llround(m.bytes)).num("gbps", m.gbps());
+    if (m.share >= 0) j.num("bandwidth_share", m.share);
+    out_ << j.text() << "\n" << std::flush;
+
+    char size[32], share[16] = "-";
+    std::snprintf(size, sizeof size, "%dx%d", m.size.width, m.size.height);
+    if (m.share >= 0) std::snprintf(share, sizeof share, "%.2f", m.share);
+    std::printf("%-8s %-9s %-6s %10.4f %10.4f %9.1f %8.1f %6s\n", m.stage.c_str(), size, m.device.c_str(),
+                m.st.median_ms, m.st.min_ms, m.fps(), m.gbps(), share);
+    std::fflush(stdout);
+  }
+
+ private:
+  const Options &o_;
+  std::ofstream &out_;
+  std::string run_id_;
+};
+
+// ---- CPU timings ----------------------------------------------------------------
+
+void convert_cpu(const FrameView &in, const YuvToRgb &m, const FrameView &out) {
+  cv::parallel_for_(cv::Range(0, in.height), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < in.width; ++x) store_rgba(out, x, y, load_rgba(in, x, y, m));
+  });
+}
+
+// The CPU counterpart of the GPU's SizeBench: rotating inputs, per-frame
+// stage inputs computed once, scratch outputs.
+struct CpuSizeBench {
+  std::vector<HostFrame> frames, stereo;
+  std::vector<cv::Mat> depth, filtered;
+  cv::Mat out_depth, out_filtered;
+  HostFrame out_stereo, out_packed, out_rgba;
+  DepthEstimatorCpu estimator;
+
+  CpuSizeBench(const StageParams &p, std::vector<HostFrame> inputs) : frames(std::move(inputs)) {
+    const int w = frames[0].width(), h = frames[0].height();
+    const PixelFormat sf = stereo_format(frames[0].format());
+    int pw = 0, ph = 0;
+    pack_size(p.pack.layout, w, h, &pw, &ph);
+    out_depth.create(h, w, CV_32FC1);
+    out_filtered.create(h, w, CV_32FC1);
+    out_stereo = HostFrame(sf, 2 * w, h);
+    out_packed = HostFrame(sf, pw, ph);
+    out_rgba = HostFrame(PixelFormat::RGBA, w, h);
+    for (const HostFrame &f : frames) {
+      depth.emplace_back(h, w, CV_32FC1);
+      filtered.emplace_back(h, w, CV_32FC1);
+      stereo.emplace_back(sf, 2 * w, h);
+      estimator.estimate(p.depth, f.view(), depth_view_of(depth.back()));
+      bilateral_filter_cpu(p.filter, f.view(), depth_view_of(std::as_const(depth.back())),
+                           depth_view_of(filtered.back()));
+      warp(p, f.view(), filtered.back(), stereo.back().view());
+    }
+  }
+
+  static void warp(const StageParams &p, const FrameView &f, const cv::Mat &depth, const FrameView &out) {
+    if (warp_render_cpu(p.warp, f, p.yuv, depth_view_of(depth), out) < 0)
+      throw std::runtime_error("warp_render_cpu: frames do not fit");
+  }
+
+  void run_stage(const std::string &stage, const StageParams &p, int i) {
+    const size_t k = static_cast<size_t>(i) % frames.size();
+    const FrameView f = frames[k].view();
+    if (stage == "convert") {
+      convert_cpu(f, p.yuv, out_rgba.view());
+    } else if (stage == "depth") {
+      estimator.estimate(p.depth, f, depth_view_of(out_depth));
+    } else if (stage == "filter") {
+      bilateral_filter_cpu(p.filter, f, depth_view_of(std::as_const(depth[k])), depth_view_of(out_filtered));
+    } else if (stage == "warp") {
+      warp(p, f, filtered[k], out_stereo.view());
+    } else if (stage == "pack") {
+      pack_cpu(p.pack, stereo[k].view(), out_packed.view());
+    } else {  // chain
+      estimator.estimate(p.depth, f, depth_view_of(out_depth));
+      bilateral_filter_cpu(p.filter, f, depth_view_of(std::as_const(out_depth)), depth_view_of(out_filtered));
+      warp(p, f, out_filtered, out_stereo.view());
+      pack_cpu(p.pack, out_stereo.view(), out_packed.view());
+    }
+  }
+};
+
+std::vector<double> time_cpu(const std::function<void(int)> &op, int warmup, int iterations) {
+  using clock = std::chrono::steady_clock;
+  for (int i = 0; i < warmup; ++i) op(i);
+  std::vector<double> ms;
+  for (int i = 0; i < iterations; ++i) {
+    const auto t0 = clock::now();
+    op(warmup + i);
+    ms.push_back(std::chrono::duration<double, std::milli>(clock::now() - t0).count());
+  }
+  return ms;
+}
+
+void bench_cpu(const Options &o, Size s, std::vector<HostFrame> frames, Reporter &rep) {
+  CpuSizeBench b(o.params, std::move(frames));
+  const int iterations = cpu_iterations(o, s);
+  for (const std::string &stage : stage_names()) {
+    Measurement m;
+    m.stage = stage;
+    m.device = "cpu";
+    m.size = s;
+    m.iterations = iterations;
+    m.st = stats_of(time_cpu([&](int i) { b.run_stage(stage, o.params, i); }, o.cpu_warmup, iterations));
+    m.bytes = stage_bytes(stage, o.format, s, o.params.pack);
+    rep.emit(m);
+  }
+}
+
+// ---- GPU timings -------------------------------------------------------------------
+
+#ifdef P3D_BENCH_GPU
+struct GpuContext {
+  std::string name;
+  double copy_gbps = 0;
+};
+
+[[noreturn]] void gpu_failure(const std::string &error) {
+  std::cerr << "pseudo3d-bench: CUDA error: " << error << "\n";
+  std::exit(1);
+}
+
+GpuContext bench_gpu_copy(const Options &o, Reporter &rep) {
+  GpuContext g;
+  g.name = gpu_name();
+  const TimingPlan plan{o.gpu_warmup, o.iterations > 0 ? o.iterations : 50};
+  std::vector<double> ms;
+  std::string error;
+  if (!gpu_time_copy(o.copy_bytes, plan, &ms, &error)) gpu_failure(error);
+  Measurement m;
+  m.stage = "d2d_copy";
+  m.device = "gpu";
+  m.gpu_name = g.name;
+  m.iterations = plan.iterations;
+  m.st = stats_of(ms);
+  m.bytes = 2.0 * static_cast<double>(o.copy_bytes);  // read + write
+  g.copy_gbps = m.gbps();
+  m.share = 1.0;
+  rep.emit(m);
+  return g;
+}
+
+void bench_gpu(const Options &o, const GpuContext &g, Size s, const std::vector<HostFrame> &frames, Reporter &rep) {
+  const TimingPlan plan{o.gpu_warmup, o.iterations > 0 ? o.iterations : 50};
+  std::vector<StageTimes> times;
+  std::string error;
+  if (!gpu_time_stages(o.params, frames, plan, &times, &error)) gpu_failure(error);
+  for (const StageTimes &t : times) {
+    Measurement m;
+    m.stage = t.stage;
+    m.device = "gpu";
+    m.gpu_name = g.name;
+    m.size = s;
+    m.iterations = plan.iterations;
+    m.st = stats_of(t.ms);
+    m.bytes = stage_bytes(t.stage, o.format, s, o.params.pack);
+    m.share = g.copy_gbps > 0 ? m.gbps() / g.copy_gbps : 0;
+    rep.emit(m);
+  }
+}
+#endif
+
+// ---- run metadata ------------------------------------------------------------------
+
+std::string utc_now(const char *fmt) {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, fmt, &tm);
+  return buf;
+}
+
+// The source tree's commit (with -dirty), or "" when git or the tree is not there.
+std::string git_version() {
+#ifdef P3D_SOURCE_DIR
+  const std::string cmd = std::string("git -C '") + P3D_SOURCE_DIR + "' describe --always --dirty --abbrev=12 2>/dev/null";
+  FILE *p = popen(cmd.c_str(), "r");
+  if (!p) return "";
+  char buf[128] = {0};
+  std::string out = std::fgets(buf, sizeof buf, p) ? buf : "";
+  pclose(p);
+  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+  return out;
+#else
+  return "";
+#endif
+}
+
+// Decides which devices run; returns a process exit status, or -1 to go on.
+int resolve_devices(Options &o) {
+#ifdef P3D_BENCH_GPU
+  const bool have_gpu = gpu_present();
+  const char *why = "no usable CUDA device";
+#else
+  const bool have_gpu = false;
+  const char *why = "this build has no CUDA support";
+#endif
+  if (!o.want_gpu || have_gpu) return -1;
+  if (o.device_given) {
+    std::cerr << "pseudo3d-bench: --device gpu requested but " << why << "\n";
+    return kExitNoGpu;
+  }
+  std::cout << "GPU skipped: " << why << "; timing the CPU only\n";
+  o.want_gpu = false;
+  return -1;
+}
+
+int run(int argc, char **argv) {
+  Options o = parse_args(argc, argv);
+  const int early = resolve_devices(o);
+  if (early >= 0) return early;
+  if (o.cpu_threads > 0) cv::setNumThreads(o.cpu_threads);
+
+  std::ofstream out(o.out_path, std::ios::app);
+  if (!out) {
+    std::cerr << "pseudo3d-bench: cannot open " << o.out_path << " for appending\n";
+    return 1;
+  }
+  Reporter rep(o, out);
+  rep.header(utc_now("%Y%m%dT%H%M%SZ") + "-" + std::to_string(getpid()), utc_now("%Y-%m-%dT%H:%M:%SZ"),
+             git_version());
+
+#ifdef P3D_BENCH_GPU
+  GpuContext gpu;
+  if (o.want_gpu) gpu = bench_gpu_copy(o, rep);
+#endif
+  for (const Size s : o.sizes) {
+    std::vector<HostFrame> frames = make_frames(o.format, s);
+#ifdef P3D_BENCH_GPU
+    if (o.want_gpu) bench_gpu(o, gpu, s, frames, rep);
+#endif
+    if (o.want_cpu) bench_cpu(o, s, std::move(frames), rep);
+  }
+  std::cout << "results appended to " << o.out_path << "\n";
+  return 0;
+}
+
+}  // namespace
+}  // namespace p3d::bench
+
+int main(int argc, char **argv) {
+  try {
+    return p3d::bench::run(argc, argv);
+  } catch (const std::exception &e) {
+    std::cerr << "pseudo3d-bench: " << e.what() << "\n";
+    return 1;
+  }
+}
