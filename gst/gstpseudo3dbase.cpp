@@ -16,8 +16,9 @@
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_base_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_base_debug
 
-enum { PROP_0, PROP_DEVICE_ID };
+enum { PROP_0, PROP_DEVICE_ID, PROP_PROCESSING };
 #define DEFAULT_DEVICE_ID (-1)
+#define DEFAULT_PROCESSING GST_PSEUDO3D_PROCESSING_AUTO
 
 #define gst_pseudo3d_base_parent_class parent_class
 G_DEFINE_ABSTRACT_TYPE_WITH_CODE(GstPseudo3DBase, gst_pseudo3d_base, GST_TYPE_BASE_TRANSFORM,
@@ -32,6 +33,11 @@ static void gst_pseudo3d_base_set_property(GObject *object, guint prop_id, const
       self->device_id = g_value_get_int(value);
       GST_OBJECT_UNLOCK(self);
       break;
+    case PROP_PROCESSING:
+      GST_OBJECT_LOCK(self);
+      self->processing = static_cast<GstPseudo3DProcessing>(g_value_get_enum(value));
+      GST_OBJECT_UNLOCK(self);
+      break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
 }
@@ -40,17 +46,19 @@ static void gst_pseudo3d_base_get_property(GObject *object, guint prop_id, GValu
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(object);
   switch (prop_id) {
     case PROP_DEVICE_ID: g_value_set_int(value, self->device_id); break;
+    case PROP_PROCESSING: g_value_set_enum(value, self->processing); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
 }
 
-gboolean gst_pseudo3d_base_on_gpu(GstPseudo3DBase *self) {
+GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self) {
 #if HAVE_CUDA
-  return self->cuda_caps && self->context != nullptr;
+  if (self->context && self->processing != GST_PSEUDO3D_PROCESSING_CPU)
+    return self->cuda_caps ? GST_PSEUDO3D_PATH_GPU : GST_PSEUDO3D_PATH_STAGED;
 #else
   (void)self;
-  return FALSE;
 #endif
+  return GST_PSEUDO3D_PATH_CPU;
 }
 
 #if HAVE_CUDA
@@ -68,7 +76,51 @@ GstFlowReturn gst_pseudo3d_base_sync(GstPseudo3DBase *self) {
   return GST_FLOW_OK;
 }
 
+namespace p3d::gst {
+
+CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, const FrameView &frame,
+                        bool read, FrameView *dev) {
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    *dev = frame;
+    return {};
+  }
+  return read ? self->staging->upload(slot, frame, dev, self->stream) : self->staging->allocate(slot, frame, dev);
+}
+
+CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, ImageView<float> depth,
+                        bool read, ImageView<float> *dev) {
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    *dev = depth;
+    return {};
+  }
+  return read ? self->staging->upload_depth(slot, as_const(depth), dev, self->stream)
+              : self->staging->allocate_depth(slot, depth.width, depth.height, dev);
+}
+
+CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host) {
+  if (path != GST_PSEUDO3D_PATH_STAGED) return {};
+  return self->staging->download(dev, host, self->stream);
+}
+
+CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, ImageView<const float> dev,
+                         ImageView<float> host) {
+  if (path != GST_PSEUDO3D_PATH_STAGED) return {};
+  return self->staging->download_depth(dev, host, self->stream);
+}
+
+}  // namespace p3d::gst
+
 static void release_cuda(GstPseudo3DBase *self) {
+  if (self->context) {
+    // Device memory of this context is freed while it is current.
+    CudaContextScope scope(self->context);
+    GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
+    if (scope.ok()) {
+      if (klass->release_gpu) klass->release_gpu(self);
+      delete self->staging;
+      self->staging = nullptr;
+    }
+  }
   if (self->context && self->stream) {
     CudaContextScope scope(self->context);
     if (scope.ok()) {
@@ -101,7 +153,9 @@ static void acquire_cuda(GstPseudo3DBase *self) {
     GST_WARNING_OBJECT(self, "cudaStreamCreateWithFlags failed (%s): processing on the CPU", cudaGetErrorName(err));
     self->stream = nullptr;
     gst_clear_object(&self->context);
+    return;
   }
+  self->staging = new p3d::gst::GpuStaging();
 }
 
 static void gst_pseudo3d_base_set_context(GstElement *element, GstContext *context) {
@@ -120,13 +174,20 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
 #endif
 
 static gboolean gst_pseudo3d_base_start(GstBaseTransform *trans) {
-#if HAVE_CUDA
-  acquire_cuda(GST_PSEUDO3D_BASE(trans));
-#else
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+#if HAVE_CUDA
+  if (self->processing != GST_PSEUDO3D_PROCESSING_CPU) acquire_cuda(self);
+  const gboolean have_gpu = self->context != nullptr;
+#else
   if (!self->cpu_notice_logged) GST_INFO_OBJECT(self, "built without CUDA: processing on the CPU");
   self->cpu_notice_logged = TRUE;
+  const gboolean have_gpu = FALSE;
 #endif
+  if (self->processing == GST_PSEUDO3D_PROCESSING_GPU && !have_gpu) {
+    GST_ELEMENT_ERROR(self, RESOURCE, NOT_FOUND, ("processing=gpu but no usable CUDA device"),
+                      ("cuda-device-id %d; use processing=auto to fall back to the CPU", self->device_id));
+    return FALSE;
+  }
   return TRUE;
 }
 
@@ -240,13 +301,14 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
   GstCapsFeatures *features = gst_caps_get_features(incaps, 0);
   self->cuda_caps = features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
   if (self->cuda_caps) acquire_cuda(self);
-  if (self->cuda_caps && !self->context)
-    GST_WARNING_OBJECT(self, "CUDA memory negotiated but no CUDA context: CPU fallback through mapped memory");
+  if (self->cuda_caps && gst_pseudo3d_base_path(self) == GST_PSEUDO3D_PATH_CPU)
+    GST_WARNING_OBJECT(self, "CUDA memory negotiated but processing on the CPU through mapped memory (slow)");
 #endif
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
   if (klass->set_info && !klass->set_info(self, incaps, &self->in_info, outcaps, &self->out_info)) return FALSE;
-  GST_DEBUG_OBJECT(self, "negotiated %dx%d -> %dx%d on the %s", in.width, in.height, out.width, out.height,
-                   gst_pseudo3d_base_on_gpu(self) ? "GPU" : "CPU");
+  static const char *const path_names[] = {"CPU", "GPU", "GPU (staged through system memory)"};
+  GST_INFO_OBJECT(self, "negotiated %dx%d -> %dx%d, processing on the %s", in.width, in.height, out.width, out.height,
+                  path_names[gst_pseudo3d_base_path(self)]);
   return TRUE;
 }
 
@@ -349,7 +411,7 @@ static gboolean gst_pseudo3d_base_transform_meta(GstBaseTransform *trans, GstBuf
 
 static GstMapFlags map_flags(GstPseudo3DBase *self, GstMapFlags base) {
 #if HAVE_CUDA
-  if (gst_pseudo3d_base_on_gpu(self)) return (GstMapFlags)(base | GST_MAP_CUDA);
+  if (gst_pseudo3d_base_path(self) == GST_PSEUDO3D_PATH_GPU) return (GstMapFlags)(base | GST_MAP_CUDA);
 #else
   (void)self;
 #endif
@@ -359,7 +421,7 @@ static GstMapFlags map_flags(GstPseudo3DBase *self, GstMapFlags base) {
 #if HAVE_CUDA
 // Memory of another context (another device) must not be launched on.
 static gboolean check_memory_context(GstPseudo3DBase *self, GstBuffer *buf) {
-  if (!gst_pseudo3d_base_on_gpu(self)) return TRUE;
+  if (gst_pseudo3d_base_path(self) != GST_PSEUDO3D_PATH_GPU) return TRUE;
   for (guint i = 0; i < gst_buffer_n_memory(buf); ++i) {
     GstMemory *mem = gst_buffer_peek_memory(buf, i);
     if (!gst_is_cuda_memory(mem) || reinterpret_cast<GstCudaMemory *>(mem)->context != self->context) {
@@ -389,7 +451,7 @@ static GstFlowReturn guarded(GstPseudo3DBase *self, F &&f) {
 static GstFlowReturn gst_pseudo3d_base_transform(GstBaseTransform *trans, GstBuffer *inbuf, GstBuffer *outbuf) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  const gboolean gpu = gst_pseudo3d_base_on_gpu(self);
+  const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
 #if HAVE_CUDA
   if (!check_memory_context(self, inbuf)) return GST_FLOW_ERROR;
 #endif
@@ -407,9 +469,9 @@ static GstFlowReturn gst_pseudo3d_base_transform(GstBaseTransform *trans, GstBuf
   }
   GstFlowReturn ret;
 #if HAVE_CUDA
-  CudaContextScope scope(gpu ? self->context : nullptr);
+  CudaContextScope scope(path != GST_PSEUDO3D_PATH_CPU ? self->context : nullptr);
 #endif
-  ret = guarded(self, [&] { return klass->process(self, gpu, inbuf, &in, &out); });
+  ret = guarded(self, [&] { return klass->process(self, path, inbuf, &in, &out); });
   gst_video_frame_unmap(&out);
   gst_video_frame_unmap(&in);
   return ret;
@@ -418,7 +480,7 @@ static GstFlowReturn gst_pseudo3d_base_transform(GstBaseTransform *trans, GstBuf
 static GstFlowReturn gst_pseudo3d_base_transform_ip(GstBaseTransform *trans, GstBuffer *buf) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  const gboolean gpu = gst_pseudo3d_base_on_gpu(self);
+  const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
 #if HAVE_CUDA
   if (!check_memory_context(self, buf)) return GST_FLOW_ERROR;
 #endif
@@ -431,9 +493,9 @@ static GstFlowReturn gst_pseudo3d_base_transform_ip(GstBaseTransform *trans, Gst
     return GST_FLOW_ERROR;
   }
 #if HAVE_CUDA
-  CudaContextScope scope(gpu ? self->context : nullptr);
+  CudaContextScope scope(path != GST_PSEUDO3D_PATH_CPU ? self->context : nullptr);
 #endif
-  const GstFlowReturn ret = guarded(self, [&] { return klass->process_ip(self, gpu, buf, &frame); });
+  const GstFlowReturn ret = guarded(self, [&] { return klass->process_ip(self, path, buf, &frame); });
   gst_video_frame_unmap(&frame);
   return ret;
 }
@@ -453,6 +515,20 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
    * pipeline's context or the first device. Without a usable device the
    * element processes on the CPU.
    */
+  /**
+   * GstPseudo3DBase:processing:
+   *
+   * auto: the GPU when a CUDA device is usable (memory:CUDAMemory caps in
+   * place; system-memory caps through an upload and a download per frame),
+   * else the CPU. cpu: always the CPU. gpu: fail to start without a GPU.
+   */
+  g_object_class_install_property(
+      gobject_class, PROP_PROCESSING,
+      g_param_spec_enum("processing", "Processing",
+                        "Where frames are processed: auto = GPU when a CUDA device is usable (system-memory frames "
+                        "are uploaded and downloaded per frame), else CPU; cpu; gpu = an error without a GPU",
+                        GST_TYPE_PSEUDO3D_PROCESSING, DEFAULT_PROCESSING,
+                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
   g_object_class_install_property(
       gobject_class, PROP_DEVICE_ID,
       g_param_spec_int("cuda-device-id", "CUDA device id",
@@ -485,6 +561,7 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
 
 static void gst_pseudo3d_base_init(GstPseudo3DBase *self) {
   self->device_id = DEFAULT_DEVICE_ID;
+  self->processing = DEFAULT_PROCESSING;
   gst_video_info_init(&self->in_info);
   gst_video_info_init(&self->out_info);
 }

@@ -10,7 +10,9 @@
 #include <gst/video/video.h>
 
 #include "config.h"
+#include "enums.h"
 #include "frame.h"
+#include "gpu_staging.h"
 
 #if HAVE_CUDA
 #include <cuda_runtime_api.h>
@@ -27,6 +29,13 @@ G_BEGIN_DECLS
 #define GST_PSEUDO3D_BASE_GET_CLASS(obj) \
   (G_TYPE_INSTANCE_GET_CLASS((obj), GST_TYPE_PSEUDO3D_BASE, GstPseudo3DBaseClass))
 
+/* Where a negotiated stream is processed. */
+typedef enum {
+  GST_PSEUDO3D_PATH_CPU = 0,    /* CPU references on mapped memory */
+  GST_PSEUDO3D_PATH_GPU = 1,    /* memory:CUDAMemory: kernels on the frames in place */
+  GST_PSEUDO3D_PATH_STAGED = 2, /* system memory, GPU present: upload, kernels, download */
+} GstPseudo3DPath;
+
 typedef struct _GstPseudo3DBase GstPseudo3DBase;
 typedef struct _GstPseudo3DBaseClass GstPseudo3DBaseClass;
 
@@ -40,10 +49,12 @@ struct _GstPseudo3DBase {
 
   /* properties */
   gint device_id;
+  GstPseudo3DProcessing processing;
 
 #if HAVE_CUDA
   GstCudaContext *context; /* null: no usable GPU, CPU path */
   cudaStream_t stream;
+  p3d::gst::GpuStaging *staging; /* system-memory frames on the GPU */
 #endif
   gboolean cpu_notice_logged;
 };
@@ -63,17 +74,19 @@ struct _GstPseudo3DBaseClass {
 
   gboolean (*set_info)(GstPseudo3DBase *self, GstCaps *incaps, GstVideoInfo *in_info, GstCaps *outcaps,
                        GstVideoInfo *out_info);
-  /* Not in place: frames are mapped (device pointers when on_gpu). */
-  GstFlowReturn (*process)(GstPseudo3DBase *self, gboolean on_gpu, GstBuffer *inbuf, GstVideoFrame *in,
+  /* Not in place: frames are mapped (device pointers on GST_PSEUDO3D_PATH_GPU). */
+  GstFlowReturn (*process)(GstPseudo3DBase *self, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
                            GstVideoFrame *out);
   /* In place: frame mapped for reading; the stage attaches metas to buf. */
-  GstFlowReturn (*process_ip)(GstPseudo3DBase *self, gboolean on_gpu, GstBuffer *buf, GstVideoFrame *frame);
+  GstFlowReturn (*process_ip)(GstPseudo3DBase *self, GstPseudo3DPath path, GstBuffer *buf, GstVideoFrame *frame);
+  /* Frees the stage's device memory; called in stop() with the context current. */
+  void (*release_gpu)(GstPseudo3DBase *self);
 };
 
 GType gst_pseudo3d_base_get_type(void);
 
-/* Whether frames of the negotiated caps are processed on the GPU. */
-gboolean gst_pseudo3d_base_on_gpu(GstPseudo3DBase *self);
+/* Where frames of the negotiated caps are processed. */
+GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self);
 
 #if HAVE_CUDA
 /* Posts a GST_ELEMENT_ERROR naming the failed CUDA call; returns GST_FLOW_ERROR. */
@@ -88,6 +101,20 @@ G_DEFINE_AUTOPTR_CLEANUP_FUNC(GstPseudo3DBase, gst_object_unref)
 G_END_DECLS
 
 #if HAVE_CUDA
+namespace p3d::gst {
+/* The device view of a frame or depth map a stage reads (read = true: a
+ * staged frame is uploaded) or writes: the mapped memory itself on
+ * GST_PSEUDO3D_PATH_GPU, a staging buffer on GST_PSEUDO3D_PATH_STAGED. */
+CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, const FrameView &frame,
+                        bool read, FrameView *dev);
+CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, ImageView<float> depth,
+                        bool read, ImageView<float> *dev);
+/* After the kernels: a staged result goes back to host memory (no-op on the GPU path). */
+CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host);
+CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, ImageView<const float> dev,
+                         ImageView<float> host);
+}  // namespace p3d::gst
+
 /* Makes the element's CUDA context current on this thread for the scope. */
 class CudaContextScope {
  public:

@@ -98,6 +98,7 @@ static void gst_pseudo3d_convert_set_property(GObject *object, guint prop_id, co
     for (GstElement *e : self->stage) g_object_set_property(G_OBJECT(e), "cuda-device-id", value);
   } else if (prop_id == PROP_PROCESSING) {
     self->processing = static_cast<GstPseudo3DProcessing>(g_value_get_enum(value));
+    for (GstElement *e : self->stage) g_object_set_property(G_OBJECT(e), "processing", value);
   } else if (prop_id >= 1 && prop_id <= G_N_ELEMENTS(kProxied)) {
     g_object_set_property(G_OBJECT(self->stage[kProxied[prop_id - 1].stage]), kProxied[prop_id - 1].name, value);
   } else {

@@ -103,12 +103,14 @@ static p3d::DepthParams read_params(GstPseudo3DDepth *self) {
   return p;
 }
 
-static p3d::gst::DepthPlanePtr new_plane(GstPseudo3DDepth *self, gboolean gpu, int w, int h) {
+// Device planes on the GPU path; host planes otherwise (staged results are downloaded).
+static p3d::gst::DepthPlanePtr new_plane(GstPseudo3DDepth *self, GstPseudo3DPath path, int w, int h) {
   std::string error;
 #if HAVE_CUDA
-  p3d::gst::DepthPlanePtr plane = self->state->pool.acquire(w, h, gpu ? self->parent.context : nullptr, &error);
+  p3d::gst::DepthPlanePtr plane =
+      self->state->pool.acquire(w, h, path == GST_PSEUDO3D_PATH_GPU ? self->parent.context : nullptr, &error);
 #else
-  (void)gpu;
+  (void)path;
   p3d::gst::DepthPlanePtr plane = self->state->pool.acquire(w, h, nullptr, &error);
 #endif
   if (!plane)
@@ -117,16 +119,25 @@ static p3d::gst::DepthPlanePtr new_plane(GstPseudo3DDepth *self, gboolean gpu, i
 }
 
 // method=edges: frame unchanged, depth attached.
-static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *buf, GstVideoFrame *frame) {
+static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,
+                                GstVideoFrame *frame) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
   if (pseudo3d_buffer_get_depth(buf)) return GST_FLOW_OK;  // supplied upstream: nothing to estimate
   const p3d::FrameView view = p3d::gst::frame_view(frame);
-  p3d::gst::DepthPlanePtr plane = new_plane(self, gpu, view.width, view.height);
+  p3d::gst::DepthPlanePtr plane = new_plane(self, path, view.width, view.height);
   if (!plane) return GST_FLOW_ERROR;
   const p3d::DepthParams params = read_params(self);
 #if HAVE_CUDA
-  if (gpu) {
-    const p3d::CudaStatus st = self->state->gpu.estimate(params, view, plane->view(), base->stream);
+  if (path != GST_PSEUDO3D_PATH_CPU) {
+    using p3d::gst::GpuStaging;
+    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+      p3d::FrameView f;
+      p3d::ImageView<float> d;
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, view, true, &f));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, plane->view(), false, &d));
+      P3D_CUDA_TRY_STATUS(self->state->gpu.estimate(params, f, d, base->stream));
+      return p3d::gst::depth_to_host(base, path, p3d::as_const(d), plane->view());
+    }();
     if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "estimating depth");
     const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
     if (ret != GST_FLOW_OK) return ret;
@@ -159,16 +170,17 @@ static p3d::FrameView right_half(p3d::FrameView v, int half) {
 }
 
 // method=rgbd: copy the colour half, attach the grey half as depth.
-static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *, GstVideoFrame *in,
+// RGBD is a copy and a grey conversion: on system memory it stays on the CPU.
+static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *, GstVideoFrame *in,
                              GstVideoFrame *out) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
   const int half = GST_VIDEO_FRAME_WIDTH(out);
   const p3d::FrameView grey = right_half(p3d::gst::frame_view(in), half);
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
-  p3d::gst::DepthPlanePtr plane = new_plane(self, gpu, half, GST_VIDEO_FRAME_HEIGHT(out));
+  p3d::gst::DepthPlanePtr plane = new_plane(self, path, half, GST_VIDEO_FRAME_HEIGHT(out));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
-  if (gpu) {
+  if (path == GST_PSEUDO3D_PATH_GPU) {
     for (guint i = 0; i < GST_VIDEO_FRAME_N_PLANES(out); ++i) {
       const cudaError_t err = cudaMemcpy2DAsync(
           GST_VIDEO_FRAME_PLANE_DATA(out, i), GST_VIDEO_FRAME_PLANE_STRIDE(out, i), GST_VIDEO_FRAME_PLANE_DATA(in, i),
@@ -186,7 +198,6 @@ static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *, G
   } else
 #endif
   {
-    (void)gpu;
     // The colour half is the left part of every plane: a plain copy.
     for (guint i = 0; i < GST_VIDEO_FRAME_N_PLANES(out); ++i) {
       const gsize row = GST_VIDEO_FRAME_COMP_WIDTH(out, i) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, i);
@@ -199,6 +210,14 @@ static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *, G
   }
   if (!pseudo3d_buffer_set_depth(out->buffer, std::move(plane))) return GST_FLOW_ERROR;
   return GST_FLOW_OK;
+}
+
+static void release_gpu(GstPseudo3DBase *base) {
+#if HAVE_CUDA
+  GST_PSEUDO3D_DEPTH(base)->state->gpu = p3d::DepthEstimatorGpu();
+#else
+  (void)base;
+#endif
 }
 
 static void update_in_place(GstPseudo3DDepth *self) {
@@ -323,6 +342,7 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
   base_class->set_info = set_info;
   base_class->process = process;
   base_class->process_ip = process_ip;
+  base_class->release_gpu = release_gpu;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_depth_debug, "pseudo3ddepth", 0, "pseudo3d depth estimation");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_DEPTH_METHOD, (GstPluginAPIFlags)0);

@@ -46,7 +46,9 @@ struct _GstPseudo3DFilter {
 G_DEFINE_TYPE(GstPseudo3DFilter, gst_pseudo3d_filter, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dfilter, "pseudo3dfilter", GST_RANK_NONE, GST_TYPE_PSEUDO3D_FILTER);
 
-static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *buf, GstVideoFrame *frame) {
+static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,
+                                GstVideoFrame *frame) {
+  const bool device = path == GST_PSEUDO3D_PATH_GPU;
   GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(base);
   p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(buf);
   if (!depth) {
@@ -55,10 +57,10 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *
     return GST_FLOW_ERROR;
   }
   const p3d::FrameView guide = p3d::gst::frame_view(frame);
-  if (depth->width != guide.width || depth->height != guide.height || depth->on_device != (gpu == TRUE)) {
+  if (depth->width != guide.width || depth->height != guide.height || depth->on_device != device) {
     GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Depth map does not match the frame"),
                       ("depth %dx%d (%s), frame %dx%d (%s)", depth->width, depth->height,
-                       depth->on_device ? "device" : "host", guide.width, guide.height, gpu ? "device" : "host"));
+                       depth->on_device ? "device" : "host", guide.width, guide.height, device ? "device" : "host"));
     return GST_FLOW_ERROR;
   }
   GST_OBJECT_LOCK(self);
@@ -67,7 +69,8 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *
 
   std::string error;
 #if HAVE_CUDA
-  p3d::gst::DepthPlanePtr out = self->state->pool.acquire(depth->width, depth->height, gpu ? base->context : nullptr, &error);
+  p3d::gst::DepthPlanePtr out =
+      self->state->pool.acquire(depth->width, depth->height, device ? base->context : nullptr, &error);
 #else
   p3d::gst::DepthPlanePtr out = self->state->pool.acquire(depth->width, depth->height, nullptr, &error);
 #endif
@@ -76,8 +79,17 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *
     return GST_FLOW_ERROR;
   }
 #if HAVE_CUDA
-  if (gpu) {
-    const p3d::CudaStatus st = self->state->gpu.run(params, guide, p3d::as_const(depth->view()), out->view(), base->stream);
+  if (path != GST_PSEUDO3D_PATH_CPU) {
+    using p3d::gst::GpuStaging;
+    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+      p3d::FrameView g;
+      p3d::ImageView<float> din, dout;
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, guide, true, &g));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->view(), true, &din));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, out->view(), false, &dout));
+      P3D_CUDA_TRY_STATUS(self->state->gpu.run(params, g, p3d::as_const(din), dout, base->stream));
+      return p3d::gst::depth_to_host(base, path, p3d::as_const(dout), out->view());
+    }();
     if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "filtering depth");
     const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
     if (ret != GST_FLOW_OK) return ret;
@@ -88,6 +100,14 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, gboolean gpu, GstBuffer *
   }
   pseudo3d_buffer_set_depth(buf, std::move(out));
   return GST_FLOW_OK;
+}
+
+static void release_gpu(GstPseudo3DBase *base) {
+#if HAVE_CUDA
+  GST_PSEUDO3D_FILTER(base)->state->gpu = p3d::BilateralFilterGpu();
+#else
+  (void)base;
+#endif
 }
 
 static void update_passthrough(GstPseudo3DFilter *self) {
@@ -161,6 +181,7 @@ static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
   gst_caps_unref(caps);
 
   base_class->process_ip = process_ip;
+  base_class->release_gpu = release_gpu;
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_filter_debug, "pseudo3dfilter", 0, "pseudo3d depth filter");
 }
 

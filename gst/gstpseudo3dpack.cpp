@@ -116,17 +116,26 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   return TRUE;
 }
 
-static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *, GstVideoFrame *in, GstVideoFrame *out) {
+static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *, GstVideoFrame *in,
+                             GstVideoFrame *out) {
   const p3d::PackParams params = read_params(GST_PSEUDO3D_PACK(base));
   const p3d::FrameView src = p3d::gst::frame_view(in), dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
-  if (gpu) {
-    const p3d::CudaStatus st = p3d::pack_gpu(params, src, dst, base->stream);
+  if (path != GST_PSEUDO3D_PATH_CPU) {
+    using p3d::gst::GpuStaging;
+    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+      p3d::FrameView fin, fout;
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
+      P3D_CUDA_TRY_STATUS(p3d::pack_gpu(params, fin, fout, base->stream));
+      return p3d::gst::frame_to_host(base, path, fout, dst);
+    }();
     if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "packing the stereo pair");
     return gst_pseudo3d_base_sync(base);
   }
+#else
+  (void)path;
 #endif
-  (void)gpu;
   p3d::pack_cpu(params, src, dst);
   return GST_FLOW_OK;
 }

@@ -60,8 +60,9 @@ static void set_src_multiview(GstPseudo3DBase *, GstStructure *s) {
                     GST_TYPE_VIDEO_MULTIVIEW_FLAGSET, 0, GST_FLAG_SET_MASK_EXACT, "views", G_TYPE_INT, 2, NULL);
 }
 
-static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *inbuf, GstVideoFrame *in,
+static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
                              GstVideoFrame *out) {
+  const bool device = path == GST_PSEUDO3D_PATH_GPU;
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
   p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(inbuf);
   const p3d::FrameView src = p3d::gst::frame_view(in);
@@ -69,10 +70,10 @@ static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *inb
     GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Frame carries no depth map"), ("put pseudo3ddepth before pseudo3dwarp"));
     return GST_FLOW_ERROR;
   }
-  if (depth->width != src.width || depth->height != src.height || depth->on_device != (gpu == TRUE)) {
+  if (depth->width != src.width || depth->height != src.height || depth->on_device != device) {
     GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Depth map does not match the frame"),
                       ("depth %dx%d (%s), frame %dx%d (%s)", depth->width, depth->height,
-                       depth->on_device ? "device" : "host", src.width, src.height, gpu ? "device" : "host"));
+                       depth->on_device ? "device" : "host", src.width, src.height, device ? "device" : "host"));
     return GST_FLOW_ERROR;
   }
   GST_OBJECT_LOCK(self);
@@ -81,13 +82,21 @@ static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *inb
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   const p3d::FrameView dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
-  if (gpu) {
-    const p3d::CudaStatus st = self->state->gpu.render(params, src, yuv, p3d::as_const(depth->view()), dst, base->stream);
+  if (path != GST_PSEUDO3D_PATH_CPU) {
+    using p3d::gst::GpuStaging;
+    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+      p3d::FrameView fin, fout;
+      p3d::ImageView<float> d;
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->view(), true, &d));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
+      P3D_CUDA_TRY_STATUS(self->state->gpu.render(params, fin, yuv, p3d::as_const(d), fout, base->stream));
+      return p3d::gst::frame_to_host(base, path, fout, dst);
+    }();
     if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "rendering the views");
     return gst_pseudo3d_base_sync(base);
   }
 #endif
-  (void)gpu;
   const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), dst);
   if (holes < 0) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
@@ -96,6 +105,14 @@ static GstFlowReturn process(GstPseudo3DBase *base, gboolean gpu, GstBuffer *inb
   }
   GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
   return GST_FLOW_OK;
+}
+
+static void release_gpu(GstPseudo3DBase *base) {
+#if HAVE_CUDA
+  GST_PSEUDO3D_WARP(base)->state->gpu = p3d::WarpRendererGpu();
+#else
+  (void)base;
+#endif
 }
 
 static void gst_pseudo3d_warp_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
@@ -178,6 +195,7 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
   base_class->sink_formats = P3D_ALL_FORMATS;
   base_class->set_src_multiview = set_src_multiview;
   base_class->process = process;
+  base_class->release_gpu = release_gpu;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_warp_debug, "pseudo3dwarp", 0, "pseudo3d DIBR view synthesis");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_VIEW, (GstPluginAPIFlags)0);

@@ -98,24 +98,26 @@ std::string run_to_eos(const std::string &launch, int timeout_s) {
     return msg;
   }
   std::string result;
-  if (gst_element_set_state(pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE) result = "state change failed";
   GstBus *bus = gst_element_get_bus(pipeline);
-  if (result.empty()) {
-    GstMessage *msg = gst_bus_timed_pop_filtered(bus, (GstClockTime)timeout_s * GST_SECOND,
-                                                 (GstMessageType)(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
-    if (!msg) {
-      result = "timeout";
-    } else {
-      if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR) {
-        GError *e = nullptr;
-        gchar *dbg = nullptr;
-        gst_message_parse_error(msg, &e, &dbg);
-        result = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
-        g_clear_error(&e);
-        g_free(dbg);
-      }
-      gst_message_unref(msg);
+  // A failed state change posts its reason as an error message: wait for
+  // that too (at once if the change failed, else up to the timeout).
+  const bool failed = gst_element_set_state(pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE;
+  GstMessage *msg = gst_bus_timed_pop_filtered(bus, failed ? 0 : (GstClockTime)timeout_s * GST_SECOND,
+                                               (GstMessageType)(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  if (!msg) {
+    result = failed ? "state change failed" : "timeout";
+  } else {
+    if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR) {
+      GError *e = nullptr;
+      gchar *dbg = nullptr;
+      gst_message_parse_error(msg, &e, &dbg);
+      result = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
+      g_clear_error(&e);
+      g_free(dbg);
+    } else if (failed) {
+      result = "state change failed";
     }
+    gst_message_unref(msg);
   }
   gst_object_unref(bus);
   gst_element_set_state(pipeline, GST_STATE_NULL);

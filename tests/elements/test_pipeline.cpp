@@ -50,3 +50,11 @@ TEST(Pipeline, StillImageToAnaglyphPng) {
 TEST(Pipeline, BadPropertyValueFailsToParse) {
   EXPECT_NE("", run_to_eos("videotestsrc num-buffers=1 ! pseudo3dpack layout=nonsense ! fakesink"));
 }
+
+// processing=gpu without a usable GPU fails to start with a message that
+// says so (skipped where a GPU is present: then it simply runs).
+TEST(Pipeline, ProcessingGpuWithoutGpuIsAClearError) {
+  const std::string err = run_to_eos("videotestsrc num-buffers=1 ! pseudo3ddepth processing=gpu ! fakesink");
+  if (err.empty()) GTEST_SKIP() << "a GPU is present";
+  EXPECT_NE(err.find("processing=gpu"), std::string::npos) << err;
+}

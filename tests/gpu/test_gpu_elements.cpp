@@ -18,12 +18,20 @@ using namespace p3d::test;
 
 namespace {
 
-const char *kStages = "pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp max-disparity=4 ! pseudo3dpack layout=%s";
+const char *kStages =
+    "pseudo3ddepth processing=%1$s ! pseudo3dfilter processing=%1$s ! pseudo3dwarp max-disparity=4 processing=%1$s ! "
+    "pseudo3dpack layout=%2$s processing=%1$s";
 
-std::string chain(bool gpu, const char *layout, const char *out_format) {
-  char stages[256];
-  snprintf(stages, sizeof stages, kStages, layout);
-  std::string s = gpu ? std::string("cudaupload ! video/x-raw(memory:CUDAMemory) ! ") + stages + " ! cudadownload" : std::string(stages);
+// The stages on CUDA memory (kDevice), on system memory with internal
+// upload/download (kStaged), or on the CPU.
+enum Where { kDevice, kStaged, kCpu };
+
+std::string chain(Where where, const char *layout, const char *out_format) {
+  char stages[512];
+  snprintf(stages, sizeof stages, kStages, where == kCpu ? "cpu" : "gpu", layout);
+  std::string s = where == kDevice ? std::string("cudaupload ! video/x-raw(memory:CUDAMemory) ! ") + stages +
+                                         " ! cudadownload"
+                                   : std::string(stages);
   return s + " ! capsfilter caps=video/x-raw,format=" + out_format;
 }
 
@@ -108,10 +116,12 @@ TEST_P(GpuChain, MatchesCpuChain) {
   for (uint32_t s = 0; s < 3; ++s) frames.push_back(picture(c.format, c.w, c.h, 100 + s));
   for (const char *layout : {"anaglyph", "side-by-side-half"}) {
     std::string caps;
-    const auto gpu = run_chain(chain(true, layout, "BGRA"), c.format, c.w, c.h, frames, &caps);
-    const auto cpu = run_chain(chain(false, layout, "BGRA"), c.format, c.w, c.h, frames);
+    const auto gpu = run_chain(chain(kDevice, layout, "BGRA"), c.format, c.w, c.h, frames, &caps);
+    const auto staged = run_chain(chain(kStaged, layout, "BGRA"), c.format, c.w, c.h, frames);
+    const auto cpu = run_chain(chain(kCpu, layout, "BGRA"), c.format, c.w, c.h, frames);
     EXPECT_NE(caps.find("memory:CUDAMemory"), std::string::npos) << "warp did not run on CUDA memory: " << caps;
-    expect_same(gpu, cpu, std::string(format_name(c.format)) + " " + layout);
+    expect_same(gpu, cpu, std::string(format_name(c.format)) + " " + layout + " on CUDA memory");
+    expect_same(staged, cpu, std::string(format_name(c.format)) + " " + layout + " staged through system memory");
   }
 }
 
@@ -130,8 +140,8 @@ TEST(GpuChainReal, AloeMatchesCpu) {
   const cv::Mat aloe = load_data_image("aloeL.jpg");
   ASSERT_FALSE(aloe.empty());
   const std::vector<HostFrame> frames = {HostFrame::from_bgr(aloe, PixelFormat::NV12)};
-  const auto gpu = run_chain(chain(true, "anaglyph", "RGBA"), PixelFormat::NV12, aloe.cols, aloe.rows, frames);
-  const auto cpu = run_chain(chain(false, "anaglyph", "RGBA"), PixelFormat::NV12, aloe.cols, aloe.rows, frames);
+  const auto gpu = run_chain(chain(kDevice, "anaglyph", "RGBA"), PixelFormat::NV12, aloe.cols, aloe.rows, frames);
+  const auto cpu = run_chain(chain(kCpu, "anaglyph", "RGBA"), PixelFormat::NV12, aloe.cols, aloe.rows, frames);
   expect_same(gpu, cpu, "aloe");
 }
 
@@ -149,7 +159,7 @@ TEST(GpuConvertBin, SystemMemoryOnGpuMatchesCpu) {
 // Device memory stays flat over 1000 frames (pools, no per-frame allocation).
 TEST(GpuChainMemory, FlatOver1000Frames) {
   const int w = 640, h = 360;
-  GstHarness *hx = gst_harness_new_parse(chain(true, "anaglyph", "RGBA").c_str());
+  GstHarness *hx = gst_harness_new_parse(chain(kDevice, "anaglyph", "RGBA").c_str());
   gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::NV12, w, h).c_str());
   std::vector<HostFrame> frames;
   for (uint32_t s = 0; s < 4; ++s) frames.push_back(picture(PixelFormat::NV12, w, h, s));
