@@ -4,7 +4,7 @@
 #   scripts/gpu-check.sh prepare        (here, no GPU needed) builds build-gpu/
 #       for sm_90, bundles GStreamer + the project's binaries + test data into
 #       .gpu/payload.tar.gz with ../shared/gpu/make-gst-runtime.
-#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|all]]   (on the GPU machine, from the repo
+#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|pipelines|all]]   (on the GPU machine, from the repo
 #       root, with .gpu carried) unpacks, runs the GPU suites, compute-sanitizer
 #       memcheck and racecheck on the kernel suite (large sizes filtered out:
 #       the sanitizer is ~100x slower), pseudo3d-bench, and prints a table.
@@ -45,12 +45,15 @@ run() {
 
   local big='*Uhd*:*7680*:*3840*:*EightK*:*UltraHd*:*Timing*:*Large*:*8k*:*4k*'
   declare -A rc
-  if [ "$what" != sanitize ]; then
+  if [ "$what" = tests ] || [ "$what" = all ]; then
   "$p/bin/test_gpu" --gtest_output=xml:"$out/test_gpu.xml" >"$out/test_gpu.log" 2>&1; rc[kernels]=$?
   "$p/bin/test_gpu_elements" --gtest_output=xml:"$out/test_gpu_elements.xml" >"$out/test_gpu_elements.log" 2>&1; rc[elements]=$?
   "$p/bin/pseudo3d-bench" --out "$out/bench.jsonl" >"$out/bench.txt" 2>&1; rc[bench]=$?
   fi
-  if [ "$what" != tests ]; then
+  if [ "$what" = pipelines ]; then
+    "$top/scripts/bench-pipelines.sh" "$out" >"$out/pipelines.txt" 2>&1; rc[pipelines]=$?
+  fi
+  if [ "$what" != tests ] && [ "$what" != pipelines ]; then
   compute-sanitizer --tool memcheck --leak-check full --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
     >"$out/memcheck.log" 2>&1; rc[memcheck]=$?
   compute-sanitizer --tool racecheck --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
@@ -65,6 +68,7 @@ run() {
     grep -hE '^\[  (PASSED|FAILED) |^\[  FAILED  \]' "$out"/test_gpu*.log 2>/dev/null
     grep -hE 'ERROR SUMMARY|RACECHECK SUMMARY' "$out"/memcheck*.log "$out"/racecheck.log 2>/dev/null
     [ -f "$out/bench.txt" ] && { echo "== benchmark"; cat "$out/bench.txt"; }
+    [ -f "$out/pipelines.txt" ] && { echo "== pipelines"; cat "$out/pipelines.txt"; }
   } | tee "$out/summary.txt"
   local fail=0
   for k in "${!rc[@]}"; do [ "${rc[$k]}" -ne 0 ] && fail=1; done
