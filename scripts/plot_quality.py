@@ -46,6 +46,15 @@ def fmt(v, digits=2):
     return f"{v:.{digits}f}"
 
 
+def threads(run):
+    n = run.get("cpu_threads")
+    return f"{n} OpenCV thread{'' if n == 1 else 's'}" if n is not None else "? OpenCV threads"
+
+
+def sfmt(v, digits=2):
+    return fmt(v, digits) if v is None or v < 0 else "+" + fmt(v, digits)
+
+
 def table(header, lines):
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     out += ["| " + " | ".join(str(c) for c in line) + " |" for line in lines]
@@ -58,7 +67,7 @@ def table(header, lines):
 def plot(rows, png):
     synth = of_kind(rows, "synthesis")
     variants = of_kind(rows, "filter_variant")
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.4), dpi=90)
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 5.4), dpi=90)
 
     for fill, (colour, marker) in FILL_STYLE.items():
         pts = sorted((r for r in synth if r["fill"] == fill), key=lambda r: r["radius"])
@@ -79,7 +88,7 @@ def plot(rows, png):
     ax1.set_ylabel("PSNR against aloeR, dB")
     ax1.set_title("Aloe right view: fill x filter radius (r0 = GT depth as is)", fontsize=9)
     ax1.grid(True, which="both", alpha=0.3)
-    ax1.legend(fontsize=6.5, loc="lower right")
+    ax1.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
 
     for variant, (colour, marker) in VARIANT_STYLE.items():
         for inp, style in (("estimated", "-"), ("ground-truth", "--")):
@@ -98,11 +107,11 @@ def plot(rows, png):
     ax2.set_ylabel("mean |error| against the exact filter, 8-bit levels")
     ax2.set_title("Cross-bilateral filter: exact window vs faster variants", fontsize=9)
     ax2.grid(True, which="both", alpha=0.3)
-    ax2.legend(fontsize=6.5, loc="upper right")
+    ax2.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
 
     run = next((r for r in rows if r.get("kind") == "run"), {})
     fig.suptitle(f"pseudo3d quality vs run time, 1282x1110 Aloe, {run.get('cpu', 'CPU')} "
-                 f"({run.get('cpu_threads', '?')} threads), {run.get('date', '')[:10]}", fontsize=10)
+                 f"({threads(run)}), {run.get('date', '')[:10]}", fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.dirname(png) or ".", exist_ok=True)
     fig.savefig(png, dpi=90)
@@ -110,6 +119,12 @@ def plot(rows, png):
 
 
 # ---- report ---------------------------------------------------------------------
+
+
+def outside_share(r):
+    """Share of the squared error outside the known-correspondence mask: PSNR
+    is 10 log10(peak^2 / MSE), so MSE_mask / MSE_all = 10^((psnr - psnr_masked) / 10)."""
+    return 1 - r["mask_fraction"] * 10 ** ((r["psnr"] - r["psnr_masked"]) / 10)
 
 
 def synthesis_section(rows):
@@ -136,12 +151,15 @@ def synthesis_section(rows):
     if bg0 and base:
         notes.append(f"The warp with the true depth and background fill scores {fmt(bg0['psnr'])} dB / SSIM "
                      f"{fmt(bg0['ssim'], 3)}, {fmt(bg0['psnr'] - base[0]['psnr'])} dB over the unwarped left view; "
-                     f"on the pixels with a known correspondence it reaches {fmt(bg0['psnr_masked'])} dB, so most of "
-                     f"the remaining error is in the {fmt(100 * bg0['hole_fraction'], 1)} % of pixels the warp leaves "
-                     f"as holes (disocclusions, the right border band, unknown-GT areas), which no fill can know.")
+                     f"on the pixels with a known correspondence it reaches {fmt(bg0['psnr_masked'])} dB. "
+                     f"{fmt(100 * outside_share(bg0), 0)} % of the squared error lies in the other "
+                     f"{fmt(100 * (1 - bg0['mask_fraction']), 0)} % of the picture, mostly the "
+                     f"{fmt(100 * bg0['hole_fraction'], 1)} % the warp leaves as holes: disocclusions, the right "
+                     f"border band and the gaps beside unknown-GT pixels (GT 0, so they stay put as far).")
     if bg0 and na0:
-        notes.append(f"Neighbour averaging (the paper's inpainting) is {fmt(na0['psnr'] - bg0['psnr'])} dB PSNR and "
-                     f"{fmt(na0['ssim'] - bg0['ssim'], 4)} SSIM against background fill, at "
+        notes.append(f"Neighbour averaging (the paper's inpainting) changes PSNR by {sfmt(na0['psnr'] - bg0['psnr'])} dB "
+                     f"and SSIM by {sfmt(na0['ssim'] - bg0['ssim'], 4)} against background fill (smooth colour in "
+                     f"the holes suits SSIM, the wrong colour costs PSNR), at "
                      f"{fmt(na0['warp_ms'] / bg0['warp_ms'], 1)}x its warp time (iterations scale with the hole "
                      f"width); `none` shows the unfilled holes (magenta) for scale.")
     if bg0 and bg5:
@@ -182,10 +200,11 @@ def filter_section(rows):
     gt5 = [r for r in variants if r["input"] == "ground-truth" and r["radius"] == 5 and "synth_psnr" in r]
     if gt5:
         spread = max(r["synth_psnr"] for r in gt5) - min(r["synth_psnr"] for r in gt5)
-        notes.append(f"Through the warp the variants are within {fmt(spread, 2)} dB of the exact filter's right "
-                     f"view at radius 5: their errors sit at depth edges, a pixel or two wide. The worst-case error "
-                     f"is large because a tap pattern that skips a thin structure (stride 2) or reaches it only "
-                     f"through an L-shaped path (separable) weighs a different side of an edge.")
+        notes.append(f"Through the warp the variants are within {fmt(spread, 3)} dB of the exact filter's right "
+                     f"view at radius 5, although single pixels can be off by tens of levels: at a depth edge, a "
+                     f"tap pattern that skips a thin structure (stride 2) or reaches it only through an L-shaped "
+                     f"path (separable) can weigh the other side of the edge. The separable pass is the cheapest; "
+                     f"its time grows linearly with the radius, the exact window's quadratically.")
     return out + [""] + notes
 
 
@@ -204,12 +223,13 @@ def depth_section(rows):
         notes.append(f"With the defaults (top-bottom, edge_threshold 24, region_weight 0.75, filter radius 5) the "
                      f"estimated depth ranks Aloe's pixels with rho = {fmt(default['spearman'], 3)} against the "
                      f"true disparity. The hypothesis decides most of it; edge_threshold and region_weight move rho "
-                     f"by a few hundredths. Flat has no ordering (n/a).")
+                     f"by a few hundredths, and the filter hardly changes the ranking (it moves block edges onto "
+                     f"image edges, a few pixels). Flat has no ordering (n/a).")
     if best:
         notes.append(f"Best here: {best['hypothesis']}, edge_threshold {fmt(best['edge_threshold'], 0)}, "
                      f"region_weight {fmt(best['region_weight'], 2)}, radius {best['filter_radius']} "
-                     f"(rho {fmt(best['spearman'], 3)}). One scene is one scene: Aloe is a plant in front of a "
-                     f"backdrop whose lower part is nearer, which suits top-bottom.")
+                     f"(rho {fmt(best['spearman'], 3)}). One scene is one scene: in Aloe the pot and the floor at "
+                     f"the bottom are nearest and the backdrop behind the plant is far, which suits top-bottom.")
     return out + [""] + notes
 
 
@@ -225,7 +245,8 @@ def flicker_section(rows):
               fmt(r["mean_abs_all_pixels"] * LEVEL, 3), f"{r['cuts']}/{r['smoothed']}/{r['reused']}",
               fmt(r["time_ms"], 1)] for r in flick]
     f0 = flick[0]
-    out = [f"{f0['frames']} frames of {f0['video']} ({f0['width']}x{f0['height']}); static background = "
+    out = [f"{f0['frames']} frames of {f0['video']} ({f0['width']}x{f0['height']}, decoded by OpenCV's "
+           f"{f0.get('decoder') or '?'} backend); static background = "
            f"{fmt(100 * f0['mask_fraction'], 1)} % of the pixels (luma standard deviation under "
            f"{fmt(f0['static_std_levels'], 0)} levels over the run). Changes in 8-bit depth levels (1 level = 1/255).",
            "",
@@ -236,10 +257,15 @@ def flicker_section(rows):
     if off and on and off["mean_abs"] > 0:
         out += ["", f"The depth the warp receives changes by {fmt(off['mean_abs'] * LEVEL, 3)} levels per frame on "
                 f"the static background without smoothing and {fmt(on['mean_abs'] * LEVEL, 3)} with the default 0.5 "
-                f"({fmt(100 * (1 - on['mean_abs'] / off['mean_abs']), 0)} % less). Both are well under one grey "
-                f"level: the region grouping rarely re-labels background blocks when people pass, and frames "
-                f"that hardly change reuse the previous depth outright. The cost of smoothing is lag on moving "
-                f"objects, which this measurement does not see."]
+                f"({fmt(100 * (1 - on['mean_abs'] / off['mean_abs']), 0)} % less); 95 % of the changes are under "
+                f"{fmt(off['p95_abs'] * LEVEL, 2)} and {fmt(on['p95_abs'] * LEVEL, 2)} levels, and only "
+                f"{fmt(100 * off['share_over_1_level'], 2)} % and {fmt(100 * on['share_over_1_level'], 2)} % reach "
+                f"one level. Background blocks move at all because a block takes region_weight of its region's "
+                f"mean: when a walker's blocks join or leave the large background region, that mean shifts and "
+                f"every block of the region with it. Smoothing spreads such a step over several frames (so slightly "
+                f"more, smaller changes reach one level); its cost is lag on moving objects, which this "
+                f"measurement does not see. Frames that hardly change reuse the previous depth outright "
+                f"({on['reused']} of {on['frames']} here), with or without smoothing."]
     return out
 
 
@@ -250,7 +276,7 @@ def report(rows, md, png_rel, data_rel):
         "",
         f"Generated by `scripts/quality-report.sh` (tools/pseudo3d_quality.cpp, scripts/plot_quality.py) on "
         f"{run.get('date', '?')}, commit `{run.get('git') or '?'}`, {run.get('cpu', '?')} with "
-        f"{run.get('cpu_threads', '?')} OpenCV threads, OpenCV {run.get('opencv', '?')}. Raw data: "
+        f"{threads(run)}, OpenCV {run.get('opencv', '?')}. Raw data: "
         f"[{os.path.basename(data_rel)}]({data_rel}).",
         "",
         f"![error against run time]({png_rel})",
@@ -259,7 +285,8 @@ def report(rows, md, png_rel, data_rel):
         "",
         "Everything runs the CPU reference code of `common/` (the CUDA kernels compute the same functions, so the "
         "errors hold for the GPU too; their times are in [benchmarks.md](benchmarks.md)). Times are wall-clock "
-        f"medians of {run.get('runs', '?')} runs on this shared machine: read them as ratios, not absolutes.",
+        f"medians of {run.get('runs', '?')} runs, taken round-robin across the configurations of a table so that "
+        "a burst of other load slows them alike; the machine is shared: read them as ratios, not absolutes.",
         "",
         "* **View synthesis.** Aloe (Middlebury, 1282x1110): the right view is rendered from aloeL and its "
         "ground-truth disparity exactly as the Aloe element test does (depth = GT / max(GT), view=right, "

@@ -5,7 +5,8 @@
 #   docs/img/quality-vs-time.png PSNR vs time of view synthesis, filter error vs time
 # Builds pseudo3d-quality in build/ (BUILDDIR=... for another folder) and
 # fetches the test data first. Extra arguments go to pseudo3d-quality
-# (e.g. --quick for a smoke test, --runs 9).
+# (e.g. --quick for a smoke test, --runs 9, --threads 1 for timings that a
+# shared machine disturbs less).
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 cd "$top"

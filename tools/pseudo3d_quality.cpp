@@ -63,6 +63,7 @@ struct Options {
   std::string out_path = "quality.jsonl";
   int runs = 5;
   int frames = 200;
+  int threads = -1;  // -1: OpenCV's default
   std::set<std::string> parts = {"synthesis", "filter", "depth", "flicker"};
   std::string argv;
 };
@@ -76,6 +77,7 @@ void print_usage(std::ostream &os) {
         "  --runs N        timed runs per measurement, median reported (default 5)\n"
         "  --frames N      vtest.avi frames for the flicker measurement (default 200)\n"
         "  --only LIST     comma separated subset of synthesis,filter,depth,flicker\n"
+        "  --threads N     OpenCV worker threads (default: OpenCV's choice)\n"
         "  --quick         smoke test: --runs 1 --frames 20\n"
         "Exit status: 0 ok, 1 missing data or I/O error, 64 bad usage.\n";
 }
@@ -133,6 +135,8 @@ Options parse_args(int argc, char **argv) {
     } else if (a == "--frames") {
       o.frames = parse_int(a, v, 2, 100000);
       frames_given = true;
+    } else if (a == "--threads") {
+      o.threads = parse_int(a, v, 1, 1024);
     } else if (a == "--only") {
       o.parts = parse_parts(v);
     } else {
@@ -226,7 +230,8 @@ void emit_run_line(Writer &w, const Options &o) {
   const std::time_t now = std::time(nullptr);
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
   JsonLine j;
-  j.str("kind", "run").str("date", date).str("git", command_output("git describe --always --dirty --abbrev=12 2>/dev/null"));
+  j.str("kind", "run").str("date", date);
+  j.str("git", command_output("git describe --always --dirty --abbrev=12 2>/dev/null"));
   j.str("args", o.argv).str("cpu", cpu_model()).integer("cpu_threads", cv::getNumThreads());
   j.str("opencv", CV_VERSION).integer("runs", o.runs);
   w.emit(j);
@@ -245,15 +250,27 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Median wall time of `runs` calls of f.
-double median_ms(int runs, const std::function<void()> &f) {
+// Wall times of one measured configuration.
+struct Timing {
   std::vector<double> ms;
-  for (int i = 0; i < runs; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    ms.push_back(elapsed_ms(t0));
+  double median_ms() const { return median(ms); }
+  double min_ms() const {
+    return ms.empty() ? std::numeric_limits<double>::quiet_NaN() : *std::min_element(ms.begin(), ms.end());
   }
-  return median(ms);
+};
+
+// Times every job `runs` times, round-robin (run i of every job before run
+// i+1 of any): the machine is shared, and a burst of someone else's load
+// then slows all configurations alike instead of one of them.
+std::vector<Timing> time_interleaved(int runs, const std::vector<std::function<void()>> &jobs) {
+  std::vector<Timing> t(jobs.size());
+  for (int i = 0; i < runs; ++i)
+    for (size_t j = 0; j < jobs.size(); ++j) {
+      const auto t0 = std::chrono::steady_clock::now();
+      jobs[j]();
+      t[j].ms.push_back(elapsed_ms(t0));
+    }
+  return t;
 }
 
 // Ranks 1..n with ties given their average rank (Spearman's convention).
@@ -421,45 +438,62 @@ const char *fill_name(HoleFill f) {
 void measure_baseline(Writer &w, const Aloe &a) {
   JsonLine j;
   j.str("kind", "baseline").str("what", "left view as is");
-  j.num("psnr", psnr(a.left, a.right)).num("ssim", ssim(a.left, a.right)).num("psnr_masked", psnr(a.left, a.right, a.mask));
+  j.num("psnr", psnr(a.left, a.right)).num("ssim", ssim(a.left, a.right));
+  j.num("psnr_masked", psnr(a.left, a.right, a.mask));
   w.emit(j);
 }
 
+struct SynthCase {
+  int radius;
+  HoleFill fill;
+};
+
 void measure_synthesis(Writer &w, const Aloe &a, int runs) {
+  const std::vector<int> radii = {0, 2, 5, 10};  // 0: the GT depth as is
+  std::vector<SynthCase> cases;
+  for (const int radius : radii)
+    for (const HoleFill fill : {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None})
+      cases.push_back({radius, fill});
   HostFrame out(PixelFormat::BGRA, 2 * a.left.cols, a.left.rows);
+  // The filter and the warp are timed apart (their sum is the case's time);
+  // one filter run per radius and round serves the three fills.
+  std::vector<cv::Mat> filtered(radii.size());
+  std::vector<std::function<void()>> filter_jobs, warp_jobs;
+  for (size_t r = 0; r < radii.size(); ++r)
+    filter_jobs.push_back([&, r] {
+      filtered[r] = radii[r] > 0 ? filter_depth(study_filter(radii[r]), a.left_frame.view(), a.gt_depth) : a.gt_depth;
+    });
+  const std::vector<Timing> filter_t = time_interleaved(runs, filter_jobs);
+  auto radius_index = [&radii](int radius) {
+    return static_cast<size_t>(std::find(radii.begin(), radii.end(), radius) - radii.begin());
+  };
+  for (const SynthCase &c : cases)
+    warp_jobs.push_back([&, c] { render_right(a, filtered[radius_index(c.radius)], c.fill, out); });
+  const std::vector<Timing> warp_t = time_interleaved(runs, warp_jobs);
+
   const double mask_fraction = static_cast<double>(cv::countNonZero(a.mask)) / static_cast<double>(a.mask.total());
-  for (const int radius : {0, 2, 5, 10}) {
-    const BilateralParams bp = study_filter(radius);
-    for (const HoleFill fill : {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None}) {
-      cv::Mat depth = a.gt_depth;
-      long long holes = 0;
-      std::vector<double> filter_ms, warp_ms, total_ms;
-      for (int i = 0; i < runs; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        if (radius > 0) depth = filter_depth(bp, a.left_frame.view(), a.gt_depth);
-        const double f = elapsed_ms(t0);
-        const auto t1 = std::chrono::steady_clock::now();
-        holes = render_right(a, depth, fill, out);
-        const double wm = elapsed_ms(t1);
-        filter_ms.push_back(f);
-        warp_ms.push_back(wm);
-        total_ms.push_back(f + wm);
-      }
-      const cv::Mat synth = right_half_bgr(out);
-      const double full = psnr(synth, a.right), structural = ssim(synth, a.right);
-      const double masked = psnr(synth, a.right, a.mask);
-      JsonLine j;
-      j.str("kind", "synthesis").str("fill", fill_name(fill)).integer("radius", radius);
-      j.num("sigma_space", radius > 0 ? bp.sigma_space : 0.0).num("sigma_range", radius > 0 ? bp.sigma_range : 0.0);
-      j.integer("width", a.left.cols).integer("height", a.left.rows).num("max_disparity_percent", a.warp.max_disparity);
-      j.num("psnr", full).num("ssim", structural).num("psnr_masked", masked).num("mask_fraction", mask_fraction);
-      j.num("hole_fraction", static_cast<double>(holes) / static_cast<double>(a.mask.total()));
-      j.num("time_ms", median(total_ms)).num("filter_ms", median(filter_ms)).num("warp_ms", median(warp_ms));
-      w.emit(j);
-      std::printf("synthesis  fill %-16s radius %2d  PSNR %6.2f dB  SSIM %.4f  masked %6.2f dB  %8.1f ms\n",
-                  fill_name(fill), radius, full, structural, masked, median(total_ms));
-      std::fflush(stdout);
-    }
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const SynthCase &c = cases[i];
+    const BilateralParams bp = study_filter(c.radius);
+    const Timing &ft = filter_t[radius_index(c.radius)];
+    const long long holes = render_right(a, filtered[radius_index(c.radius)], c.fill, out);
+    const cv::Mat synth = right_half_bgr(out);
+    const double full = psnr(synth, a.right), structural = ssim(synth, a.right);
+    const double masked = psnr(synth, a.right, a.mask);
+    const double filter_ms = c.radius > 0 ? ft.median_ms() : 0.0;
+    const double filter_min = c.radius > 0 ? ft.min_ms() : 0.0;
+    JsonLine j;
+    j.str("kind", "synthesis").str("fill", fill_name(c.fill)).integer("radius", c.radius);
+    j.num("sigma_space", c.radius > 0 ? bp.sigma_space : 0.0).num("sigma_range", c.radius > 0 ? bp.sigma_range : 0.0);
+    j.integer("width", a.left.cols).integer("height", a.left.rows).num("max_disparity_percent", a.warp.max_disparity);
+    j.num("psnr", full).num("ssim", structural).num("psnr_masked", masked).num("mask_fraction", mask_fraction);
+    j.num("hole_fraction", static_cast<double>(holes) / static_cast<double>(a.mask.total()));
+    j.num("time_ms", filter_ms + warp_t[i].median_ms()).num("min_ms", filter_min + warp_t[i].min_ms());
+    j.num("filter_ms", filter_ms).num("warp_ms", warp_t[i].median_ms());
+    w.emit(j);
+    std::printf("synthesis  fill %-16s radius %2d  PSNR %6.2f dB  SSIM %.4f  masked %6.2f dB  %8.1f ms\n",
+                fill_name(c.fill), c.radius, full, structural, masked, filter_ms + warp_t[i].median_ms());
+    std::fflush(stdout);
   }
 }
 
@@ -597,33 +631,48 @@ void measure_filter_variants(Writer &w, const Aloe &a, int runs) {
       {"exact", filter_depth}, {"stride2", bilateral_stride2}, {"separable", bilateral_separable}};
   const std::vector<std::pair<const char *, cv::Mat>> inputs = {
       {"estimated", estimated_depth(DepthParams(), a.left_frame.view())}, {"ground-truth", a.gt_depth}};
-  HostFrame out(PixelFormat::BGRA, 2 * a.left.cols, a.left.rows);
   const FrameView guide = a.left_frame.view();
-  for (const auto &in : inputs) {
-    for (const int radius : {5, 10}) {
-      // The element's default (sigma_space 3) at radius 5, and the study's
-      // 0.6 r (the same as 3 at radius 5) at radius 10.
-      const BilateralParams bp = study_filter(radius);
-      const cv::Mat exact = filter_depth(bp, guide, in.second);
-      for (const auto &v : variants) {
-        cv::Mat result;
-        const double ms = median_ms(runs, [&] { result = v.second(bp, guide, in.second); });
-        const MapError e = map_error(exact, result);
-        JsonLine j;
-        j.str("kind", "filter_variant").str("variant", v.first).str("input", in.first).integer("radius", radius);
-        j.num("sigma_space", bp.sigma_space).num("sigma_range", bp.sigma_range);
-        j.num("time_ms", ms).num("max_abs", e.max_abs).num("mean_abs", e.mean_abs).num("psnr_vs_exact", e.psnr);
-        if (std::string(in.first) == "ground-truth") {
-          render_right(a, result, HoleFill::Background, out);
-          const cv::Mat synth = right_half_bgr(out);
-          j.num("synth_psnr", psnr(synth, a.right)).num("synth_ssim", ssim(synth, a.right));
-        }
-        w.emit(j);
-        std::printf("filter     %-9s %-12s radius %2d  %8.1f ms  max %.4f  mean %.5f  PSNR %6.2f dB\n", v.first,
-                    in.first, radius, ms, e.max_abs, e.mean_abs, e.psnr);
-        std::fflush(stdout);
-      }
+  // One timing group for all of them, so that the speed-ups compare runs
+  // taken side by side.
+  struct Case {
+    size_t input, variant;
+    int radius;
+  };
+  std::vector<Case> cases;
+  for (size_t i = 0; i < inputs.size(); ++i)
+    for (const int radius : {5, 10})
+      for (size_t v = 0; v < variants.size(); ++v) cases.push_back({i, v, radius});
+  std::vector<cv::Mat> results(cases.size());
+  std::vector<std::function<void()>> jobs;
+  for (size_t k = 0; k < cases.size(); ++k)
+    jobs.push_back([&, k] {
+      // The element's default (sigma_space 3) at radius 5; 0.6 r at radius 10.
+      const Case &c = cases[k];
+      results[k] = variants[c.variant].second(study_filter(c.radius), guide, inputs[c.input].second);
+    });
+  const std::vector<Timing> t = time_interleaved(runs, jobs);
+
+  HostFrame out(PixelFormat::BGRA, 2 * a.left.cols, a.left.rows);
+  for (size_t k = 0; k < cases.size(); ++k) {
+    const Case &c = cases[k];
+    const char *variant = variants[c.variant].first, *input = inputs[c.input].first;
+    const BilateralParams bp = study_filter(c.radius);
+    const cv::Mat &exact = results[k - c.variant];  // variant 0 of the same input and radius
+    const MapError e = map_error(exact, results[k]);
+    JsonLine j;
+    j.str("kind", "filter_variant").str("variant", variant).str("input", input).integer("radius", c.radius);
+    j.num("sigma_space", bp.sigma_space).num("sigma_range", bp.sigma_range);
+    j.num("time_ms", t[k].median_ms()).num("min_ms", t[k].min_ms());
+    j.num("max_abs", e.max_abs).num("mean_abs", e.mean_abs).num("psnr_vs_exact", e.psnr);
+    if (std::string(input) == "ground-truth") {
+      render_right(a, results[k], HoleFill::Background, out);
+      const cv::Mat synth = right_half_bgr(out);
+      j.num("synth_psnr", psnr(synth, a.right)).num("synth_ssim", ssim(synth, a.right));
     }
+    w.emit(j);
+    std::printf("filter     %-9s %-12s radius %2d  %8.1f ms  max %.4f  mean %.5f  PSNR %6.2f dB\n", variant, input,
+                c.radius, t[k].median_ms(), e.max_abs, e.mean_abs, e.psnr);
+    std::fflush(stdout);
   }
 }
 
@@ -687,13 +736,19 @@ void measure_depth_rank(Writer &w, const Aloe &a, int runs) {
   std::vector<double> gt_values(sample.size()), est_values(sample.size());
   for (size_t i = 0; i < sample.size(); ++i) gt_values[i] = a.gt.ptr<uint8_t>()[sample[i]];
   const FrameView frame = a.left_frame.view();
-  for (const RankCase &c : rank_cases()) {
-    cv::Mat depth;
-    const BilateralParams bp;  // the element's defaults (radius 5)
-    const double ms = median_ms(runs, [&] {
-      depth = estimated_depth(c.depth, frame);
-      if (c.radius > 0) depth = filter_depth(bp, frame, depth);
+  const std::vector<RankCase> cases = rank_cases();
+  std::vector<cv::Mat> depths(cases.size());
+  std::vector<std::function<void()>> jobs;
+  for (size_t k = 0; k < cases.size(); ++k)
+    jobs.push_back([&, k] {
+      depths[k] = estimated_depth(cases[k].depth, frame);
+      if (cases[k].radius > 0) depths[k] = filter_depth(BilateralParams(), frame, depths[k]);  // element defaults
     });
+  const std::vector<Timing> t = time_interleaved(runs, jobs);
+  for (size_t k = 0; k < cases.size(); ++k) {
+    const RankCase &c = cases[k];
+    const cv::Mat &depth = depths[k];
+    const double ms = t[k].median_ms();
     // The depth map is dense and continuous, so its element index is the
     // GT's (both W x H, continuous Mats).
     for (size_t i = 0; i < sample.size(); ++i) est_values[i] = depth.ptr<float>()[sample[i]];
@@ -706,7 +761,8 @@ void measure_depth_rank(Writer &w, const Aloe &a, int runs) {
     j.str("kind", "depth_rank").str("hypothesis", hypothesis_name(c.depth.hypothesis));
     j.integer("block_size", c.depth.block_size).num("edge_threshold", c.depth.edge_threshold);
     j.num("region_weight", c.depth.region_weight).integer("filter_radius", c.radius);
-    j.integer("samples", static_cast<long long>(sample.size())).num("spearman", rho).num("time_ms", ms);
+    j.integer("samples", static_cast<long long>(sample.size())).num("spearman", rho);
+    j.num("time_ms", ms).num("min_ms", t[k].min_ms());
     w.emit(j);
     std::printf("depth      %-11s edge %5.1f region_weight %.2f radius %d  rho %+.4f  %8.1f ms\n",
                 hypothesis_name(c.depth.hypothesis), c.depth.edge_threshold, c.depth.region_weight, c.radius, rho, ms);
@@ -831,6 +887,7 @@ void measure_flicker(Writer &w, const std::string &path, int frames) {
     raw[s].temporal_smoothing = filtered[s].temporal_smoothing = settings[s];
   }
   cv::VideoCapture cap(path);
+  const std::string backend = cap.isOpened() ? cap.getBackendName() : "";
   cv::Mat bgr;
   const BilateralParams bp;
   for (int f = 0; f < n && cap.read(bgr) && !bgr.empty(); ++f) {
@@ -862,7 +919,7 @@ void measure_flicker(Writer &w, const std::string &path, int frames) {
       for (const double v : t.frame_mean_all) mean_all += v;
       const double pairs = static_cast<double>(t.frame_mean.size());
       JsonLine j;
-      j.str("kind", "flicker").str("video", "vtest.avi").str("stage", t.stage);
+      j.str("kind", "flicker").str("video", "vtest.avi").str("decoder", backend).str("stage", t.stage);
       j.num("temporal_smoothing", t.temporal_smoothing).integer("frames", n);
       j.num("static_std_levels", kStaticLumaStd).num("mask_fraction", mask_fraction);
       j.num("mean_abs", mean / pairs).num("p95_abs", t.quantile(0.95)).num("worst_frame_mean_abs", worst);
@@ -909,6 +966,7 @@ int run(const Options &o) {
 
 int main(int argc, char **argv) {
   const p3d::quality::Options o = p3d::quality::parse_args(argc, argv);
+  if (o.threads > 0) cv::setNumThreads(o.threads);
   try {
     return p3d::quality::run(o);
   } catch (const cv::Exception &e) {

@@ -145,6 +145,24 @@ TEST(GpuChainReal, AloeMatchesCpu) {
   expect_same(gpu, cpu, "aloe");
 }
 
+// Real video: the first 12 frames of vtest.avi as a stream, so the depth
+// stage's temporal smoothing, static reuse and cut detection run on the GPU
+// with history, against the CPU chain frame by frame.
+TEST(GpuChainReal, VtestVideoMatchesCpu) {
+  std::vector<HostFrame> frames;
+  for (int k = 0; k < 12; ++k) {
+    char name[64];
+    snprintf(name, sizeof name, "vtest.avi.frame-%03d", k);
+    const cv::Mat bgr = load_data_image(name);
+    ASSERT_FALSE(bgr.empty());
+    frames.push_back(HostFrame::from_bgr(bgr, PixelFormat::I420));
+  }
+  const int w = frames[0].width(), h = frames[0].height();
+  const auto gpu = run_chain(chain(kDevice, "anaglyph", "RGBA"), PixelFormat::I420, w, h, frames);
+  const auto cpu = run_chain(chain(kCpu, "anaglyph", "RGBA"), PixelFormat::I420, w, h, frames);
+  expect_same(gpu, cpu, "vtest");
+}
+
 // The bin on system memory: processing=gpu (cudaupload ! stages ! cudadownload
 // inside) gives the CPU bin's output exactly.
 TEST(GpuConvertBin, SystemMemoryOnGpuMatchesCpu) {
