@@ -18,18 +18,6 @@ void bilateral_tables(const BilateralParams &p, float *space, float *range) {
 
 namespace {
 
-// The guide's luma once per pixel: the window reads every value up to
-// (2r+1)^2 times, and load_luma() of R'G'B' is a few float operations.
-cv::Mat guide_luma(const FrameView &guide) {
-  cv::Mat luma(guide.height, guide.width, CV_8UC1);
-  cv::parallel_for_(cv::Range(0, guide.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      uint8_t *out = luma.ptr<uint8_t>(y);
-      for (int x = 0; x < guide.width; ++x) out[x] = load_luma(guide, x, y);
-    }
-  });
-  return luma;
-}
 
 // A private copy of the input when it aliases the output, so that the
 // filter never reads pixels it has already written.
@@ -56,7 +44,7 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
   const BilateralParams p = bilateral_sanitize(params);
   std::vector<float> space(bilateral_space_table_size(p.radius)), range(kBilateralRangeTableSize);
   bilateral_tables(p, space.data(), range.data());
-  const cv::Mat luma = guide_luma(guide);
+  const cv::Mat luma = bilateral_guide_luma(guide);
 
   const int w = depth_in.width, h = depth_in.height;
   auto guide_at = [&luma](int qx, int qy) { return luma.ptr<uint8_t>(qy)[qx]; };
@@ -68,6 +56,19 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
         out[x] = bilateral_pixel(x, y, w, h, p.radius, space.data(), range.data(), guide_at, depth_at);
     }
   });
+}
+
+// The guide's luma once per pixel: the window reads every value up to
+// (2r+1)^2 times, and load_luma() of R'G'B' is a few float operations.
+cv::Mat bilateral_guide_luma(const FrameView &guide) {
+  cv::Mat luma(guide.height, guide.width, CV_8UC1);
+  cv::parallel_for_(cv::Range(0, guide.height), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      uint8_t *out = luma.ptr<uint8_t>(y);
+      for (int x = 0; x < guide.width; ++x) out[x] = load_luma(guide, x, y);
+    }
+  });
+  return luma;
 }
 
 }  // namespace p3d

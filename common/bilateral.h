@@ -121,3 +121,13 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
                           ImageView<float> depth_out);
 
 }  // namespace p3d
+
+#if !defined(__CUDACC__)
+#include <opencv2/core.hpp>
+
+namespace p3d {
+// The guide's 8-bit luma (load_luma) of every pixel, computed once: the
+// window reads each value up to (2r+1)^2 times. Host code only (OpenCV).
+cv::Mat bilateral_guide_luma(const FrameView &guide);
+}  // namespace p3d
+#endif

@@ -48,6 +48,7 @@
 #include "host_frame.h"
 #include "metrics.h"
 #include "warp.h"
+#include "json_line.h"
 
 namespace p3d::quality {
 namespace {
@@ -152,43 +153,8 @@ Options parse_args(int argc, char **argv) {
 
 // ---- output ---------------------------------------------------------------------
 
-std::string json_escape(const std::string &s) {
-  std::string o;
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      o += buf;
-    } else {
-      o += c;
-    }
-  }
-  return o;
-}
-
-// One JSON object on one line; non-finite numbers become null (JSON has no NaN).
-class JsonLine {
- public:
-  JsonLine &str(const std::string &k, const std::string &v) { return raw(k, "\"" + json_escape(v) + "\""); }
-  JsonLine &num(const std::string &k, double v) {
-    if (!std::isfinite(v)) return raw(k, "null");
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return raw(k, buf);
-  }
-  JsonLine &integer(const std::string &k, long long v) { return raw(k, std::to_string(v)); }
-  JsonLine &raw(const std::string &k, const std::string &v) {
-    body_ += (body_.empty() ? "" : ", ") + ("\"" + json_escape(k) + "\": ") + v;
-    return *this;
-  }
-  std::string text() const { return "{" + body_ + "}"; }
-
- private:
-  std::string body_;
-};
+using p3d::tools::json_escape;
+using p3d::tools::JsonLine;
 
 class Writer {
  public:
@@ -499,19 +465,6 @@ void measure_synthesis(Writer &w, const Aloe &a, int runs) {
 
 // ---- faster bilateral variants ------------------------------------------------------
 
-// The guide's luma once per pixel, as bilateral_filter_cpu does (its cost is
-// part of every variant's time).
-cv::Mat guide_luma(const FrameView &guide) {
-  cv::Mat luma(guide.height, guide.width, CV_8UC1);
-  cv::parallel_for_(cv::Range(0, guide.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      uint8_t *out = luma.ptr<uint8_t>(y);
-      for (int x = 0; x < guide.width; ++x) out[x] = load_luma(guide, x, y);
-    }
-  });
-  return luma;
-}
-
 struct FilterTables {
   BilateralParams p;
   std::vector<float> space, range;
@@ -529,7 +482,7 @@ struct FilterTables {
 // the exact filter; a thin structure between two taps is what it can miss.
 cv::Mat bilateral_stride2(const BilateralParams &params, const FrameView &guide, const cv::Mat &depth) {
   const FilterTables t(params);
-  const cv::Mat luma = guide_luma(guide);
+  const cv::Mat luma = bilateral_guide_luma(guide);
   const int w = depth.cols, h = depth.rows, r = t.p.radius & ~1;  // the largest even offset
   cv::Mat out(depth.size(), CV_32FC1);
   cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
@@ -565,7 +518,7 @@ cv::Mat bilateral_stride2(const BilateralParams &params, const FrameView &guide,
 // part (a pixel can reach a similar one only through an L-shaped path).
 cv::Mat bilateral_separable(const BilateralParams &params, const FrameView &guide, const cv::Mat &depth) {
   const FilterTables t(params);
-  const cv::Mat luma = guide_luma(guide);
+  const cv::Mat luma = bilateral_guide_luma(guide);
   const int w = depth.cols, h = depth.rows, r = t.p.radius;
   cv::Mat across(depth.size(), CV_32FC1), out(depth.size(), CV_32FC1);
   cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {

@@ -26,12 +26,15 @@
 #include "bilateral.h"
 #include "depth_estimate.h"
 #include "pack.h"
+#include "stiff_frames.h"
 #include "test_data.h"
 #include "warp.h"
 
 namespace p3d {
 namespace {
 
+using test::warp_params;
+using test::bilateral_params;
 using test::kAllFills;
 using test::kAllFormats;
 using test::kAllGlasses;
@@ -52,63 +55,11 @@ constexpr Size kEdgeSizes[] = {{1, 1}, {2, 1}, {1, 2}, {3, 2}, {4097, 3}, {37, 2
 
 std::string size_name(Size s) { return std::to_string(s.w) + "x" + std::to_string(s.h); }
 
-// ---- stiff frames -------------------------------------------------------------
-
-enum class Pattern { Black, White, Colour, VStripes, HStripes, Checker1, Checker8, Noise };
-constexpr Pattern kAllPatterns[] = {Pattern::Black,    Pattern::White,    Pattern::Colour,   Pattern::VStripes,
-                                    Pattern::HStripes, Pattern::Checker1, Pattern::Checker8, Pattern::Noise};
-
-const char *pattern_name(Pattern p) {
-  switch (p) {
-    case Pattern::Black: return "black";
-    case Pattern::White: return "white";
-    case Pattern::Colour: return "colour";
-    case Pattern::VStripes: return "1px vertical stripes";
-    case Pattern::HStripes: return "1px horizontal stripes";
-    case Pattern::Checker1: return "1px checkerboard";
-    case Pattern::Checker8: return "8px checkerboard";
-    default: return "noise";
-  }
-}
-
-// Grey level (0 or 255) of the black/white patterns.
-int pattern_level(Pattern p, int x, int y) {
-  switch (p) {
-    case Pattern::Black: return 0;
-    case Pattern::VStripes: return (x & 1) * 255;
-    case Pattern::HStripes: return (y & 1) * 255;
-    case Pattern::Checker1: return ((x + y) & 1) * 255;
-    case Pattern::Checker8: return (((x / 8) + (y / 8)) & 1) * 255;
-    default: return 255;
-  }
-}
-
-// The black/white patterns are exact greys in every format: R'=G'=B' (alpha
-// 255), or limited-range Y' (16 / 235) with neutral chroma, so a YUV
-// checkerboard has the full contrast in Y' and none in chroma. Colour is a
-// constant non-grey frame (no channel at 255, so never the hole colour);
-// Noise is every byte random (alpha and chroma included).
-HostFrame make_frame(Pattern p, PixelFormat f, int w, int h, uint32_t seed = 1) {
-  HostFrame fr(f, w, h, 3);
-  if (p == Pattern::Noise) {
-    fr.fill_random(seed);
-    return fr;
-  }
-  if (p == Pattern::Colour) return HostFrame::from_bgr(cv::Mat(h, w, CV_8UC3, cv::Scalar(40, 220, 90)), f, 3);
-  fr.fill(128);
-  const FrameView v = fr.view();
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const int level = pattern_level(p, x, y);
-      if (is_packed_rgb(f)) {
-        const uint8_t l = static_cast<uint8_t>(level);
-        store_rgba(v, x, y, Rgba{l, l, l, 255});
-      } else {
-        v.plane[0][static_cast<size_t>(y) * v.stride[0] + x] = static_cast<uint8_t>(16 + (level * 219 + 127) / 255);
-      }
-    }
-  return fr;
-}
+using test::kAllPatterns;
+using test::make_frame;
+using test::Pattern;
+using test::pattern_level;
+using test::pattern_name;
 
 Rgba at(const HostFrame &f, int x, int y) { return load_rgba(f.view(), x, y, YuvToRgb()); }
 bool equal(Rgba a, Rgba b) { return a.r == b.r && a.g == b.g && a.b == b.b && a.a == b.a; }
@@ -297,23 +248,6 @@ long long count_colour(const HostFrame &f, Rgba c) {
   for (int y = 0; y < f.height(); ++y)
     for (int x = 0; x < f.width(); ++x) n += equal(at(f, x, y), c);
   return n;
-}
-
-WarpParams warp_params(float max_disparity, float convergence, StereoView view, HoleFill fill) {
-  WarpParams p;
-  p.max_disparity = max_disparity;
-  p.convergence = convergence;
-  p.view = view;
-  p.fill = fill;
-  return p;
-}
-
-BilateralParams bilateral_params(int radius, float sigma_space, float sigma_range) {
-  BilateralParams p;
-  p.radius = radius;
-  p.sigma_space = sigma_space;
-  p.sigma_range = sigma_range;
-  return p;
 }
 
 // ==== depth estimation =========================================================

@@ -18,6 +18,7 @@
 namespace p3d {
 namespace {
 
+using test::warp_params;
 using test::kAllFills;
 using test::kAllViews;
 using test::kAllFormats;
@@ -49,15 +50,6 @@ cv::Mat noise_depth(int w, int h, uint32_t seed, bool binary) {
   return make_depth(w, h, [&](int, int) {
     return binary ? static_cast<float>(rng() & 1) : std::uniform_real_distribution<float>(0.f, 1.f)(rng);
   });
-}
-
-WarpParams params(float max_disparity, float convergence, StereoView view, HoleFill fill) {
-  WarpParams p;
-  p.max_disparity = max_disparity;
-  p.convergence = convergence;
-  p.view = view;
-  p.fill = fill;
-  return p;
 }
 
 struct Rendered {
@@ -131,7 +123,7 @@ long long count_colour(const HostFrame &out, Rgba c) {
 // view=both moves the left view right by 2 and the right view left by 2.
 TEST(WarpShift, ConstantDepthIntegerDisparity) {
   const HostFrame src = textured(PixelFormat::BGRA, 100, 3, 1);
-  const Rendered r = render(params(8.f, 0.5f, StereoView::Both, HoleFill::Background), src, flat_depth(100, 3, 1.f));
+  const Rendered r = render(warp_params(8.f, 0.5f, StereoView::Both, HoleFill::Background), src, flat_depth(100, 3, 1.f));
   EXPECT_EQ(r.holes, 2 * 2 * 3);  // two columns uncovered at one edge of each view
   EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) { return at(src, x < 2 ? 0 : x - 2, y); }));
   EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) { return at(src, x > 97 ? 99 : x + 2, y); }));
@@ -141,7 +133,7 @@ TEST(WarpShift, ConstantDepthIntegerDisparity) {
 // takes the colour at u = X -+ 0.25, interpolated between its neighbours.
 TEST(WarpShift, SubPixelShiftInterpolates) {
   const HostFrame src = textured(PixelFormat::RGBA, 100, 2, 2);
-  const Rendered r = render(params(1.f, 0.5f, StereoView::Both, HoleFill::None), src, flat_depth(100, 2, 1.f));
+  const Rendered r = render(warp_params(1.f, 0.5f, StereoView::Both, HoleFill::None), src, flat_depth(100, 2, 1.f));
   EXPECT_EQ(r.holes, 0);
   EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) {
     return x == 0 ? at(src, 0, y) : lerp_exact(at(src, x - 1, y), at(src, x, y), 0.75);
@@ -155,7 +147,7 @@ TEST(WarpShift, SubPixelShiftInterpolates) {
 // p = 1.5 * (1 - 0.5) = 0.75.
 TEST(WarpShift, SubPixelShiftSingleView) {
   const HostFrame src = textured(PixelFormat::RGBx, 100, 2, 3);
-  const Rendered r = render(params(1.5f, 0.5f, StereoView::Right, HoleFill::None), src, flat_depth(100, 2, 1.f));
+  const Rendered r = render(warp_params(1.5f, 0.5f, StereoView::Right, HoleFill::None), src, flat_depth(100, 2, 1.f));
   // Column 99 is uncovered: t(99) = 98.25 and only t(x) - 0.5 <= X < t(x) + 0.5 reaches past t(99).
   EXPECT_EQ(r.holes, 2);
   EXPECT_TRUE(view_is(r.out, 0, source_of(src)));
@@ -171,9 +163,9 @@ TEST(WarpShift, SubPixelShiftSingleView) {
 TEST(WarpViews, DirectionsInFrontOfScreen) {
   const HostFrame src = textured(PixelFormat::BGRA, 100, 2, 4);
   const cv::Mat near = flat_depth(100, 2, 1.f);
-  const Rendered both = render(params(8.f, 0.5f, StereoView::Both, HoleFill::None), src, near);
-  const Rendered left = render(params(8.f, 0.5f, StereoView::Left, HoleFill::None), src, near);
-  const Rendered right = render(params(8.f, 0.5f, StereoView::Right, HoleFill::None), src, near);
+  const Rendered both = render(warp_params(8.f, 0.5f, StereoView::Both, HoleFill::None), src, near);
+  const Rendered left = render(warp_params(8.f, 0.5f, StereoView::Left, HoleFill::None), src, near);
+  const Rendered right = render(warp_params(8.f, 0.5f, StereoView::Right, HoleFill::None), src, near);
   auto or_hole = [&](int by) {
     return [&src, by](int x, int y) { return x - by < 0 || x - by > 99 ? kHoleColour : at(src, x - by, y); };
   };
@@ -191,7 +183,7 @@ TEST(WarpViews, DirectionsInFrontOfScreen) {
 // Behind the screen (depth 0 < convergence 0.5, p = -4) everything mirrors.
 TEST(WarpViews, DirectionsBehindScreen) {
   const HostFrame src = textured(PixelFormat::BGRA, 100, 2, 5);
-  const Rendered both = render(params(8.f, 0.5f, StereoView::Both, HoleFill::Background), src, flat_depth(100, 2, 0.f));
+  const Rendered both = render(warp_params(8.f, 0.5f, StereoView::Both, HoleFill::Background), src, flat_depth(100, 2, 0.f));
   EXPECT_TRUE(view_is(both.out, 0, [&](int x, int y) { return at(src, x > 97 ? 99 : x + 2, y); }));
   EXPECT_TRUE(view_is(both.out, 1, [&](int x, int y) { return at(src, x < 2 ? 0 : x - 2, y); }));
 }
@@ -204,12 +196,12 @@ TEST(WarpZero, NoDisparityGivesTheSourceInEveryFormat) {
     const HostFrame src = textured(f, 37, 11, 6, 3);
     const cv::Mat depth = noise_depth(37, 11, 7, false);
     for (StereoView v : kAllViews) {
-      const Rendered zero = render(params(0.f, 0.5f, v, HoleFill::None), src, depth);
+      const Rendered zero = render(warp_params(0.f, 0.5f, v, HoleFill::None), src, depth);
       EXPECT_EQ(zero.holes, 0);
       EXPECT_TRUE(view_is(zero.out, 0, source_of(src)));
       EXPECT_TRUE(view_is(zero.out, 1, source_of(src)));
       // Depth on the screen plane everywhere: p = 0 whatever D is.
-      const Rendered plane = render(params(20.f, 0.3f, v, HoleFill::None), src, flat_depth(37, 11, 0.3f));
+      const Rendered plane = render(warp_params(20.f, 0.3f, v, HoleFill::None), src, flat_depth(37, 11, 0.3f));
       EXPECT_EQ(plane.holes, 0);
       EXPECT_TRUE(view_is(plane.out, 0, source_of(src)));
       EXPECT_TRUE(view_is(plane.out, 1, source_of(src)));
@@ -226,12 +218,12 @@ TEST(WarpZero, NoDisparityGivesTheSourceInEveryFormat) {
 TEST(WarpOrder, NearerPixelWins) {
   const HostFrame src = textured(PixelFormat::BGRA, 100, 1, 8);
   const cv::Mat depth = make_depth(100, 1, [](int x, int) { return x == 10 ? 1.f : 0.f; });
-  const Rendered r = render(params(4.f, 0.f, StereoView::Right, HoleFill::Background), src, depth);
+  const Rendered r = render(warp_params(4.f, 0.f, StereoView::Right, HoleFill::Background), src, depth);
   EXPECT_EQ(r.holes, 1);
   EXPECT_TRUE(view_is(r.out, 0, source_of(src)));
   EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) { return at(src, x == 6 ? 10 : (x == 10 ? 9 : x), y); }));
   // Mirrored: view=left moves it right onto pixel 14.
-  const Rendered l = render(params(4.f, 0.f, StereoView::Left, HoleFill::Background), src, depth);
+  const Rendered l = render(warp_params(4.f, 0.f, StereoView::Left, HoleFill::Background), src, depth);
   EXPECT_EQ(l.holes, 1);
   EXPECT_TRUE(view_is(l.out, 0, [&](int x, int y) { return at(src, x == 14 ? 10 : (x == 10 ? 9 : x), y); }));
 }
@@ -242,11 +234,11 @@ TEST(WarpOrder, NearerPixelWins) {
 TEST(WarpOrder, NearestOfSeveralWins) {
   const HostFrame src = textured(PixelFormat::BGRA, 64, 1, 9);
   const cv::Mat depth = make_depth(64, 1, [](int x, int) { return x == 20 ? 1.f : (x == 16 ? 0.5f : 0.f); });
-  const Rendered r = render(params(12.5f, 0.f, StereoView::Right, HoleFill::None), src, depth);
+  const Rendered r = render(warp_params(12.5f, 0.f, StereoView::Right, HoleFill::None), src, depth);
   EXPECT_TRUE(same(view_at(r.out, 1, 12, 0), at(src, 20, 0)));
   // Mirrored geometry in the left view: both reach X = 28 from 20 and 24.
   const cv::Mat mirrored = make_depth(64, 1, [](int x, int) { return x == 20 ? 1.f : (x == 24 ? 0.5f : 0.f); });
-  const Rendered l = render(params(12.5f, 0.f, StereoView::Left, HoleFill::None), src, mirrored);
+  const Rendered l = render(warp_params(12.5f, 0.f, StereoView::Left, HoleFill::None), src, mirrored);
   EXPECT_TRUE(same(view_at(l.out, 0, 28, 0), at(src, 20, 0)));
 }
 
@@ -260,7 +252,7 @@ TEST(WarpOrder, NearestOfSeveralWins) {
 TEST(WarpStretch, GapUpToMaxStretchIsInterpolatedWiderIsAHole) {
   const HostFrame src = textured(PixelFormat::BGRA, 64, 2, 28);
   auto step = [](float d) { return make_depth(64, 2, [d](int x, int) { return x >= 20 && x <= 29 ? d : 0.f; }); };
-  const WarpParams p = params(12.5f, 0.f, StereoView::Right, HoleFill::None);
+  const WarpParams p = warp_params(12.5f, 0.f, StereoView::Right, HoleFill::None);
   const Rendered stretched = render(p, src, step(0.25f));
   EXPECT_EQ(stretched.holes, 0);
   for (int y = 0; y < 2; ++y) {
@@ -328,10 +320,10 @@ TEST(WarpHelpers, SanitizeAndDepth) {
   EXPECT_EQ(warp_depth(-0.5f), 0.f);
   EXPECT_EQ(warp_depth(1.5f), 1.f);
   EXPECT_EQ(warp_depth(0.375f), 0.375f);
-  WarpParams p = params(nan, nan, StereoView::Left, HoleFill::None);
+  WarpParams p = warp_params(nan, nan, StereoView::Left, HoleFill::None);
   EXPECT_EQ(warp_sanitize(p).max_disparity, 0.f);
   EXPECT_EQ(warp_sanitize(p).convergence, 0.f);
-  p = params(30.f, 2.f, StereoView::Left, HoleFill::None);
+  p = warp_params(30.f, 2.f, StereoView::Left, HoleFill::None);
   EXPECT_EQ(warp_sanitize(p).max_disparity, kMaxDisparityPercent);
   EXPECT_EQ(warp_sanitize(p).convergence, 1.f);
   EXPECT_EQ(warp_sanitize(p).view, StereoView::Left);
@@ -356,7 +348,7 @@ HostFrame two_colour_scene(Rgba bg, Rgba fg) {
     for (int x = 0; x < kSceneW; ++x) store_rgba(f.view(), x, y, in_square(x, y) ? fg : bg);
   return f;
 }
-const WarpParams kSceneParams = params(12.5f, 0.f, StereoView::Both, HoleFill::Background);
+const WarpParams kSceneParams = warp_params(12.5f, 0.f, StereoView::Both, HoleFill::Background);
 bool left_hole(int x, int y) { return x >= 24 && x <= 27 && y >= 2 && y <= 5; }
 bool right_hole(int x, int y) { return x >= 36 && x <= 39 && y >= 2 && y <= 5; }
 
@@ -455,15 +447,15 @@ TEST(WarpFill, NeighborAverageFillsAllHoles) {
   expect_neighbour_average_matches_naive(kSceneParams, textured(PixelFormat::BGRA, kSceneW, kSceneH, 12),
                                          square_depth());
   const HostFrame src = textured(PixelFormat::I420, 61, 37, 13);
-  expect_neighbour_average_matches_naive(params(15.f, 0.4f, StereoView::Both, HoleFill::None), src,
+  expect_neighbour_average_matches_naive(warp_params(15.f, 0.4f, StereoView::Both, HoleFill::None), src,
                                          noise_depth(61, 37, 14, true));
-  expect_neighbour_average_matches_naive(params(25.f, 0.f, StereoView::Right, HoleFill::None), src,
+  expect_neighbour_average_matches_naive(warp_params(25.f, 0.f, StereoView::Right, HoleFill::None), src,
                                          noise_depth(61, 37, 15, false));
 }
 
 TEST(WarpFill, NeighborAverageOfOneColourIsThatColour) {
   const Rgba c{90, 60, 30, 255};
-  const Rendered r = render(params(12.5f, 0.f, StereoView::Both, HoleFill::NeighborAverage), two_colour_scene(c, c),
+  const Rendered r = render(warp_params(12.5f, 0.f, StereoView::Both, HoleFill::NeighborAverage), two_colour_scene(c, c),
                             square_depth());
   EXPECT_EQ(r.holes, 2 * 4 * 4);
   for (int eye = 0; eye < 2; ++eye) EXPECT_TRUE(view_is(r.out, eye, [&](int, int) { return c; }));
@@ -477,7 +469,7 @@ TEST(WarpHoles, CountEqualsPaintedHoles) {
   const HostFrame src = textured(PixelFormat::NV12, 83, 29, 16);
   for (StereoView v : kAllViews)
     for (bool binary : {false, true}) {
-      const Rendered r = render(params(10.f, 0.5f, v, HoleFill::None), src, noise_depth(83, 29, 17, binary));
+      const Rendered r = render(warp_params(10.f, 0.5f, v, HoleFill::None), src, noise_depth(83, 29, 17, binary));
       EXPECT_GT(r.holes, 0);
       EXPECT_EQ(count_colour(r.out, kHoleColour), r.holes);
     }
@@ -496,7 +488,7 @@ TEST(WarpFormats, EverySourceAndOutputFormat) {
     const cv::Mat bgra = src.to_bgra();
     const HostFrame as_bgra = HostFrame::from_bgr(bgra, PixelFormat::BGRA);
     for (HoleFill fill : kAllFills) {
-      const WarpParams p = params(12.f, 0.5f, StereoView::Both, fill);
+      const WarpParams p = warp_params(12.f, 0.5f, StereoView::Both, fill);
       const Rendered want = render(p, as_bgra, depth);
       for (PixelFormat of : kPackedFormats) {
         SCOPED_TRACE(test::format_name(of));
@@ -515,7 +507,7 @@ TEST(WarpSizes, OneByOne) {
     const HostFrame src = textured(f, 1, 1, 20);
     for (StereoView v : kAllViews)
       for (float d : {0.f, 1.f}) {
-        const Rendered r = render(params(25.f, 1.f - d, v, HoleFill::None), src, flat_depth(1, 1, d));
+        const Rendered r = render(warp_params(25.f, 1.f - d, v, HoleFill::None), src, flat_depth(1, 1, d));
         EXPECT_EQ(r.holes, 0);
         EXPECT_TRUE(view_is(r.out, 0, source_of(src)));
         EXPECT_TRUE(view_is(r.out, 1, source_of(src)));
@@ -541,7 +533,7 @@ TEST(WarpSizes, OddSizesEveryModeFullyWritten) {
     const HostFrame src = textured(PixelFormat::I420, s[0], s[1], 21);
     const cv::Mat depth = noise_depth(s[0], s[1], 22, true);
     for (StereoView v : kAllViews)
-      for (HoleFill fill : kAllFills) expect_fully_written(params(25.f, 0.5f, v, fill), src, depth);
+      for (HoleFill fill : kAllFills) expect_fully_written(warp_params(25.f, 0.5f, v, fill), src, depth);
   }
 }
 
@@ -551,7 +543,7 @@ TEST(WarpExtremes, FullDisparityBinaryDepth) {
   const cv::Mat depth = noise_depth(97, 31, 24, true);
   for (float c : {0.f, 0.5f, 1.f})
     for (StereoView v : kAllViews)
-      for (HoleFill fill : kAllFills) expect_fully_written(params(25.f, c, v, fill), src, depth);
+      for (HoleFill fill : kAllFills) expect_fully_written(warp_params(25.f, c, v, fill), src, depth);
 }
 
 // Out-of-range parameters are clamped; NaN depth reads as 0 and depth
@@ -567,18 +559,18 @@ TEST(WarpExtremes, InvalidParametersAndDepthAreClamped) {
   };
   const StereoView v = StereoView::Both;
   const HoleFill f = HoleFill::Background;
-  same_render(params(80.f, 0.5f, v, f), depth, params(25.f, 0.5f, v, f), depth);
-  same_render(params(inf, 0.5f, v, f), depth, params(25.f, 0.5f, v, f), depth);
-  same_render(params(-3.f, 0.5f, v, f), depth, params(0.f, 0.5f, v, f), depth);
-  same_render(params(nan, 0.5f, v, f), depth, params(0.f, 0.5f, v, f), depth);
-  same_render(params(10.f, nan, v, f), depth, params(10.f, 0.f, v, f), depth);
-  same_render(params(10.f, 7.f, v, f), depth, params(10.f, 1.f, v, f), depth);
-  same_render(params(10.f, -1.f, v, f), depth, params(10.f, 0.f, v, f), depth);
-  same_render(params(10.f, 0.5f, v, f), flat_depth(57, 9, nan), params(10.f, 0.5f, v, f), flat_depth(57, 9, 0.f));
-  same_render(params(10.f, 0.5f, v, f), flat_depth(57, 9, -inf), params(10.f, 0.5f, v, f), flat_depth(57, 9, 0.f));
-  same_render(params(10.f, 0.5f, v, f), flat_depth(57, 9, 3.f), params(10.f, 0.5f, v, f), flat_depth(57, 9, 1.f));
+  same_render(warp_params(80.f, 0.5f, v, f), depth, warp_params(25.f, 0.5f, v, f), depth);
+  same_render(warp_params(inf, 0.5f, v, f), depth, warp_params(25.f, 0.5f, v, f), depth);
+  same_render(warp_params(-3.f, 0.5f, v, f), depth, warp_params(0.f, 0.5f, v, f), depth);
+  same_render(warp_params(nan, 0.5f, v, f), depth, warp_params(0.f, 0.5f, v, f), depth);
+  same_render(warp_params(10.f, nan, v, f), depth, warp_params(10.f, 0.f, v, f), depth);
+  same_render(warp_params(10.f, 7.f, v, f), depth, warp_params(10.f, 1.f, v, f), depth);
+  same_render(warp_params(10.f, -1.f, v, f), depth, warp_params(10.f, 0.f, v, f), depth);
+  same_render(warp_params(10.f, 0.5f, v, f), flat_depth(57, 9, nan), warp_params(10.f, 0.5f, v, f), flat_depth(57, 9, 0.f));
+  same_render(warp_params(10.f, 0.5f, v, f), flat_depth(57, 9, -inf), warp_params(10.f, 0.5f, v, f), flat_depth(57, 9, 0.f));
+  same_render(warp_params(10.f, 0.5f, v, f), flat_depth(57, 9, 3.f), warp_params(10.f, 0.5f, v, f), flat_depth(57, 9, 1.f));
   // Max disparity 0 is the source even with NaN depth.
-  const Rendered zero = render(params(0.f, 0.5f, v, f), src, flat_depth(57, 9, nan));
+  const Rendered zero = render(warp_params(0.f, 0.5f, v, f), src, flat_depth(57, 9, nan));
   EXPECT_EQ(zero.holes, 0);
   EXPECT_TRUE(view_is(zero.out, 0, source_of(src)));
 }

@@ -32,12 +32,15 @@
 #include "depth_estimate_gpu.h"
 #include "gpu_util.h"
 #include "pack_gpu.h"
+#include "stiff_frames.h"
 #include "test_data.h"
 #include "warp_gpu.h"
 
 namespace p3d {
 namespace {
 
+using test::warp_params;
+using test::bilateral_params;
 using test::check_cuda;
 using test::DeviceDepth;
 using test::DeviceFrame;
@@ -62,69 +65,11 @@ constexpr Size k4K = {3840, 2160}, k8K = {7680, 4320};
 
 std::string size_name(Size s) { return std::to_string(s.w) + "x" + std::to_string(s.h); }
 
-// ---- stiff frames (as in tests/common/test_extremes.cpp) -----------------------
-
-enum class Pattern { Black, White, Colour, VStripes, HStripes, Checker1, Checker8, Noise };
-constexpr Pattern kAllPatterns[] = {Pattern::Black,    Pattern::White,    Pattern::Colour,   Pattern::VStripes,
-                                    Pattern::HStripes, Pattern::Checker1, Pattern::Checker8, Pattern::Noise};
-
-const char *pattern_name(Pattern p) {
-  switch (p) {
-    case Pattern::Black: return "black";
-    case Pattern::White: return "white";
-    case Pattern::Colour: return "colour";
-    case Pattern::VStripes: return "1px vertical stripes";
-    case Pattern::HStripes: return "1px horizontal stripes";
-    case Pattern::Checker1: return "1px checkerboard";
-    case Pattern::Checker8: return "8px checkerboard";
-    default: return "noise";
-  }
-}
-
-int pattern_level(Pattern p, int x, int y) {
-  switch (p) {
-    case Pattern::Black: return 0;
-    case Pattern::VStripes: return (x & 1) * 255;
-    case Pattern::HStripes: return (y & 1) * 255;
-    case Pattern::Checker1: return ((x + y) & 1) * 255;
-    case Pattern::Checker8: return (((x / 8) + (y / 8)) & 1) * 255;
-    default: return 255;
-  }
-}
-
-// Black/white patterns: exact greys (R'=G'=B', alpha 255; or Y' 16/235 with
-// neutral chroma). Colour: a constant non-grey frame with no channel at 255
-// (built directly, no OpenCV conversion, so 8K stays cheap). Noise: every
-// byte random.
-HostFrame make_frame(Pattern p, PixelFormat f, int w, int h, uint32_t seed = 1) {
-  HostFrame fr(f, w, h, 3);
-  if (p == Pattern::Noise) {
-    fr.fill_random(seed);
-    return fr;
-  }
-  const FrameView v = fr.view();
-  if (p == Pattern::Colour) {
-    if (is_packed_rgb(f)) {
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) store_rgba(v, x, y, Rgba{90, 220, 40, 255});
-      return fr;
-    }
-    fr.fill(60);  // Y' 60, Cb = Cr = 60: a saturated green, constant
-    return fr;
-  }
-  fr.fill(128);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const int level = pattern_level(p, x, y);
-      if (is_packed_rgb(f)) {
-        const uint8_t l = static_cast<uint8_t>(level);
-        store_rgba(v, x, y, Rgba{l, l, l, 255});
-      } else {
-        v.plane[0][static_cast<size_t>(y) * v.stride[0] + x] = static_cast<uint8_t>(16 + (level * 219 + 127) / 255);
-      }
-    }
-  return fr;
-}
+using test::kAllPatterns;
+using test::make_frame;
+using test::Pattern;
+using test::pattern_level;
+using test::pattern_name;
 
 enum class DepthKind { Zero, One, Half, Noise, Binary, Aligned, NonFinite };
 
@@ -215,23 +160,6 @@ std::string frame_mismatch(const HostFrame &cpu, const HostFrame &gpu) {
 }
 
 PixelFormat warp_output_format(PixelFormat src) { return is_packed_rgb(src) ? src : PixelFormat::RGBA; }
-
-WarpParams warp_params(float max_disparity, float convergence, StereoView view, HoleFill fill) {
-  WarpParams p;
-  p.max_disparity = max_disparity;
-  p.convergence = convergence;
-  p.view = view;
-  p.fill = fill;
-  return p;
-}
-
-BilateralParams bilateral_params(int radius, float sigma_space, float sigma_range) {
-  BilateralParams p;
-  p.radius = radius;
-  p.sigma_space = sigma_space;
-  p.sigma_range = sigma_range;
-  return p;
-}
 
 PackParams pack_params(PackLayout l, AnaglyphGlasses g = AnaglyphGlasses::RedCyan,
                        AnaglyphMethod m = AnaglyphMethod::Dubois, bool swap = false) {

@@ -25,6 +25,7 @@
 namespace p3d {
 namespace {
 
+using test::warp_params;
 using test::kAllFills;
 using test::kAllViews;
 using test::kAllFormats;
@@ -61,15 +62,6 @@ cv::Mat random_depth(int w, int h, DepthKind kind, uint32_t seed) {
 
 const char *kind_name(DepthKind k) {
   return k == DepthKind::Smooth ? "smooth" : k == DepthKind::Noise ? "noise" : "binary";
-}
-
-WarpParams params(float max_disparity, float convergence, StereoView view, HoleFill fill) {
-  WarpParams p;
-  p.max_disparity = max_disparity;
-  p.convergence = convergence;
-  p.view = view;
-  p.fill = fill;
-  return p;
 }
 
 std::string describe(const WarpParams &p, PixelFormat src, PixelFormat out, int w, int h) {
@@ -142,7 +134,7 @@ TEST_F(GpuWarp, AllModesRandomDepth) {
     src.fill_random(rng());
     const cv::Mat depth = random_depth(257, 131, kind, rng());
     for (StereoView v : kAllViews)
-      for (HoleFill f : kAllFills) expect_same(params(1.f + 24.f * u01(rng), u01(rng), v, f), src, depth);
+      for (HoleFill f : kAllFills) expect_same(warp_params(1.f + 24.f * u01(rng), u01(rng), v, f), src, depth);
   }
 }
 
@@ -158,7 +150,7 @@ TEST_F(GpuWarp, EveryFormat) {
     HostFrame src(f, 101, 37, 7);
     src.fill_random(rng());
     for (PixelFormat of : kPackedFormats)
-      for (HoleFill fill : kAllFills) expect_same(params(12.f, 0.4f, StereoView::Both, fill), src, depth, of, bt709);
+      for (HoleFill fill : kAllFills) expect_same(warp_params(12.f, 0.4f, StereoView::Both, fill), src, depth, of, bt709);
   }
 }
 
@@ -173,7 +165,7 @@ TEST_F(GpuWarp, OddSizes) {
     for (DepthKind kind : {DepthKind::Noise, DepthKind::Binary}) {
       const cv::Mat depth = random_depth(s[0], s[1], kind, rng());
       for (StereoView v : kAllViews)
-        for (HoleFill f : kAllFills) expect_same(params(25.f, 0.5f, v, f), src, depth, PixelFormat::BGRx);
+        for (HoleFill f : kAllFills) expect_same(warp_params(25.f, 0.5f, v, f), src, depth, PixelFormat::BGRx);
     }
   }
 }
@@ -186,7 +178,7 @@ TEST_F(GpuWarp, VeryWideRowsUseGlobalKeys) {
   src.fill_random(rng());
   for (DepthKind kind : {DepthKind::Smooth, DepthKind::Binary}) {
     const cv::Mat depth = random_depth(40001, 3, kind, rng());
-    for (HoleFill f : kAllFills) expect_same(params(0.5f, 0.5f, StereoView::Both, f), src, depth);
+    for (HoleFill f : kAllFills) expect_same(warp_params(0.5f, 0.5f, StereoView::Both, f), src, depth);
   }
 }
 
@@ -201,10 +193,10 @@ TEST_F(GpuWarp, ZeroDisparityAndInvalidValues) {
   depth.at<float>(3, 9) = 4.f;
   depth.at<float>(4, 11) = -2.f;
   for (HoleFill f : kAllFills) {
-    expect_same(params(0.f, 0.5f, StereoView::Both, f), src, depth);
-    expect_same(params(NAN, NAN, StereoView::Right, f), src, depth);
-    expect_same(params(90.f, 3.f, StereoView::Left, f), src, depth);
-    expect_same(params(25.f, -1.f, StereoView::Both, f), src, depth);
+    expect_same(warp_params(0.f, 0.5f, StereoView::Both, f), src, depth);
+    expect_same(warp_params(NAN, NAN, StereoView::Right, f), src, depth);
+    expect_same(warp_params(90.f, 3.f, StereoView::Left, f), src, depth);
+    expect_same(warp_params(25.f, -1.f, StereoView::Both, f), src, depth);
   }
 }
 
@@ -224,7 +216,7 @@ TEST_F(GpuWarp, Aloe) {
   for (PixelFormat f : {PixelFormat::NV12, PixelFormat::BGRx}) {
     const HostFrame src = HostFrame::from_bgr(bgr, f, 5);
     for (StereoView v : kAllViews)
-      for (HoleFill fill : kAllFills) expect_same(params(5.f, 0.5f, v, fill), src, depth);
+      for (HoleFill fill : kAllFills) expect_same(warp_params(5.f, 0.5f, v, fill), src, depth);
   }
 }
 
@@ -237,7 +229,7 @@ TEST_F(GpuWarp, BufferReuseAcrossSizes) {
     HostFrame src(PixelFormat::RGBx, s[0], s[1]);
     src.fill_random(rng());
     const cv::Mat depth = random_depth(s[0], s[1], DepthKind::Binary, rng());
-    for (HoleFill f : kAllFills) expect_same(params(10.f, 0.3f, StereoView::Both, f), src, depth);
+    for (HoleFill f : kAllFills) expect_same(warp_params(10.f, 0.3f, StereoView::Both, f), src, depth);
   }
 }
 
@@ -247,7 +239,7 @@ TEST_F(GpuWarp, HoleCountIsOptional) {
   src.fill_random(fresh_seed());
   const cv::Mat depth = random_depth(70, 20, DepthKind::Binary, fresh_seed());
   for (HoleFill f : kAllFills) {
-    const WarpParams p = params(20.f, 0.5f, StereoView::Both, f);
+    const WarpParams p = warp_params(20.f, 0.5f, StereoView::Both, f);
     HostFrame cpu(PixelFormat::RGBA, 140, 20);
     warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), cpu.view());
     const test::DeviceFrame dsrc = test::DeviceFrame::upload(src);
@@ -283,7 +275,7 @@ void large_case(GpuWarpTest &t, int w, int h, const std::initializer_list<HoleFi
   cv::Mat depth = random_depth(w, h, DepthKind::Smooth, rng());
   const cv::Mat noise = random_depth(w, h, DepthKind::Noise, rng());
   depth = depth * 0.9 + noise * 0.1;
-  for (HoleFill f : fills) t.expect_same(params(3.f, 0.5f, StereoView::Both, f), src, depth);
+  for (HoleFill f : fills) t.expect_same(warp_params(3.f, 0.5f, StereoView::Both, f), src, depth);
 }
 
 TEST_F(GpuWarpLarge, Uhd4k) {
@@ -303,7 +295,7 @@ TEST_F(GpuWarpLarge, Uhd4kTiming) {
   const test::DeviceDepth ddepth = test::DeviceDepth::upload(depth);
   const test::DeviceFrame dout(PixelFormat::RGBA, 2 * 3840, 2160);
   for (HoleFill f : kAllFills) {
-    const WarpParams p = params(3.f, 0.5f, StereoView::Both, f);
+    const WarpParams p = warp_params(3.f, 0.5f, StereoView::Both, f);
     test::check_cuda(renderer_.render(p, dsrc.view(), YuvToRgb(), as_const(ddepth.view()), dout.view(), stream_));
     cudaEvent_t a, b;
     ASSERT_EQ(cudaSuccess, cudaEventCreate(&a));

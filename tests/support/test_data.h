@@ -8,6 +8,7 @@
 
 #include "frame.h"
 #include "host_frame.h"
+#include "bilateral.h"
 #include "pack.h"
 #include "warp.h"
 
@@ -51,6 +52,23 @@ inline constexpr PixelFormat kAllFormats[] = {PixelFormat::NV12, PixelFormat::I4
 inline constexpr PixelFormat kPackedFormats[] = {PixelFormat::RGBA, PixelFormat::BGRA, PixelFormat::RGBx,
                                                  PixelFormat::BGRx};
 const char *format_name(PixelFormat f);
+
+// Parameter structs from their fields, for compact test tables.
+inline WarpParams warp_params(float max_disparity, float convergence, StereoView view, HoleFill fill) {
+  WarpParams p;
+  p.max_disparity = max_disparity;
+  p.convergence = convergence;
+  p.view = view;
+  p.fill = fill;
+  return p;
+}
+inline BilateralParams bilateral_params(int radius, float sigma_space, float sigma_range) {
+  BilateralParams p;
+  p.radius = radius;
+  p.sigma_space = sigma_space;
+  p.sigma_range = sigma_range;
+  return p;
+}
 
 // Every value of the stage enums, for exhaustive CPU and GPU tests.
 inline constexpr PackLayout kAllLayouts[] = {
