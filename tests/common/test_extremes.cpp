@@ -33,6 +33,7 @@
 namespace p3d {
 namespace {
 
+using test::pack_params;
 using test::warp_params;
 using test::bilateral_params;
 using test::kAllFills;
@@ -817,16 +818,6 @@ HostFrame pair_of(const HostFrame &l, const HostFrame &r) {
       store_rgba(pair.view(), l.width() + x, y, at(r, x, y));
     }
   return pair;
-}
-
-PackParams pack_params(PackLayout l, AnaglyphGlasses g = AnaglyphGlasses::RedCyan,
-                       AnaglyphMethod m = AnaglyphMethod::Dubois, bool swap = false) {
-  PackParams p;
-  p.layout = l;
-  p.glasses = g;
-  p.method = m;
-  p.swap_eyes = swap;
-  return p;
 }
 
 // Identical views: the Gray anaglyph is grey (every eye's channels carry the

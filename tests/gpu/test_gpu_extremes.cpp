@@ -39,6 +39,7 @@
 namespace p3d {
 namespace {
 
+using test::pack_params;
 using test::warp_params;
 using test::bilateral_params;
 using test::check_cuda;
@@ -160,16 +161,6 @@ std::string frame_mismatch(const HostFrame &cpu, const HostFrame &gpu) {
 }
 
 PixelFormat warp_output_format(PixelFormat src) { return is_packed_rgb(src) ? src : PixelFormat::RGBA; }
-
-PackParams pack_params(PackLayout l, AnaglyphGlasses g = AnaglyphGlasses::RedCyan,
-                       AnaglyphMethod m = AnaglyphMethod::Dubois, bool swap = false) {
-  PackParams p;
-  p.layout = l;
-  p.glasses = g;
-  p.method = m;
-  p.swap_eyes = swap;
-  return p;
-}
 
 DepthParams depth_params(Hypothesis h, int block, float edge_threshold, float region_weight) {
   DepthParams p;

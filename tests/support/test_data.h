@@ -70,6 +70,16 @@ inline BilateralParams bilateral_params(int radius, float sigma_space, float sig
   return p;
 }
 
+inline PackParams pack_params(PackLayout l, AnaglyphGlasses g = AnaglyphGlasses::RedCyan,
+                              AnaglyphMethod m = AnaglyphMethod::Dubois, bool swap = false) {
+  PackParams p;
+  p.layout = l;
+  p.glasses = g;
+  p.method = m;
+  p.swap_eyes = swap;
+  return p;
+}
+
 // Every value of the stage enums, for exhaustive CPU and GPU tests.
 inline constexpr PackLayout kAllLayouts[] = {
     PackLayout::Anaglyph,      PackLayout::SideBySide,     PackLayout::SideBySideHalf,    PackLayout::TopBottom,
