@@ -187,23 +187,31 @@ TEST(Depth, RgbdRejectsUnsplittableYuvWidth) {
 }
 
 // radius 0: the buffer passes through untouched (same buffer).
-TEST(Filter, RadiusZeroIsPassthrough) {
-  GstHarness *h = gst_harness_new_parse("pseudo3dfilter radius=0");
-  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 8, 8).c_str());
-  GstBuffer *in = buffer_from_frame(test_frame(PixelFormat::RGBA, 8, 8, 1));
-  GstBuffer *out = gst_harness_push_and_pull(h, gst_buffer_ref(in));
-  EXPECT_EQ(out, in);
-  gst_buffer_unref(out);
+// A stage with nothing to do hands on the very buffer it was given.
+static void expect_passthrough(const char *launch, const std::string &caps, int w, int h) {
+  GstHarness *hx = gst_harness_new_parse(launch);
+  gst_harness_set_src_caps_str(hx, caps.c_str());
+  GstBuffer *in = buffer_from_frame(test_frame(PixelFormat::RGBA, w, h, 1));
+  GstBuffer *out = gst_harness_push_and_pull(hx, gst_buffer_ref(in));
+  EXPECT_EQ(out, in) << launch;
+  if (out) gst_buffer_unref(out);
   gst_buffer_unref(in);
+  gst_harness_teardown(hx);
+}
+
+// A frame without a depth map is a flow error, not a crash or a guess.
+static void expect_error_without_depth(const char *launch) {
+  GstHarness *h = gst_harness_new_parse(launch);
+  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 8, 8).c_str());
+  EXPECT_EQ(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::RGBA, 8, 8, 1))), GST_FLOW_ERROR) << launch;
   gst_harness_teardown(h);
 }
 
-TEST(Filter, WithoutDepthIsAnError) {
-  GstHarness *h = gst_harness_new_parse("pseudo3dfilter radius=2");
-  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 8, 8).c_str());
-  EXPECT_EQ(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::RGBA, 8, 8, 1))), GST_FLOW_ERROR);
-  gst_harness_teardown(h);
+TEST(Filter, RadiusZeroIsPassthrough) {
+  expect_passthrough("pseudo3dfilter radius=0", raw_caps(PixelFormat::RGBA, 8, 8), 8, 8);
 }
+
+TEST(Filter, WithoutDepthIsAnError) { expect_error_without_depth("pseudo3dfilter radius=2"); }
 
 class FilterFormats : public ::testing::TestWithParam<std::tuple<PixelFormat, Size>> {};
 
@@ -278,12 +286,7 @@ TEST(Warp, ViewsDifferAndHolesAreFilled) {
   gst_harness_teardown(h);
 }
 
-TEST(Warp, WithoutDepthIsAnError) {
-  GstHarness *h = gst_harness_new_parse("pseudo3dwarp");
-  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 8, 8).c_str());
-  EXPECT_EQ(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::RGBA, 8, 8, 1))), GST_FLOW_ERROR);
-  gst_harness_teardown(h);
-}
+TEST(Warp, WithoutDepthIsAnError) { expect_error_without_depth("pseudo3dwarp"); }
 
 struct LayoutCase {
   const char *layout;
@@ -340,14 +343,8 @@ INSTANTIATE_TEST_SUITE_P(
 
 // A full side-by-side pair is already packed: the same buffer comes out.
 TEST(Pack, SideBySideIsPassthrough) {
-  GstHarness *h = gst_harness_new_parse("pseudo3dpack layout=side-by-side");
-  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 16, 4, ",multiview-mode=side-by-side").c_str());
-  GstBuffer *in = buffer_from_frame(test_frame(PixelFormat::RGBA, 16, 4, 1));
-  GstBuffer *out = gst_harness_push_and_pull(h, gst_buffer_ref(in));
-  EXPECT_EQ(out, in);
-  gst_buffer_unref(out);
-  gst_buffer_unref(in);
-  gst_harness_teardown(h);
+  expect_passthrough("pseudo3dpack layout=side-by-side", raw_caps(PixelFormat::RGBA, 16, 4, ",multiview-mode=side-by-side"),
+                     16, 4);
 }
 
 // YUV cannot be packed directly (pseudo3dwarp outputs packed RGB).
