@@ -14,6 +14,11 @@ enum class PixelFormat : int { NV12 = 0, I420, RGBA, BGRA, RGBx, BGRx };
 
 P3D_HD bool is_packed_rgb(PixelFormat f) { return f != PixelFormat::NV12 && f != PixelFormat::I420; }
 
+// The largest source frame side the stages accept (8K DCI, 8192): the GPU
+// warp keeps a source row in shared memory, which bounds the width on every
+// supported GPU. The stereo frames after the warp may be twice as large.
+constexpr int kMaxFrameSide = 8192;
+
 // One frame, host or device memory. Plane pointers and strides come from the
 // mapped GstVideoFrame (never width*bpp). Unused planes are null.
 struct FrameView {

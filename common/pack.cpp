@@ -1,5 +1,6 @@
 #include "pack.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
@@ -19,8 +20,8 @@ void pass_channel(float *m, int c) { m[3 * c + c] = 1.f; }
 void luma_to_channel(float *m, int c) { set_row(m, c, kLuma[0], kLuma[1], kLuma[2]); }
 
 // Dubois' least-squares projections (E. Dubois, "A projection method to
-// generate anaglyph stereo images", ICASSP 2001, and his published
-// matrices for the three glasses), applied to 0..255 R'G'B'.
+// generate anaglyph stereo images", ICASSP 2001), in their first published
+// form, applied to 0..255 values.
 void dubois(AnaglyphGlasses g, float *l, float *r) {
   static const float kRedCyan[2][9] = {
       {0.437f, 0.449f, 0.164f, -0.062f, -0.062f, -0.024f, -0.048f, -0.050f, -0.017f},
@@ -38,6 +39,38 @@ void dubois(AnaglyphGlasses g, float *l, float *r) {
     l[i] = m[0][i];
     r[i] = m[1][i];
   }
+}
+
+// The matrices of ffmpeg's (and mpv's) stereo3d filter, ana_coeff[] for
+// arcd, agmd and aybd: per output channel, the left then the right eye's
+// R, G, B weights in 16.16 fixed point.
+void dubois_ffmpeg(AnaglyphGlasses g, float *l, float *r) {
+  static const int kRedCyan[3][6] = {{29891, 32800, 11559, -2849, -5763, -102},
+                                     {-2627, -2479, -1033, 24804, 48080, -1209},
+                                     {-997, -1350, -358, -4729, -7403, 80373}};
+  static const int kGreenMagenta[3][6] = {{-4063, -10354, -2556, 34669, 46203, 1573},
+                                          {18612, 43778, 9372, -1049, -983, -4260},
+                                          {-983, -1769, 1376, 590, 4915, 61407}};
+  static const int kAmberBlue[3][6] = {{65535, -12650, 18451, -987, -7590, -1049},
+                                       {-1604, 56032, 4196, 370, 3826, -1049},
+                                       {-2345, -10676, 1358, 5801, 11416, 56217}};
+  const int(*m)[6] = g == AnaglyphGlasses::GreenMagenta ? kGreenMagenta
+                     : g == AnaglyphGlasses::AmberBlue  ? kAmberBlue
+                                                        : kRedCyan;
+  for (int row = 0; row < 3; ++row)
+    for (int c = 0; c < 3; ++c) {
+      l[3 * row + c] = static_cast<float>(m[row][c] / 65536.0);
+      r[3 * row + c] = static_cast<float>(m[row][3 + c] / 65536.0);
+    }
+}
+
+// sRGB transfer (IEC 61966-2-1), in double, for the linear-light tables.
+double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+
+void linear_light_tables(AnaglyphMatrices *am) {
+  am->linear_light = true;
+  for (int v = 0; v < 256; ++v) am->to_linear[v] = static_cast<float>(srgb_to_linear(v / 255.0));
+  for (int k = 0; k < 255; ++k) am->midpoints[k] = 0.5f * (am->to_linear[k] + am->to_linear[k + 1]);
 }
 
 // Channels each eye's filter passes (0 = R, 1 = G, 2 = B).
@@ -76,9 +109,14 @@ bool packed_rgb_valid(const FrameView &f) {
 
 AnaglyphMatrices anaglyph_matrices(AnaglyphGlasses g, AnaglyphMethod m) {
   AnaglyphMatrices am{};
-  if (m == AnaglyphMethod::Dubois) {
-    dubois(g, am.left, am.right);
-    return am;
+  switch (m) {
+    case AnaglyphMethod::Dubois: dubois(g, am.left, am.right); return am;
+    case AnaglyphMethod::DuboisFfmpeg: dubois_ffmpeg(g, am.left, am.right); return am;
+    case AnaglyphMethod::DuboisLinear:
+      dubois(g, am.left, am.right);
+      linear_light_tables(&am);
+      return am;
+    default: break;
   }
   const Filters f = filters(g);
   const bool luma_left = m == AnaglyphMethod::Gray || (m == AnaglyphMethod::HalfColor && f.single_colour_left);
@@ -88,21 +126,50 @@ AnaglyphMatrices anaglyph_matrices(AnaglyphGlasses g, AnaglyphMethod m) {
   return am;
 }
 
+bool input_view_size(StereoInput input, int in_width, int in_height, int *view_width, int *view_height) {
+  if (in_width <= 0 || in_height <= 0) return false;
+  if (input == StereoInput::SideBySide && in_width % 2 != 0) return false;
+  if (input == StereoInput::TopBottom && in_height % 2 != 0) return false;
+  pack_detail::view_size(input, in_width, in_height, view_width, view_height);
+  return true;
+}
+
 void pack_size(PackLayout layout, int view_width, int view_height, int *out_width, int *out_height) {
   *out_width = layout == PackLayout::SideBySide ? 2 * view_width : view_width;
   *out_height = layout == PackLayout::TopBottom ? 2 * view_height : view_height;
 }
 
+bool layout_arrangement(PackLayout layout, StereoInput *arrangement) {
+  switch (layout) {
+    case PackLayout::SideBySide: *arrangement = StereoInput::SideBySide; return true;
+    case PackLayout::SideBySideHalf: *arrangement = StereoInput::SideBySideHalf; return true;
+    case PackLayout::TopBottom: *arrangement = StereoInput::TopBottom; return true;
+    case PackLayout::TopBottomHalf: *arrangement = StereoInput::TopBottomHalf; return true;
+    case PackLayout::RowInterleaved: *arrangement = StereoInput::RowInterleaved; return true;
+    case PackLayout::ColumnInterleaved: *arrangement = StereoInput::ColumnInterleaved; return true;
+    case PackLayout::Checkerboard: *arrangement = StereoInput::Checkerboard; return true;
+    default: return false;
+  }
+}
+
+bool pack_is_identity(const PackParams &params) {
+  StereoInput out;
+  // The output's first view is the right one exactly when swap_eyes.
+  return layout_arrangement(params.layout, &out) && out == params.input &&
+         params.swap_eyes == params.input_right_first;
+}
+
 bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameView &out) {
   const int layout = static_cast<int>(params.layout), glasses = static_cast<int>(params.glasses),
-            method = static_cast<int>(params.method);
+            method = static_cast<int>(params.method), input = static_cast<int>(params.input);
   if (layout < 0 || layout > static_cast<int>(PackLayout::Right)) return false;
   if (glasses < 0 || glasses > static_cast<int>(AnaglyphGlasses::AmberBlue)) return false;
-  if (method < 0 || method > static_cast<int>(AnaglyphMethod::Gray)) return false;
+  if (method < 0 || method > static_cast<int>(AnaglyphMethod::DuboisLinear)) return false;
+  if (input < 0 || input > static_cast<int>(StereoInput::Checkerboard)) return false;
   if (!packed_rgb_valid(in) || !packed_rgb_valid(out) || in.format != out.format) return false;
-  if (in.width % 2 != 0) return false;
-  int w = 0, h = 0;
-  pack_size(params.layout, in.width / 2, in.height, &w, &h);
+  int vw = 0, vh = 0, w = 0, h = 0;
+  if (!input_view_size(params.input, in.width, in.height, &vw, &vh)) return false;
+  pack_size(params.layout, vw, vh, &w, &h);
   return out.width == w && out.height == h;
 }
 

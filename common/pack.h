@@ -1,11 +1,38 @@
-// Packing a full-resolution side-by-side stereo pair (the warp's output) into
-// a display or delivery format. CPU reference; cuda/pack_gpu.h computes the
-// same function. Input and output are packed RGB frames of one format.
+// Stereo conversion: a stereo frame in (the warp's full side-by-side pair,
+// or any frame holding a pair as side-by-side, top-bottom, interleaved or
+// checkerboard, at full or half resolution, either eye first) and a display
+// or delivery format out. CPU reference; cuda/pack_gpu.h computes the same
+// function. Input and output are packed RGB frames of one format.
 //
-// Let L(x, y) and R(x, y) be the left and right views (W x H each) of the
-// input (left in columns [0, W) and right in [W, 2W), swapped when
-// swap_eyes). Output pixel (X, Y) for each layout:
-//   SideBySide        2W x H   L | R                 (the input itself unless swap_eyes)
+// Input. PackParams::input says how the input frame (Win x Hin) holds the
+// two views, input_right_first whether the right view comes first (left
+// half, top half, even rows/columns, (X + Y) even). Each view is read at its
+// full display size W x H (input_view_size()):
+//   SideBySide        W = Win / 2, H = Hin       the half of the frame
+//   TopBottom         W = Win, H = Hin / 2       the half of the frame
+//   SideBySideHalf    W = Win, H = Hin           the first view's samples are
+//                     columns [0, half_split(W)), the second's the rest; view
+//                     column X comes from sample i = min(X / 2, n - 1) of the
+//                     view's n samples and its neighbour j = i - 1 (X even) or
+//                     i + 1 (X odd), clamped to the view: (3 s_i + s_j + 2) / 4
+//                     per channel (linear interpolation between sample
+//                     centres; it inverts the half formats' pair means up to
+//                     rounding)
+//   TopBottomHalf     likewise along rows
+//   RowInterleaved    W = Win, H = Hin; the first view owns the even rows:
+//                     a row the view owns is read as is, any other row is the
+//                     rounded mean (a + b + 1) / 2 of the rows above and below
+//                     (one of them at the frame's edge)
+//   ColumnInterleaved likewise along columns
+//   Checkerboard      the first view owns (X + Y) even; any other pixel is the
+//                     rounded mean (sum + n / 2) / n of its n in-frame
+//                     4-neighbours (which the view owns)
+// A frame too small to hold a view's sample (a one-row row-interleaved
+// frame...) reads the nearest sample there is.
+//
+// Output. Let L(x, y) and R(x, y) be the left and right views (W x H each),
+// exchanged when swap_eyes. Output pixel (X, Y) for each layout:
+//   SideBySide        2W x H   L | R
 //   SideBySideHalf    W  x H   L squeezed into columns [0, half_split(W)), R into
 //                              the rest; output column i of a half is the rounded
 //                              mean (a + b + 1) / 2 of its view's columns 2i and
@@ -18,15 +45,33 @@
 //   Left / Right      W  x H   one view
 //   Anaglyph          W  x H   per pixel: out = Ml * L + Mr * R (3x3 matrices
 //                              on 0..255 R'G'B', then to_u8), alpha from L.
-// Anaglyph matrices (anaglyph_matrices()): Dubois' least-squares matrices for
-// red-cyan, green-magenta and amber-blue glasses; Color: each eye's channels
-// pass through its filter (red-cyan: R from L, G and B from R); HalfColor:
-// the left eye's channel is L's luma, the other eye in colour (for red-cyan;
-// for the others the eye behind the single-channel filter gets luma:
-// green-magenta the left, amber-blue the right eye); Gray: both eyes as luma.
+// An output in the input's own arrangement and eye order is the input itself
+// (pack_is_identity(): the element passes such buffers through).
+//
+// Anaglyph matrices (anaglyph_matrices()):
+//   Dubois        Dubois' least-squares projections for red-cyan,
+//                 green-magenta and amber-blue glasses (E. Dubois, "A
+//                 projection method to generate anaglyph stereo images",
+//                 ICASSP 2001), as first published, applied to the
+//                 gamma-encoded R'G'B' values and clipped;
+//   DuboisFfmpeg  the matrices of ffmpeg's and mpv's stereo3d filter (arcd,
+//                 agmd, aybd: Dubois' later revision, 16.16 fixed point in
+//                 their source, used here as those fractions), applied the
+//                 same way, for output that matches theirs;
+//   DuboisLinear  the Dubois matrices applied in linear light, as Dubois
+//                 specifies: sRGB-decode both views (to_linear table), mix,
+//                 clip to [0, 1], and sRGB-encode by picking the 8-bit code
+//                 whose linear value is nearest (midpoint table);
+//   Color: each eye's channels pass through its filter (red-cyan: R from L,
+//   G and B from R); HalfColor: the left eye's channel is L's luma, the
+//   other eye in colour (for red-cyan; for the others the eye behind the
+//   single-channel filter gets luma: green-magenta the left, amber-blue the
+//   right eye); Gray: both eyes as luma.
 // Color/HalfColor/Gray are matrices too (luma rows: rgb_luma's BT.601
 // weights), so every anaglyph takes the one path out = Ml * L + Mr * R,
 // evaluated as (Ml row . L) + (Mr row . R), each dot left to right.
+// Anaglyphs keep colour detail only in full-resolution chroma: encode them
+// as RGB or 4:4:4 (4:2:0 smears the red channel over two pixels).
 #pragma once
 
 #include "frame.h"
@@ -46,36 +91,63 @@ enum class PackLayout : int {
   Right,
 };
 enum class AnaglyphGlasses : int { RedCyan = 0, GreenMagenta, AmberBlue };
-enum class AnaglyphMethod : int { Dubois = 0, Color, HalfColor, Gray };
+enum class AnaglyphMethod : int { Dubois = 0, Color, HalfColor, Gray, DuboisFfmpeg, DuboisLinear };
+// How an input frame holds the pair (see the header comment).
+enum class StereoInput : int {
+  SideBySide = 0,
+  SideBySideHalf,
+  TopBottom,
+  TopBottomHalf,
+  RowInterleaved,
+  ColumnInterleaved,
+  Checkerboard,
+};
 
 struct PackParams {
   PackLayout layout = PackLayout::Anaglyph;
   AnaglyphGlasses glasses = AnaglyphGlasses::RedCyan;
   AnaglyphMethod method = AnaglyphMethod::Dubois;
   bool swap_eyes = false;
+  StereoInput input = StereoInput::SideBySide;  // pseudo3dwarp's output
+  bool input_right_first = false;
 };
 
 // Row-major 3x3 matrices: out.r = m[0]*c.r + m[1]*c.g + m[2]*c.b, ...
+// With linear_light the views are mixed in linear light (DuboisLinear):
+// to_linear[v] is the linear value of sRGB code v, and the output code is
+// the number of midpoints[k] = (to_linear[k] + to_linear[k + 1]) / 2,
+// k = 0..254, below the clipped linear value.
 struct AnaglyphMatrices {
   float left[9];
   float right[9];
+  bool linear_light;
+  float to_linear[256];
+  float midpoints[255];
 };
 AnaglyphMatrices anaglyph_matrices(AnaglyphGlasses g, AnaglyphMethod m);
 
-// Output size for an input pair of width 2*view_width.
+// Size of each view of an input frame of in_width x in_height holding the
+// pair as `input`; false when it cannot (a full side-by-side frame of odd
+// width, a full top-bottom one of odd height, an empty frame).
+bool input_view_size(StereoInput input, int in_width, int in_height, int *view_width, int *view_height);
+// Output size for views of view_width x view_height.
 void pack_size(PackLayout layout, int view_width, int view_height, int *out_width, int *out_height);
+// The arrangement an output layout writes, or false for anaglyph and single views.
+bool layout_arrangement(PackLayout layout, StereoInput *arrangement);
+// Whether the output equals the input (same arrangement and eye order).
+bool pack_is_identity(const PackParams &params);
 
 // Width of the left half in the half formats: ceil(W/2) (the right half
 // gets the rest, so odd widths lose no column of the output frame).
 P3D_HD int half_split(int n) { return (n + 1) / 2; }
 
-// Output pixel (X, Y). `in` is the 2W x H pair, W = in.width / 2. Defined
-// in this header (below) so the kernel calls the very same code.
+// Output pixel (X, Y) of the input frame `in`. Defined in this header
+// (below) so the kernel calls the very same code.
 P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y);
 
 // Whether pack_cpu/pack_gpu accept these arguments: enums in range, in and
-// out packed RGB of one format, in of even width >= 2 and height >= 1, out of
-// pack_size()'s size, and no view's stride shorter than its rows.
+// out packed RGB of one format, in holding views of input_view_size(), out
+// of pack_size()'s size for them, and no stride shorter than its row.
 bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameView &out);
 
 // Whole frame. out must have pack_size()'s size and the input's format;
@@ -86,17 +158,97 @@ void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &ou
 
 namespace pack_detail {
 
-// Pixel (x, y) of the left (eye 0) or right (eye 1) view of the pair.
-P3D_HD Rgba view_pixel(const FrameView &in, bool swap_eyes, int eye, int x, int y) {
-  const int w = in.width / 2;
-  const bool right_half = (eye == 1) != swap_eyes;
+P3D_HD Rgba pixel_at(const FrameView &in, int x, int y) {
   const YuvToRgb unused;  // packed RGB only: the conversion is never applied
-  return load_rgba(in, right_half ? x + w : x, y, unused);
+  return load_rgba(in, x, y, unused);
 }
 
 // Rounded per-channel mean: what the half formats store for a pair of samples.
 P3D_HD uint8_t mean2(uint8_t a, uint8_t b) { return static_cast<uint8_t>((a + b + 1) / 2); }
 P3D_HD Rgba mean2(Rgba a, Rgba b) { return Rgba{mean2(a.r, b.r), mean2(a.g, b.g), mean2(a.b, b.b), mean2(a.a, b.a)}; }
+// (3a + b + 2) / 4: a quarter of the way from sample a towards sample b.
+P3D_HD uint8_t mix31(uint8_t a, uint8_t b) { return static_cast<uint8_t>((3 * a + b + 2) / 4); }
+P3D_HD Rgba mix31(Rgba a, Rgba b) { return Rgba{mix31(a.r, b.r), mix31(a.g, b.g), mix31(a.b, b.b), mix31(a.a, b.a)}; }
+
+P3D_HD int clamp_index(int i, int n) { return i < 0 ? 0 : (i >= n ? n - 1 : i); }
+
+// Along an axis of n frame samples holding two squeezed views: the first
+// view's samples are [0, half_split(n)), the second's the rest. Display
+// position X of view `slot`: the two sample indices to mix (mix31).
+P3D_HD void unsqueeze(int X, int n, int slot, int *s0, int *s1) {
+  const int split = half_split(n);
+  int start = slot == 0 ? 0 : split, count = slot == 0 ? split : n - split;
+  if (count <= 0) {  // a one-sample axis has no second view: read the first
+    start = 0;
+    count = split;
+  }
+  const int i = X / 2 < count - 1 ? X / 2 : count - 1;
+  const int j = clamp_index((X & 1) ? i + 1 : i - 1, count);
+  *s0 = start + i;
+  *s1 = start + j;
+}
+
+// Interleaved along an axis of n samples: view `slot` owns the indices of
+// its parity. Sets the indices to average for display position X (both the
+// same when the view owns X, or at the frame's edge).
+P3D_HD void deinterleave(int X, int n, int slot, int *s0, int *s1) {
+  if ((X & 1) == slot || n == 1) {
+    *s0 = *s1 = clamp_index(X, n);
+    return;
+  }
+  // X belongs to the other view; its neighbours belong to this one.
+  int a = X - 1, b = X + 1;
+  if (a < 0) a = b;
+  if (b >= n) b = a;
+  *s0 = clamp_index(a, n);
+  *s1 = clamp_index(b, n);
+}
+
+// View `slot` of a checkerboard frame at (x, y).
+P3D_HD Rgba checker_pixel(const FrameView &in, int slot, int x, int y) {
+  if (((x + y) & 1) == slot) return pixel_at(in, x, y);
+  const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+  int n = 0, r = 0, g = 0, b = 0, a = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int xx = x + dx[k], yy = y + dy[k];
+    if (xx < 0 || yy < 0 || xx >= in.width || yy >= in.height) continue;
+    const Rgba c = pixel_at(in, xx, yy);
+    r += c.r;
+    g += c.g;
+    b += c.b;
+    a += c.a;
+    ++n;
+  }
+  if (n == 0) return pixel_at(in, x, y);  // a 1x1 frame
+  return Rgba{static_cast<uint8_t>((r + n / 2) / n), static_cast<uint8_t>((g + n / 2) / n),
+              static_cast<uint8_t>((b + n / 2) / n), static_cast<uint8_t>((a + n / 2) / n)};
+}
+
+// Pixel (x, y) of the left (eye 0) or right (eye 1) view as the output
+// shows it (swap_eyes exchanges them), read from the input arrangement.
+P3D_HD Rgba view_pixel(const PackParams &p, const FrameView &in, int eye, int x, int y) {
+  const int view = eye ^ (p.swap_eyes ? 1 : 0);
+  const int slot = view ^ (p.input_right_first ? 1 : 0);  // 0: first in the frame
+  int a = 0, b = 0;
+  switch (p.input) {
+    case StereoInput::TopBottom: return pixel_at(in, x, y + slot * (in.height / 2));
+    case StereoInput::SideBySideHalf:
+      unsqueeze(x, in.width, slot, &a, &b);
+      return mix31(pixel_at(in, a, y), pixel_at(in, b, y));
+    case StereoInput::TopBottomHalf:
+      unsqueeze(y, in.height, slot, &a, &b);
+      return mix31(pixel_at(in, x, a), pixel_at(in, x, b));
+    case StereoInput::RowInterleaved:
+      deinterleave(y, in.height, slot, &a, &b);
+      return mean2(pixel_at(in, x, a), pixel_at(in, x, b));
+    case StereoInput::ColumnInterleaved:
+      deinterleave(x, in.width, slot, &a, &b);
+      return mean2(pixel_at(in, a, y), pixel_at(in, b, y));
+    case StereoInput::Checkerboard: return checker_pixel(in, slot, x, y);
+    case StereoInput::SideBySide:
+    default: return pixel_at(in, x + slot * (in.width / 2), y);
+  }
+}
 
 // Row `row` of a 3x3 matrix times (r, g, b). One fixed evaluation order, so
 // the host (-ffp-contract=off) and the device (-fmad=false) round alike.
@@ -104,13 +256,40 @@ P3D_HD float mat_row(const float *m, int row, float r, float g, float b) {
   return m[3 * row] * r + m[3 * row + 1] * g + m[3 * row + 2] * b;
 }
 
+// The 8-bit sRGB code of a linear value: the count of midpoints below it
+// (binary search; the midpoints increase).
+P3D_HD uint8_t linear_to_code(const AnaglyphMatrices &am, float v) {
+  int lo = 0, hi = 255;  // answer in [lo, hi]
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (v > am.midpoints[mid])
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return static_cast<uint8_t>(lo);
+}
+
 P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {
-  const float lr = l.r, lg = l.g, lb = l.b, rr = r.r, rg = r.g, rb = r.b;
   Rgba o;
+  o.a = l.a;
+  if (am.linear_light) {
+    const float lr = am.to_linear[l.r], lg = am.to_linear[l.g], lb = am.to_linear[l.b];
+    const float rr = am.to_linear[r.r], rg = am.to_linear[r.g], rb = am.to_linear[r.b];
+    float c[3];
+    for (int k = 0; k < 3; ++k) {
+      const float v = mat_row(am.left, k, lr, lg, lb) + mat_row(am.right, k, rr, rg, rb);
+      c[k] = v < 0.f ? 0.f : (v > 1.f ? 1.f : v);
+    }
+    o.r = linear_to_code(am, c[0]);
+    o.g = linear_to_code(am, c[1]);
+    o.b = linear_to_code(am, c[2]);
+    return o;
+  }
+  const float lr = l.r, lg = l.g, lb = l.b, rr = r.r, rg = r.g, rb = r.b;
   o.r = to_u8(mat_row(am.left, 0, lr, lg, lb) + mat_row(am.right, 0, rr, rg, rb));
   o.g = to_u8(mat_row(am.left, 1, lr, lg, lb) + mat_row(am.right, 1, rr, rg, rb));
   o.b = to_u8(mat_row(am.left, 2, lr, lg, lb) + mat_row(am.right, 2, rr, rg, rb));
-  o.a = l.a;
   return o;
 }
 
@@ -126,40 +305,46 @@ P3D_HD int half_source(int i, int n, int *s0, int *s1) {
   return eye;
 }
 
+// Display size of the views of an input frame (input_view_size() without the checks).
+P3D_HD void view_size(StereoInput input, int in_width, int in_height, int *w, int *h) {
+  *w = input == StereoInput::SideBySide ? in_width / 2 : in_width;
+  *h = input == StereoInput::TopBottom ? in_height / 2 : in_height;
+}
+
 }  // namespace pack_detail
 
 P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
   using namespace pack_detail;
-  const int w = in.width / 2, h = in.height;
-  const bool sw = p.swap_eyes;
+  int w = 0, h = 0;
+  view_size(p.input, in.width, in.height, &w, &h);
   switch (p.layout) {
     case PackLayout::SideBySide:
-      return X < w ? view_pixel(in, sw, 0, X, Y) : view_pixel(in, sw, 1, X - w, Y);
+      return X < w ? view_pixel(p, in, 0, X, Y) : view_pixel(p, in, 1, X - w, Y);
     case PackLayout::TopBottom:
-      return Y < h ? view_pixel(in, sw, 0, X, Y) : view_pixel(in, sw, 1, X, Y - h);
+      return Y < h ? view_pixel(p, in, 0, X, Y) : view_pixel(p, in, 1, X, Y - h);
     case PackLayout::SideBySideHalf: {
       int x0, x1;
       const int eye = half_source(X, w, &x0, &x1);
-      return mean2(view_pixel(in, sw, eye, x0, Y), view_pixel(in, sw, eye, x1, Y));
+      return mean2(view_pixel(p, in, eye, x0, Y), view_pixel(p, in, eye, x1, Y));
     }
     case PackLayout::TopBottomHalf: {
       int y0, y1;
       const int eye = half_source(Y, h, &y0, &y1);
-      return mean2(view_pixel(in, sw, eye, X, y0), view_pixel(in, sw, eye, X, y1));
+      return mean2(view_pixel(p, in, eye, X, y0), view_pixel(p, in, eye, X, y1));
     }
     case PackLayout::RowInterleaved:
-      return view_pixel(in, sw, Y & 1, X, Y);
+      return view_pixel(p, in, Y & 1, X, Y);
     case PackLayout::ColumnInterleaved:
-      return view_pixel(in, sw, X & 1, X, Y);
+      return view_pixel(p, in, X & 1, X, Y);
     case PackLayout::Checkerboard:
-      return view_pixel(in, sw, (X + Y) & 1, X, Y);
+      return view_pixel(p, in, (X + Y) & 1, X, Y);
     case PackLayout::Left:
-      return view_pixel(in, sw, 0, X, Y);
+      return view_pixel(p, in, 0, X, Y);
     case PackLayout::Right:
-      return view_pixel(in, sw, 1, X, Y);
+      return view_pixel(p, in, 1, X, Y);
     case PackLayout::Anaglyph:
     default:
-      return anaglyph(am, view_pixel(in, sw, 0, X, Y), view_pixel(in, sw, 1, X, Y));
+      return anaglyph(am, view_pixel(p, in, 0, X, Y), view_pixel(p, in, 1, X, Y));
   }
 }
 

@@ -29,7 +29,7 @@ CudaStatus DeviceBuffer::ensure(size_t bytes) {
   if (bytes <= size_ && ptr_) return {};
   release();
   if (bytes == 0) bytes = 1;
-  P3D_CUDA_TRY(cudaMalloc(&ptr_, bytes));
+  P3D_CUDA_TRY_ALLOC(cudaMalloc(&ptr_, bytes), bytes);
   size_ = bytes;
   pitch_ = bytes;
   return {};
@@ -41,7 +41,7 @@ CudaStatus DeviceBuffer::ensure_2d(size_t row_bytes, size_t height) {
   if (ptr_ && pitch_ >= row_bytes && pitch_ * height <= size_) return {};
   release();
   size_t pitch = 0;
-  P3D_CUDA_TRY(cudaMallocPitch(&ptr_, &pitch, row_bytes, height));
+  P3D_CUDA_TRY_ALLOC(cudaMallocPitch(&ptr_, &pitch, row_bytes, height), row_bytes * height);
   pitch_ = pitch;
   size_ = pitch * height;
   return {};

@@ -1,6 +1,19 @@
-// Pseudo3DDepthMeta: the depth map of a buffer (see depth_plane.h). Copied
-// with the buffer (shared, reference counted); dropped by transforms that
-// change the frame geometry, since the depth no longer fits.
+// Pseudo3DDepthMeta: the depth map of a buffer (see depth_plane.h).
+//
+// The meta describes the pixels of its frame, so it registers the video,
+// size and orientation tags, and the memory tag because the plane lives in
+// the memory domain of the frame (host or one CUDA context). GStreamer's
+// transforms decide by those tags:
+//  * a copy of the whole buffer (gst_buffer_copy, make_writable, tee and
+//    queue pass the buffer itself) keeps it, sharing the plane;
+//  * GstBaseTransform never copies memory-tagged metas into a new output
+//    buffer, so a scaler, a flip or rotation, a crop, videoconvert and
+//    cudaupload/cudadownload all drop it, and the next pseudo3d stage says
+//    that it needs pseudo3ddepth (a pseudo3ddepth there estimates afresh);
+//  * where an element asks the meta to scale itself
+//    (GST_VIDEO_META_TRANSFORM_IS_SCALE), a host plane is resampled to the
+//    new size (bilinear) and a device plane is dropped;
+//  * a copy of part of a buffer (a byte region) drops it.
 #pragma once
 
 #include <gst/gst.h>

@@ -58,11 +58,30 @@ P3D_DEFINE_ENUM(gst_pseudo3d_glasses_get_type, "GstPseudo3DGlasses",
                 {(gint)p3d::AnaglyphGlasses::AmberBlue, "Amber (left) / blue (right)", "amber-blue"})
 
 P3D_DEFINE_ENUM(gst_pseudo3d_anaglyph_method_get_type, "GstPseudo3DAnaglyphMethod",
-                {(gint)p3d::AnaglyphMethod::Dubois, "Dubois least-squares (least ghosting)", "dubois"},
+                {(gint)p3d::AnaglyphMethod::Dubois,
+                 "Dubois least squares, the first published matrices, on gamma-encoded values (least ghosting)",
+                 "dubois"},
                 {(gint)p3d::AnaglyphMethod::Color, "Full colour through the filters", "color"},
                 {(gint)p3d::AnaglyphMethod::HalfColor, "Half colour (luma behind the single-colour filter)",
                  "half-color"},
-                {(gint)p3d::AnaglyphMethod::Gray, "Grey (luma for both eyes)", "gray"})
+                {(gint)p3d::AnaglyphMethod::Gray, "Grey (luma for both eyes)", "gray"},
+                {(gint)p3d::AnaglyphMethod::DuboisFfmpeg,
+                 "Dubois, the revised matrices of ffmpeg's and mpv's stereo3d (arcd, agmd, aybd)", "dubois-ffmpeg"},
+                {(gint)p3d::AnaglyphMethod::DuboisLinear, "Dubois in linear light (sRGB decoded, mixed, clipped, encoded)",
+                 "dubois-linear"})
+
+#define P3D_INPUT(value, desc, nick) {static_cast<gint>(p3d::StereoInput::value) + 1, desc, nick}
+P3D_DEFINE_ENUM(gst_pseudo3d_input_layout_get_type, "GstPseudo3DInputLayout",
+                {GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS, "From the caps' multiview-mode and multiview-flags",
+                 "from-caps"},
+                P3D_INPUT(SideBySide, "Side by side, full resolution", "side-by-side"),
+                P3D_INPUT(SideBySideHalf, "Side by side, each view squeezed to half width", "side-by-side-half"),
+                P3D_INPUT(TopBottom, "Top and bottom, full resolution", "top-bottom"),
+                P3D_INPUT(TopBottomHalf, "Top and bottom, each view squeezed to half height", "top-bottom-half"),
+                P3D_INPUT(RowInterleaved, "Rows alternate between the views", "row-interleaved"),
+                P3D_INPUT(ColumnInterleaved, "Columns alternate between the views", "column-interleaved"),
+                P3D_INPUT(Checkerboard, "Checkerboard of the two views", "checkerboard"))
+#undef P3D_INPUT
 
 P3D_DEFINE_ENUM(gst_pseudo3d_processing_get_type, "GstPseudo3DProcessing",
                 {GST_PSEUDO3D_PROCESSING_AUTO, "GPU when a CUDA device and nvcodec are available, else CPU", "auto"},

@@ -58,5 +58,11 @@ CudaStatus GpuStaging::download_depth(ImageView<const float> dev, ImageView<floa
   return {};
 }
 
+void GpuStaging::release() {
+  for (auto &slot : frame_)
+    for (DeviceBuffer &b : slot) b.release();
+  for (DeviceBuffer &b : depth_) b.release();
+}
+
 }  // namespace p3d::gst
 #endif

@@ -27,6 +27,9 @@ class GpuStaging {
   CudaStatus upload_depth(Slot slot, ImageView<const float> host, ImageView<float> *dev, cudaStream_t stream);
   CudaStatus download_depth(ImageView<const float> dev, ImageView<float> host, cudaStream_t stream);
 
+  // Frees every buffer (the owning context must be current).
+  void release();
+
  private:
   DeviceBuffer frame_[2][3];
   DeviceBuffer depth_[2];

@@ -1,16 +1,18 @@
 #include "gstpseudo3dbase.h"
 
+#include <cstdarg>
 #include <exception>
 #include <new>
+#include <string>
 
 #include "depth_meta.h"
+#include "host_allocator.h"
+#include "property_guard.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
 #include <gst/cuda/gstcudabufferpool.h>
-#include <gst/cuda/gstcudaloader.h>
 #include <gst/cuda/gstcudamemory.h>
-#include <gst/cuda/gstcudautils.h>
 #endif
 
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_base_debug);
@@ -25,40 +27,46 @@ G_DEFINE_ABSTRACT_TYPE_WITH_CODE(GstPseudo3DBase, gst_pseudo3d_base, GST_TYPE_BA
                                  GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_base_debug, "pseudo3dbase", 0,
                                                          "pseudo3d base transform"))
 
+/* ---- properties ---- */
+
 static void gst_pseudo3d_base_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(object);
+  if (!p3d::gst::property_settable(GST_ELEMENT(self), pspec)) return;
+  GST_OBJECT_LOCK(self);
   switch (prop_id) {
-    case PROP_DEVICE_ID:
-      GST_OBJECT_LOCK(self);
-      self->device_id = g_value_get_int(value);
-      GST_OBJECT_UNLOCK(self);
-      break;
-    case PROP_PROCESSING:
-      GST_OBJECT_LOCK(self);
-      self->processing = static_cast<GstPseudo3DProcessing>(g_value_get_enum(value));
-      GST_OBJECT_UNLOCK(self);
-      break;
+    case PROP_DEVICE_ID: self->device_id = g_value_get_int(value); break;
+    case PROP_PROCESSING: self->processing = static_cast<GstPseudo3DProcessing>(g_value_get_enum(value)); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
+  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pseudo3d_base_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(object);
+  GST_OBJECT_LOCK(self);
   switch (prop_id) {
     case PROP_DEVICE_ID: g_value_set_int(value, self->device_id); break;
     case PROP_PROCESSING: g_value_set_enum(value, self->processing); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
+  GST_OBJECT_UNLOCK(self);
+}
+
+/* ---- the GPU ---- */
+
+// Whether the GPU runs this element's frames (processing is fixed from start() to stop()).
+static gboolean gpu_in_use(GstPseudo3DBase *self) {
+  return self->processing != GST_PSEUDO3D_PROCESSING_CPU && self->gpu->usable();
 }
 
 GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self) {
-#if HAVE_CUDA
-  if (self->context && self->processing != GST_PSEUDO3D_PROCESSING_CPU)
-    return self->cuda_caps ? GST_PSEUDO3D_PATH_GPU : GST_PSEUDO3D_PATH_STAGED;
-#else
-  (void)self;
-#endif
-  return GST_PSEUDO3D_PATH_CPU;
+  if (!gpu_in_use(self)) return GST_PSEUDO3D_PATH_CPU;
+  return self->cuda_caps ? GST_PSEUDO3D_PATH_GPU : GST_PSEUDO3D_PATH_STAGED;
+}
+
+static void release_stage(GstPseudo3DBase *self) {
+  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
+  if (klass->release) klass->release(self);
 }
 
 #if HAVE_CUDA
@@ -66,14 +74,6 @@ GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::Cud
   GST_ELEMENT_ERROR(self, RESOURCE, FAILED, ("CUDA failure while %s: %s", what, cudaGetErrorName(st.code)),
                     ("%s", st.message().c_str()));
   return GST_FLOW_ERROR;
-}
-
-GstFlowReturn gst_pseudo3d_base_sync(GstPseudo3DBase *self) {
-  const cudaError_t err = cudaStreamSynchronize(self->stream);
-  if (err != cudaSuccess)
-    return gst_pseudo3d_base_cuda_error(self, p3d::CudaStatus{err, "cudaStreamSynchronize(stream)", __FILE__, __LINE__},
-                                        "waiting for the GPU");
-  return GST_FLOW_OK;
 }
 
 namespace p3d::gst {
@@ -84,7 +84,8 @@ CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging:
     *dev = frame;
     return {};
   }
-  return read ? self->staging->upload(slot, frame, dev, self->stream) : self->staging->allocate(slot, frame, dev);
+  GpuStaging &staging = self->gpu->staging();
+  return read ? staging.upload(slot, frame, dev, self->gpu->stream()) : staging.allocate(slot, frame, dev);
 }
 
 CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, ImageView<float> depth,
@@ -93,117 +94,99 @@ CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging:
     *dev = depth;
     return {};
   }
-  return read ? self->staging->upload_depth(slot, as_const(depth), dev, self->stream)
-              : self->staging->allocate_depth(slot, depth.width, depth.height, dev);
+  GpuStaging &staging = self->gpu->staging();
+  return read ? staging.upload_depth(slot, as_const(depth), dev, self->gpu->stream())
+              : staging.allocate_depth(slot, depth.width, depth.height, dev);
 }
 
 CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host) {
   if (path != GST_PSEUDO3D_PATH_STAGED) return {};
-  return self->staging->download(dev, host, self->stream);
+  return self->gpu->staging().download(dev, host, self->gpu->stream());
 }
 
 CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, ImageView<const float> dev,
                          ImageView<float> host) {
   if (path != GST_PSEUDO3D_PATH_STAGED) return {};
-  return self->staging->download_depth(dev, host, self->stream);
+  return self->gpu->staging().download_depth(dev, host, self->gpu->stream());
 }
 
 }  // namespace p3d::gst
 
-static void release_cuda(GstPseudo3DBase *self) {
-  if (self->context) {
-    // Device memory of this context is freed while it is current.
-    CudaContextScope scope(self->context);
-    GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-    if (scope.ok()) {
-      if (klass->release_gpu) klass->release_gpu(self);
-      delete self->staging;
-      self->staging = nullptr;
-    }
-  }
-  if (self->context && self->stream) {
-    CudaContextScope scope(self->context);
-    if (scope.ok()) {
-      const cudaError_t err = cudaStreamDestroy(self->stream);
-      if (err != cudaSuccess) GST_WARNING_OBJECT(self, "cudaStreamDestroy failed: %s", cudaGetErrorName(err));
-    }
-  }
-  self->stream = nullptr;
-  gst_clear_object(&self->context);
-}
-
-// A context and a stream, or none (then the CPU path runs, said once).
-static void acquire_cuda(GstPseudo3DBase *self) {
-  if (self->context && self->stream) return;
-  if (!gst_cuda_load_library()) {
-    if (!self->cpu_notice_logged)
-      GST_INFO_OBJECT(self, "CUDA driver library not available: processing on the CPU");
-    self->cpu_notice_logged = TRUE;
-    return;
-  }
-  if (!gst_cuda_ensure_element_context(GST_ELEMENT(self), self->device_id, &self->context)) {
-    if (!self->cpu_notice_logged)
-      GST_INFO_OBJECT(self, "no usable CUDA device (cuda-device-id %d): processing on the CPU", self->device_id);
-    self->cpu_notice_logged = TRUE;
-    return;
-  }
-  CudaContextScope scope(self->context);
-  cudaError_t err = scope.ok() ? cudaStreamCreateWithFlags(&self->stream, cudaStreamNonBlocking) : cudaErrorDeviceUninitialized;
-  if (err != cudaSuccess) {
-    GST_WARNING_OBJECT(self, "cudaStreamCreateWithFlags failed (%s): processing on the CPU", cudaGetErrorName(err));
-    self->stream = nullptr;
-    gst_clear_object(&self->context);
-    return;
-  }
-  self->staging = new p3d::gst::GpuStaging();
-}
-
 static void gst_pseudo3d_base_set_context(GstElement *element, GstContext *context) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(element);
-  if (gst_cuda_load_library()) gst_cuda_handle_set_context(element, context, self->device_id, &self->context);
+  self->gpu->handle_set_context(element, context, self->device_id);
   GST_ELEMENT_CLASS(parent_class)->set_context(element, context);
 }
 
-static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection direction, GstQuery *query) {
-  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
-  if (GST_QUERY_TYPE(query) == GST_QUERY_CONTEXT && self->context &&
-      gst_cuda_handle_context_query(GST_ELEMENT(self), query, self->context))
-    return TRUE;
-  return GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query);
+// An upstream CUDA buffer on another context: with cuda-device-id -1 (or
+// that context's device) the element switches to it, as nvcodec's filters
+// do, and renegotiates so that its pools move too. Runs before the base
+// class checks for renegotiation, so the switch is complete for this frame.
+static void adopt_buffer_context(GstPseudo3DBase *self, GstBuffer *buf) {
+  if (gst_pseudo3d_base_path(self) != GST_PSEUDO3D_PATH_GPU || gst_buffer_n_memory(buf) == 0) return;
+  GstMemory *mem = gst_buffer_peek_memory(buf, 0);
+  if (!gst_is_cuda_memory(mem)) return;
+  GstCudaContext *ctx = GST_CUDA_MEMORY_CAST(mem)->context;
+  if (!self->gpu->should_adopt(ctx, self->device_id)) return;
+  if (!self->gpu->adopt(GST_ELEMENT(self), ctx, [self] { release_stage(self); })) {
+    GST_ELEMENT_WARNING(self, RESOURCE, FAILED, ("Could not switch to the CUDA context of the incoming frames"),
+                        ("processing on the CPU from now on"));
+  }
+  gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
+}
+
+// Memory of another context (another device) must not be launched on.
+static gboolean check_memory_context(GstPseudo3DBase *self, GstBuffer *buf) {
+  if (gst_pseudo3d_base_path(self) != GST_PSEUDO3D_PATH_GPU) return TRUE;
+  for (guint i = 0; i < gst_buffer_n_memory(buf); ++i) {
+    GstMemory *mem = gst_buffer_peek_memory(buf, i);
+    if (!gst_is_cuda_memory(mem) || GST_CUDA_MEMORY_CAST(mem)->context != self->gpu->context()) {
+      GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Input buffer is not CUDA memory of this element's CUDA context"),
+                        ("cuda-device-id is %d; set it to -1 or to the upstream element's device, or insert "
+                         "cudadownload ! cudaupload",
+                         self->device_id));
+      return FALSE;
+    }
+  }
+  return TRUE;
 }
 #endif
 
 static gboolean gst_pseudo3d_base_start(GstBaseTransform *trans) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+  self->staged_warned = FALSE;
+  self->history_reset_pending = TRUE;
+  const char *why = "built without CUDA";
 #if HAVE_CUDA
-  if (self->processing != GST_PSEUDO3D_PROCESSING_CPU) acquire_cuda(self);
-  const gboolean have_gpu = self->context != nullptr;
-#else
-  if (!self->cpu_notice_logged) GST_INFO_OBJECT(self, "built without CUDA: processing on the CPU");
-  self->cpu_notice_logged = TRUE;
-  const gboolean have_gpu = FALSE;
+  if (self->processing != GST_PSEUDO3D_PROCESSING_CPU) self->gpu->acquire(GST_ELEMENT(self), self->device_id, &why);
 #endif
-  if (self->processing == GST_PSEUDO3D_PROCESSING_GPU && !have_gpu) {
-    GST_ELEMENT_ERROR(self, RESOURCE, NOT_FOUND, ("processing=gpu but no usable CUDA device"),
+  if (self->processing == GST_PSEUDO3D_PROCESSING_GPU && !self->gpu->usable()) {
+    GST_ELEMENT_ERROR(self, RESOURCE, NOT_FOUND, ("processing=gpu but %s", why),
                       ("cuda-device-id %d; use processing=auto to fall back to the CPU", self->device_id));
     return FALSE;
+  }
+  if (!self->gpu->usable() && self->processing != GST_PSEUDO3D_PROCESSING_CPU && !self->cpu_notice_logged) {
+    GST_INFO_OBJECT(self, "%s: processing on the CPU", why);
+    self->cpu_notice_logged = TRUE;
   }
   return TRUE;
 }
 
 static gboolean gst_pseudo3d_base_stop(GstBaseTransform *trans) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
 #if HAVE_CUDA
-  release_cuda(GST_PSEUDO3D_BASE(trans));
+  self->gpu->release([self] { release_stage(self); });
 #else
-  (void)trans;
+  release_stage(self);
 #endif
+  self->cuda_caps = FALSE;
+  gst_clear_caps(&self->refused_caps);
   return TRUE;
 }
 
 /* ---- caps ---- */
 
-// value * num / den for an int, an int range or a list of them.
-static void scale_dimension(const GValue *in, GValue *out, gint num, gint den) {
+static void scale_value(const GValue *in, GValue *out, gint num, gint den) {
   auto scale = [&](gint v) -> gint {
     const gint64 r = (gint64)v * num / den;
     return (gint)CLAMP(r, 1, G_MAXINT);
@@ -220,13 +203,27 @@ static void scale_dimension(const GValue *in, GValue *out, gint num, gint den) {
     g_value_init(out, GST_TYPE_LIST);
     for (guint i = 0; i < gst_value_list_get_size(in); ++i) {
       GValue item = G_VALUE_INIT;
-      scale_dimension(gst_value_list_get_value(in, i), &item, num, den);
+      scale_value(gst_value_list_get_value(in, i), &item, num, den);
       gst_value_list_append_and_take_value(out, &item);
     }
   } else {
     g_value_init(out, G_VALUE_TYPE(in));
     g_value_copy(in, out);
   }
+}
+
+void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den) {
+  const GValue *v = gst_structure_get_value(s, field);
+  if (!v || num == den) return;
+  GValue scaled = G_VALUE_INIT;
+  scale_value(v, &scaled, num, den);
+  gst_structure_take_value(s, field, &scaled);
+}
+
+GstCaps *gst_pseudo3d_caps_of(GstStructure *s) {
+  GstCaps *caps = gst_caps_new_empty();
+  gst_caps_append_structure(caps, s);
+  return caps;
 }
 
 static void set_formats(GstStructure *s, const gchar *formats) {
@@ -244,39 +241,21 @@ static GstCaps *gst_pseudo3d_base_transform_caps(GstBaseTransform *trans, GstPad
                                                  GstCaps *filter) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  gint wn = 1, wd = 1, hn = 1, hd = 1;
-  if (klass->get_size_ratio) klass->get_size_ratio(self, &wn, &wd, &hn, &hd);
   const gboolean to_src = direction == GST_PAD_SINK;
-  if (!to_src) {
-    std::swap(wn, wd);
-    std::swap(hn, hd);
-  }
   const gchar *formats = to_src ? klass->src_formats : klass->sink_formats;
 
   GstCaps *out = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
-    GstStructure *s = gst_structure_copy(gst_caps_get_structure(caps, i));
-    GstCapsFeatures *f = gst_caps_features_copy(gst_caps_get_features(caps, i));
-    if (wn != wd || hn != hd) {
-      const char *dims[2] = {"width", "height"};
-      const gint nums[2] = {wn, hn}, dens[2] = {wd, hd};
-      for (int d = 0; d < 2; ++d) {
-        const GValue *v = gst_structure_get_value(s, dims[d]);
-        if (!v) continue;
-        GValue scaled = G_VALUE_INIT;
-        scale_dimension(v, &scaled, nums[d], dens[d]);
-        gst_structure_take_value(s, dims[d], &scaled);
-      }
+    const GstStructure *in = gst_caps_get_structure(caps, i);
+    GstCapsFeatures *f = gst_caps_get_features(caps, i);
+    GstCaps *variants = klass->transform_geometry ? klass->transform_geometry(self, direction, in)
+                                                  : gst_pseudo3d_caps_of(gst_structure_copy(in));
+    for (guint k = 0; k < gst_caps_get_size(variants); ++k) {
+      GstStructure *s = gst_structure_copy(gst_caps_get_structure(variants, k));
+      if (formats) set_formats(s, formats);
+      out = gst_caps_merge_structure_full(out, s, f ? gst_caps_features_copy(f) : nullptr);
     }
-    if (formats) set_formats(s, formats);
-    if (klass->set_src_multiview) {
-      gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
-      if (to_src)
-        klass->set_src_multiview(self, s);
-      else  // the src PAR may be folded by half-aspect: it constrains nothing upstream
-        gst_structure_remove_field(s, "pixel-aspect-ratio");
-    }
-    out = gst_caps_merge_structure_full(out, s, f);
+    gst_caps_unref(variants);
   }
   if (filter) {
     GstCaps *tmp = gst_caps_intersect_full(filter, out, GST_CAPS_INTERSECT_FIRST);
@@ -287,29 +266,111 @@ static GstCaps *gst_pseudo3d_base_transform_caps(GstBaseTransform *trans, GstPad
   return out;
 }
 
+#if HAVE_CUDA
+// The same caps with the memory:CUDAMemory structures first: peers fixate on
+// the first structure, and a caps query's filter (cudaupload offers system
+// memory first) would otherwise decide the order.
+static GstCaps *cuda_first(GstCaps *caps) {
+  GstCaps *cuda = gst_caps_new_empty(), *rest = gst_caps_new_empty();
+  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
+    GstCapsFeatures *f = gst_caps_get_features(caps, i);
+    const bool is_cuda = f && gst_caps_features_contains(f, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
+    GstCaps *to = is_cuda ? cuda : rest;
+    to = gst_caps_merge_structure_full(to, gst_structure_copy(gst_caps_get_structure(caps, i)),
+                                       f ? gst_caps_features_copy(f) : nullptr);
+    if (is_cuda)
+      cuda = to;
+    else
+      rest = to;
+  }
+  return gst_caps_merge(cuda, rest);
+}
+#endif
+
+static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection direction, GstQuery *query) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+#if HAVE_CUDA
+  if (GST_QUERY_TYPE(query) == GST_QUERY_CONTEXT && self->gpu->handle_context_query(GST_ELEMENT(self), query))
+    return TRUE;
+#endif
+  if (!GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query)) return FALSE;
+#if HAVE_CUDA
+  // With a GPU in use, ask neighbours for CUDA memory first: without it,
+  // `cudaupload ! pseudo3d...` would negotiate system memory and run staged.
+  if (GST_QUERY_TYPE(query) == GST_QUERY_CAPS && gpu_in_use(self)) {
+    GstCaps *result = nullptr;
+    gst_query_parse_caps_result(query, &result);
+    if (result && !gst_caps_is_any(result)) {
+      GstCaps *ordered = cuda_first(result);
+      gst_query_set_caps_result(query, ordered);
+      gst_caps_unref(ordered);
+    }
+  }
+#endif
+  return TRUE;
+}
+
 static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *incaps, GstCaps *outcaps) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstVideoInfo in, out;
   if (!gst_video_info_from_caps(&in, incaps) || !gst_video_info_from_caps(&out, outcaps)) {
-    GST_ERROR_OBJECT(self, "caps are not video caps: %" GST_PTR_FORMAT " / %" GST_PTR_FORMAT, incaps, outcaps);
+    GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, ("Caps are not raw video caps"),
+                      ("%" GST_PTR_FORMAT " -> %" GST_PTR_FORMAT, incaps, outcaps));
     return FALSE;
   }
-  self->in_info = in;
-  self->out_info = out;
-  self->cuda_caps = FALSE;
+  gboolean cuda_caps = FALSE;
 #if HAVE_CUDA
   GstCapsFeatures *features = gst_caps_get_features(incaps, 0);
-  self->cuda_caps = features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
-  if (self->cuda_caps) acquire_cuda(self);
-  if (self->cuda_caps && gst_pseudo3d_base_path(self) == GST_PSEUDO3D_PATH_CPU)
-    GST_WARNING_OBJECT(self, "CUDA memory negotiated but processing on the CPU through mapped memory (slow)");
+  cuda_caps = features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
+  if (cuda_caps && self->processing != GST_PSEUDO3D_PROCESSING_CPU) {
+    const char *why = nullptr;
+    self->gpu->acquire(GST_ELEMENT(self), self->device_id, &why);
+  }
 #endif
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  if (klass->set_info && !klass->set_info(self, incaps, &self->in_info, outcaps, &self->out_info)) return FALSE;
+  self->negotiating_caps = incaps;
+  const gboolean accepted = !klass->set_info || klass->set_info(self, incaps, &in, outcaps, &out);
+  self->negotiating_caps = nullptr;
+  if (!accepted) return FALSE;
+  gst_clear_caps(&self->refused_caps);
+  // Stored only once the stage accepted them: a refused renegotiation leaves
+  // the running configuration intact.
+  self->in_info = in;
+  self->out_info = out;
+  self->cuda_caps = cuda_caps;
+
+  const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
+  if (cuda_caps && path == GST_PSEUDO3D_PATH_CPU)
+    GST_WARNING_OBJECT(self, "CUDA memory negotiated but processing on the CPU through mapped memory (slow)");
+  if (path == GST_PSEUDO3D_PATH_STAGED && !self->staged_warned) {
+    self->staged_warned = TRUE;
+    if (self->processing == GST_PSEUDO3D_PROCESSING_GPU)
+      GST_ELEMENT_WARNING(self, STREAM, FORMAT, ("processing=gpu on system memory: every frame is copied to the GPU and back"),
+                          ("negotiate video/x-raw(memory:CUDAMemory) for a resident stream, e.g. cudaupload ! "
+                           "\"video/x-raw(memory:CUDAMemory)\" before the element, or use pseudo3dconvert"));
+    else
+      GST_WARNING_OBJECT(self, "system memory on the GPU: every frame is copied to the GPU and back (staged)");
+  }
   static const char *const path_names[] = {"CPU", "GPU", "GPU (staged through system memory)"};
   GST_INFO_OBJECT(self, "negotiated %dx%d -> %dx%d, processing on the %s", in.width, in.height, out.width, out.height,
-                  path_names[gst_pseudo3d_base_path(self)]);
+                  path_names[path]);
   return TRUE;
+}
+
+gboolean gst_pseudo3d_base_refuse_caps(GstPseudo3DBase *self, const char *text, const char *debug_format, ...) {
+  GstCaps *caps = self->negotiating_caps;
+  if (caps && self->refused_caps && gst_caps_is_equal(caps, self->refused_caps)) {
+    GST_DEBUG_OBJECT(self, "caps refused again: %s", text);
+    return FALSE;
+  }
+  if (caps) gst_caps_replace(&self->refused_caps, caps);
+  va_list args;
+  va_start(args, debug_format);
+  gchar *debug = g_strdup_vprintf(debug_format, args);
+  va_end(args);
+  GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, ("%s", text), ("%s", debug));
+  g_free(debug);
+  return FALSE;
 }
 
 // An output buffer holds one frame of the output caps, whatever padding the
@@ -322,13 +383,23 @@ static gboolean gst_pseudo3d_base_transform_size(GstBaseTransform *, GstPadDirec
   return TRUE;
 }
 
-/* ---- allocation (CUDA memory: pools on our context, as cudaconvertscale does) ---- */
+/* ---- allocation ---- */
+
+static gboolean caps_are_cuda(GstCaps *caps) {
+#if HAVE_CUDA
+  GstCapsFeatures *features = caps && gst_caps_get_size(caps) > 0 ? gst_caps_get_features(caps, 0) : nullptr;
+  return features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
+#else
+  (void)caps;
+  return FALSE;
+#endif
+}
 
 #if HAVE_CUDA
 static GstBufferPool *new_cuda_pool(GstPseudo3DBase *self, GstCaps *caps, guint *size, guint min, guint max) {
   GstVideoInfo info;
   if (!gst_video_info_from_caps(&info, caps)) return nullptr;
-  GstBufferPool *pool = gst_cuda_buffer_pool_new(self->context);
+  GstBufferPool *pool = gst_cuda_buffer_pool_new(self->gpu->context());
   GstStructure *config = gst_buffer_pool_get_config(pool);
   gst_buffer_pool_config_add_option(config, GST_BUFFER_POOL_OPTION_VIDEO_META);
   gst_buffer_pool_config_set_params(config, caps, GST_VIDEO_INFO_SIZE(&info), min, max);
@@ -354,9 +425,7 @@ static gboolean gst_pseudo3d_base_propose_allocation(GstBaseTransform *trans, Gs
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstCaps *caps = nullptr;
   gst_query_parse_allocation(query, &caps, nullptr);
-  if (!caps || !self->context || gst_query_get_n_allocation_pools(query) > 0) return TRUE;
-  GstCapsFeatures *features = gst_caps_get_features(caps, 0);
-  if (!features || !gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY)) return TRUE;
+  if (!caps_are_cuda(caps) || !self->gpu->usable() || gst_query_get_n_allocation_pools(query) > 0) return TRUE;
   guint size = 0;
   GstBufferPool *pool = new_cuda_pool(self, caps, &size, 0, 0);
   if (!pool) return FALSE;
@@ -366,20 +435,37 @@ static gboolean gst_pseudo3d_base_propose_allocation(GstBaseTransform *trans, Gs
   return TRUE;
 }
 
+// System memory: unless downstream brings a pool of its own, output buffers
+// come from the failure-reporting host allocator.
+static void use_host_allocator(GstQuery *query) {
+  GstAllocator *host = p3d::gst::host_allocator_get();
+  GstAllocationParams params;
+  gst_allocation_params_init(&params);
+  if (gst_query_get_n_allocation_params(query) > 0) {
+    GstAllocator *current = nullptr;
+    gst_query_parse_nth_allocation_param(query, 0, &current, &params);
+    const gboolean plain = !current || g_strcmp0(current->mem_type, GST_ALLOCATOR_SYSMEM) == 0;
+    if (current) gst_object_unref(current);
+    if (plain) gst_query_set_nth_allocation_param(query, 0, host, &params);
+  } else {
+    gst_query_add_allocation_param(query, host, &params);
+  }
+  gst_object_unref(host);
+}
+
 static gboolean gst_pseudo3d_base_decide_allocation(GstBaseTransform *trans, GstQuery *query) {
-#if HAVE_CUDA
-  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstCaps *outcaps = nullptr;
   gst_query_parse_allocation(query, &outcaps, nullptr);
-  GstCapsFeatures *features = outcaps ? gst_caps_get_features(outcaps, 0) : nullptr;
-  if (self->context && features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY)) {
+#if HAVE_CUDA
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+  if (self->gpu->usable() && caps_are_cuda(outcaps)) {
     GstBufferPool *pool = nullptr;
     guint size = 0, min = 0, max = 0;
     const gboolean update = gst_query_get_n_allocation_pools(query) > 0;
     if (update) {
       gst_query_parse_nth_allocation_pool(query, 0, &pool, &size, &min, &max);
       // Only a CUDA pool on our own context will do: never launch on memory of another context.
-      if (pool && (!GST_IS_CUDA_BUFFER_POOL(pool) || GST_CUDA_BUFFER_POOL_CAST(pool)->context != self->context))
+      if (pool && (!GST_IS_CUDA_BUFFER_POOL(pool) || GST_CUDA_BUFFER_POOL_CAST(pool)->context != self->gpu->context()))
         gst_clear_object(&pool);
     }
     if (!pool) {
@@ -391,23 +477,149 @@ static gboolean gst_pseudo3d_base_decide_allocation(GstBaseTransform *trans, Gst
     else
       gst_query_add_allocation_pool(query, pool, size, min, max);
     gst_object_unref(pool);
+    return GST_BASE_TRANSFORM_CLASS(parent_class)->decide_allocation(trans, query);
   }
 #endif
+  if (!caps_are_cuda(outcaps) && gst_query_get_n_allocation_pools(query) == 0) use_host_allocator(query);
   return GST_BASE_TRANSFORM_CLASS(parent_class)->decide_allocation(trans, query);
 }
 
-// The depth map describes the input geometry: keep it only where the stage
-// keeps the frame size.
-static gboolean gst_pseudo3d_base_transform_meta(GstBaseTransform *trans, GstBuffer *outbuf, GstMeta *meta,
-                                                 GstBuffer *inbuf) {
+static GstFlowReturn gst_pseudo3d_base_prepare_output_buffer(GstBaseTransform *trans, GstBuffer *input,
+                                                             GstBuffer **outbuf) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
-  if (meta->info->api == PSEUDO3D_DEPTH_META_API_TYPE)
-    return GST_VIDEO_INFO_WIDTH(&self->in_info) == GST_VIDEO_INFO_WIDTH(&self->out_info) &&
-           GST_VIDEO_INFO_HEIGHT(&self->in_info) == GST_VIDEO_INFO_HEIGHT(&self->out_info);
-  return GST_BASE_TRANSFORM_CLASS(parent_class)->transform_meta(trans, outbuf, meta, inbuf);
+  const GstFlowReturn ret = GST_BASE_TRANSFORM_CLASS(parent_class)->prepare_output_buffer(trans, input, outbuf);
+  if (ret == GST_FLOW_ERROR) {
+    GstCaps *caps = gst_pad_get_current_caps(GST_BASE_TRANSFORM_SRC_PAD(trans));
+    GstVideoInfo info;
+    gst_video_info_init(&info);
+    if (caps) gst_video_info_from_caps(&info, caps);
+    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,
+                      ("Could not allocate a %dx%d output frame (%" G_GSIZE_FORMAT " bytes)", info.width, info.height,
+                       GST_VIDEO_INFO_SIZE(&info)),
+                      ("%s memory", caps_are_cuda(caps) ? "CUDA device" : "system"));
+    if (caps) gst_caps_unref(caps);
+  }
+  return ret;
 }
 
-/* ---- processing ---- */
+/* ---- stream events, QoS and the frame boundary ---- */
+
+gboolean gst_pseudo3d_base_take_history_reset(GstPseudo3DBase *self) {
+  GST_OBJECT_LOCK(self);
+  const gboolean reset = self->history_reset_pending;
+  self->history_reset_pending = FALSE;
+  GST_OBJECT_UNLOCK(self);
+  return reset;
+}
+
+static void request_history_reset(GstPseudo3DBase *self, const char *why) {
+  GST_DEBUG_OBJECT(self, "temporal history reset: %s", why);
+  GST_OBJECT_LOCK(self);
+  self->history_reset_pending = TRUE;
+  GST_OBJECT_UNLOCK(self);
+}
+
+// Brackets a negotiation in the streaming thread (see staged_geometry.h).
+static void freeze_geometry(GstPseudo3DBase *self, gboolean frozen) {
+  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
+  if (klass->freeze_geometry) klass->freeze_geometry(self, frozen);
+}
+
+static gboolean gst_pseudo3d_base_sink_event(GstBaseTransform *trans, GstEvent *event) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+  switch (GST_EVENT_TYPE(event)) {
+    case GST_EVENT_FLUSH_STOP:
+    case GST_EVENT_STREAM_START:
+    case GST_EVENT_SEGMENT: request_history_reset(self, GST_EVENT_TYPE_NAME(event)); break;
+    case GST_EVENT_CAPS: {
+      // New caps start a new configuration: the history does not carry over.
+      request_history_reset(self, "caps");
+      freeze_geometry(self, TRUE);
+      const gboolean ret = GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
+      freeze_geometry(self, FALSE);
+      return ret;
+    }
+    default: break;
+  }
+  return GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
+}
+
+static GstFlowReturn gst_pseudo3d_base_submit_input_buffer(GstBaseTransform *trans, gboolean is_discont,
+                                                           GstBuffer *input) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+  // Upstream's DISCONT only: is_discont is also set after this element's own
+  // QoS drops, which must not cost the history.
+  if (GST_BUFFER_FLAG_IS_SET(input, GST_BUFFER_FLAG_DISCONT)) request_history_reset(self, "discont");
+#if HAVE_CUDA
+  adopt_buffer_context(self, input);
+#endif
+  // The parent renegotiates if a property asked for it, then applies QoS.
+  freeze_geometry(self, TRUE);
+  const GstFlowReturn ret = GST_BASE_TRANSFORM_CLASS(parent_class)->submit_input_buffer(trans, is_discont, input);
+  freeze_geometry(self, FALSE);
+  return ret;
+}
+
+static void gst_pseudo3d_base_before_transform(GstBaseTransform *trans, GstBuffer *) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
+  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
+  if (klass->frame_boundary && klass->frame_boundary(self)) gst_base_transform_reconfigure_src(trans);
+}
+
+/* ---- frames ---- */
+
+gboolean gst_pseudo3d_base_depth_fits(GstPseudo3DBase *self, const p3d::gst::DepthPlane *plane, GstPseudo3DPath path,
+                                      int width, int height) {
+  if (!plane || plane->width != width || plane->height != height) return FALSE;
+  const bool device = path == GST_PSEUDO3D_PATH_GPU;
+  if (plane->on_device != device) return FALSE;
+#if HAVE_CUDA
+  if (device && plane->context != self->gpu->context()) return FALSE;
+#else
+  (void)self;
+#endif
+  return TRUE;
+}
+
+p3d::gst::DepthPlane *gst_pseudo3d_base_frame_depth(GstPseudo3DBase *self, GstBuffer *buf, GstPseudo3DPath path,
+                                                    int width, int height) {
+  p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(buf);
+  const char *name = GST_ELEMENT_NAME(gst_element_get_factory(GST_ELEMENT(self)));
+  if (!depth) {
+    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("%s needs a depth map, and this frame carries none", name),
+                      ("put pseudo3ddepth before %s; elements that change the frame between them (scaling, flipping, "
+                       "cropping, videoconvert, cudaupload/cudadownload) drop the depth, so put those before "
+                       "pseudo3ddepth",
+                       name));
+    return nullptr;
+  }
+  if (!gst_pseudo3d_base_depth_fits(self, depth, path, width, height)) {
+    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("The frame's depth map does not fit the frame"),
+                      ("depth %dx%d in %s memory, frame %dx%d in %s memory; put pseudo3ddepth right before %s",
+                       depth->width, depth->height, depth->on_device ? "device" : "host", width, height,
+                       path == GST_PSEUDO3D_PATH_GPU ? "device" : "host", name));
+    return nullptr;
+  }
+  return depth;
+}
+
+p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::gst::DepthPlanePool &pool,
+                                                    GstPseudo3DPath path, int width, int height) {
+  std::string error;
+#if HAVE_CUDA
+  p3d::gst::DepthPlanePtr plane =
+      pool.acquire(width, height, path == GST_PSEUDO3D_PATH_GPU ? self->gpu->context() : nullptr, &error);
+#else
+  (void)path;
+  p3d::gst::DepthPlanePtr plane = pool.acquire(width, height, nullptr, &error);
+#endif
+  if (!plane)
+    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,
+                      ("Could not allocate a %dx%d depth map (%" G_GSIZE_FORMAT " bytes)", width, height,
+                       static_cast<gsize>(width) * height * sizeof(float)),
+                      ("%s", error.c_str()));
+  return plane;
+}
 
 static GstMapFlags map_flags(GstPseudo3DBase *self, GstMapFlags base) {
 #if HAVE_CUDA
@@ -418,22 +630,6 @@ static GstMapFlags map_flags(GstPseudo3DBase *self, GstMapFlags base) {
   return base;
 }
 
-#if HAVE_CUDA
-// Memory of another context (another device) must not be launched on.
-static gboolean check_memory_context(GstPseudo3DBase *self, GstBuffer *buf) {
-  if (gst_pseudo3d_base_path(self) != GST_PSEUDO3D_PATH_GPU) return TRUE;
-  for (guint i = 0; i < gst_buffer_n_memory(buf); ++i) {
-    GstMemory *mem = gst_buffer_peek_memory(buf, i);
-    if (!gst_is_cuda_memory(mem) || reinterpret_cast<GstCudaMemory *>(mem)->context != self->context) {
-      GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Input buffer is not CUDA memory of this element's CUDA context"),
-                        ("set cuda-device-id to the upstream element's device, or insert cudadownload ! cudaupload"));
-      return FALSE;
-    }
-  }
-  return TRUE;
-}
-#endif
-
 // The CPU references report bad arguments and allocation failures by
 // exceptions; none may unwind through GStreamer's C frames.
 template <typename F>
@@ -441,7 +637,10 @@ static GstFlowReturn guarded(GstPseudo3DBase *self, F &&f) {
   try {
     return f();
   } catch (const std::bad_alloc &) {
-    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT, ("Out of memory while processing a frame"), (nullptr));
+    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,
+                      ("Out of memory while processing a %dx%d frame", GST_VIDEO_INFO_WIDTH(&self->in_info),
+                       GST_VIDEO_INFO_HEIGHT(&self->in_info)),
+                      ("host memory for the CPU path's working buffers"));
   } catch (const std::exception &e) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Processing a frame failed"), ("%s", e.what()));
   }
@@ -468,10 +667,12 @@ static GstFlowReturn gst_pseudo3d_base_transform(GstBaseTransform *trans, GstBuf
     return GST_FLOW_ERROR;
   }
   GstFlowReturn ret;
+  {
 #if HAVE_CUDA
-  CudaContextScope scope(path != GST_PSEUDO3D_PATH_CPU ? self->context : nullptr);
+    p3d::gst::CudaContextScope scope(path != GST_PSEUDO3D_PATH_CPU ? self->gpu->context() : nullptr);
 #endif
-  ret = guarded(self, [&] { return klass->process(self, path, inbuf, &in, &out); });
+    ret = guarded(self, [&] { return klass->process(self, path, inbuf, &in, &out); });
+  }
   gst_video_frame_unmap(&out);
   gst_video_frame_unmap(&in);
   return ret;
@@ -492,12 +693,25 @@ static GstFlowReturn gst_pseudo3d_base_transform_ip(GstBaseTransform *trans, Gst
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Could not map the frame"), (nullptr));
     return GST_FLOW_ERROR;
   }
+  GstFlowReturn ret;
+  {
 #if HAVE_CUDA
-  CudaContextScope scope(path != GST_PSEUDO3D_PATH_CPU ? self->context : nullptr);
+    p3d::gst::CudaContextScope scope(path != GST_PSEUDO3D_PATH_CPU ? self->gpu->context() : nullptr);
 #endif
-  const GstFlowReturn ret = guarded(self, [&] { return klass->process_ip(self, path, buf, &frame); });
+    ret = guarded(self, [&] { return klass->process_ip(self, path, buf, &frame); });
+  }
   gst_video_frame_unmap(&frame);
   return ret;
+}
+
+/* ---- class ---- */
+
+static void gst_pseudo3d_base_finalize(GObject *object) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(object);
+  gst_clear_caps(&self->refused_caps);
+  delete self->gpu;
+  self->gpu = nullptr;
+  G_OBJECT_CLASS(parent_class)->finalize(object);
 }
 
 static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
@@ -507,14 +721,8 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
 
   gobject_class->set_property = gst_pseudo3d_base_set_property;
   gobject_class->get_property = gst_pseudo3d_base_get_property;
+  gobject_class->finalize = gst_pseudo3d_base_finalize;
 
-  /**
-   * GstPseudo3DBase:cuda-device-id:
-   *
-   * CUDA device to run on when the caps are memory:CUDAMemory; -1 takes the
-   * pipeline's context or the first device. Without a usable device the
-   * element processes on the CPU.
-   */
   /**
    * GstPseudo3DBase:processing:
    *
@@ -526,23 +734,30 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
       gobject_class, PROP_PROCESSING,
       g_param_spec_enum("processing", "Processing",
                         "Where frames are processed: auto = GPU when a CUDA device is usable (system-memory frames "
-                        "are uploaded and downloaded per frame), else CPU; cpu; gpu = an error without a GPU",
+                        "are uploaded and downloaded per frame), else CPU; cpu; gpu = an error without a GPU. "
+                        "Set it in the NULL or READY state",
                         GST_TYPE_PSEUDO3D_PROCESSING, DEFAULT_PROCESSING,
                         (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
+  /**
+   * GstPseudo3DBase:cuda-device-id:
+   *
+   * CUDA device to run on; -1 takes the pipeline's context (or the context
+   * of the incoming CUDA buffers) or the first device.
+   */
   g_object_class_install_property(
       gobject_class, PROP_DEVICE_ID,
       g_param_spec_int("cuda-device-id", "CUDA device id",
-                       "CUDA device to use (-1 = the pipeline's shared context, else any device); "
-                       "read when the element starts",
+                       "CUDA device to use (-1 = the pipeline's shared context or that of the incoming CUDA "
+                       "buffers, else any device). Set it in the NULL or READY state",
                        -1, G_MAXINT, DEFAULT_DEVICE_ID,
                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
 
 #if HAVE_CUDA
   element_class->set_context = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_set_context);
-  trans_class->query = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_query);
 #else
   (void)element_class;
 #endif
+  trans_class->query = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_query);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_stop);
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_transform_caps);
@@ -550,7 +765,10 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_transform_size);
   trans_class->propose_allocation = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_propose_allocation);
   trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_decide_allocation);
-  trans_class->transform_meta = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_transform_meta);
+  trans_class->prepare_output_buffer = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_prepare_output_buffer);
+  trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_sink_event);
+  trans_class->submit_input_buffer = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_submit_input_buffer);
+  trans_class->before_transform = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_before_transform);
   trans_class->transform = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_transform);
   trans_class->transform_ip = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_transform_ip);
   trans_class->passthrough_on_same_caps = FALSE;
@@ -562,6 +780,9 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
 static void gst_pseudo3d_base_init(GstPseudo3DBase *self) {
   self->device_id = DEFAULT_DEVICE_ID;
   self->processing = DEFAULT_PROCESSING;
+  self->gpu = new p3d::gst::GpuContext();
   gst_video_info_init(&self->in_info);
   gst_video_info_init(&self->out_info);
+  // As GstVideoFilter: late frames are dropped before they are processed.
+  gst_base_transform_set_qos_enabled(GST_BASE_TRANSFORM(self), TRUE);
 }

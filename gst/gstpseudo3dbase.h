@@ -1,8 +1,18 @@
 // GstPseudo3DBase: the abstract base of every pseudo3d stage. It owns what
-// the stages share, written once: the cuda-device-id property, the CUDA
-// context (shared through GstContext) and stream, the negotiated memory
-// domain, caps mapping for stages that change size or format, CUDA buffer
-// pools, frame mapping, and turning CUDA failures into element errors.
+// the stages share, written once:
+//  * the processing and cuda-device-id properties (refused while PAUSED or
+//    PLAYING, with a warning on the bus);
+//  * the GPU: a GpuContext (gpu_context.h), the path a negotiated stream
+//    runs on (CPU, GPU in place, GPU staged through system memory),
+//    adoption of an upstream buffer's CUDA context when cuda-device-id is
+//    -1, and the "launch, check, wait" block of every GPU frame;
+//  * caps: sizes and multiview fields through the stage's transform_geometry,
+//    formats, CUDA memory preferred when a GPU is usable;
+//  * allocation: CUDA pools on the element's context, host buffers that fail
+//    with an element error instead of aborting the process;
+//  * stream events: the temporal-history reset on FLUSH_STOP, STREAM_START,
+//    SEGMENT and DISCONT buffers; QoS (late frames are dropped);
+//  * frames: mapping, the depth-meta check, one element error per failure.
 // A stage implements set_info plus process (or process_ip for in-place).
 #pragma once
 
@@ -10,16 +20,10 @@
 #include <gst/video/video.h>
 
 #include "config.h"
+#include "depth_plane.h"
 #include "enums.h"
 #include "frame.h"
-#include "gpu_staging.h"
-
-#if HAVE_CUDA
-#include <cuda_runtime_api.h>
-#include <gst/cuda/gstcudacontext.h>
-
-#include "cuda_check.h"
-#endif
+#include "gpu_context.h"
 
 G_BEGIN_DECLS
 
@@ -42,45 +46,56 @@ typedef struct _GstPseudo3DBaseClass GstPseudo3DBaseClass;
 struct _GstPseudo3DBase {
   GstBaseTransform parent;
 
-  /* negotiated */
+  /* negotiated (streaming thread) */
   GstVideoInfo in_info;
   GstVideoInfo out_info;
   gboolean cuda_caps; /* memory:CUDAMemory on the pads */
 
-  /* properties */
+  /* properties (object lock) */
   gint device_id;
   GstPseudo3DProcessing processing;
 
-#if HAVE_CUDA
-  GstCudaContext *context; /* null: no usable GPU, CPU path */
-  cudaStream_t stream;
-  p3d::gst::GpuStaging *staging; /* system-memory frames on the GPU */
-#endif
+  /* private */
+  p3d::gst::GpuContext *gpu;
+  gboolean history_reset_pending; /* object lock */
   gboolean cpu_notice_logged;
+  gboolean staged_warned;
+  GstCaps *negotiating_caps; /* input caps of the set_info call in progress */
+  GstCaps *refused_caps;     /* input caps whose refusal was posted */
 };
 
 struct _GstPseudo3DBaseClass {
   GstBaseTransformClass parent_class;
 
-  /* Size mapping for transform_caps: output = input * num / den per axis
-   * (sink to src); 1/1 when the stage keeps the size. Read per call, so a
-   * stage may change them with a property (then reconfigure). */
-  void (*get_size_ratio)(GstPseudo3DBase *self, gint *w_num, gint *w_den, gint *h_num, gint *h_den);
   /* Formats of the other pad when the stage converts (null: same format). */
   const gchar *src_formats;
   const gchar *sink_formats;
-  /* Sets multiview-mode/-flags (and pixel-aspect-ratio) of src caps; null: unchanged. */
-  void (*set_src_multiview)(GstPseudo3DBase *self, GstStructure *s);
+  /* The structures of the other pad for a caps structure `s` of the pad
+   * `from`: s with its geometry fields (width, height, multiview-*, views)
+   * rewritten, or several variants of it. Returns new caps without
+   * features; null hook: the stage keeps the geometry. Called from
+   * transform_caps: read the StagedGeometry's negotiating() value. */
+  GstCaps *(*transform_geometry)(GstPseudo3DBase *self, GstPadDirection from, const GstStructure *s);
 
+  /* The negotiated caps (stored in in_info/out_info once accepted): commit
+   * the staged geometry, check the caps against it (refusing them with
+   * gst_pseudo3d_base_refuse_caps) and set in-place/passthrough. */
   gboolean (*set_info)(GstPseudo3DBase *self, GstCaps *incaps, GstVideoInfo *in_info, GstCaps *outcaps,
                        GstVideoInfo *out_info);
+  /* Called with TRUE before and FALSE after each negotiation in the
+   * streaming thread: freeze the StagedGeometry's configuring value. */
+  void (*freeze_geometry)(GstPseudo3DBase *self, gboolean frozen);
+  /* Before each frame, in the streaming thread: TRUE when a staged geometry
+   * request differs from the active value (the base then renegotiates). */
+  gboolean (*frame_boundary)(GstPseudo3DBase *self);
   /* Not in place: frames are mapped (device pointers on GST_PSEUDO3D_PATH_GPU). */
   GstFlowReturn (*process)(GstPseudo3DBase *self, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
                            GstVideoFrame *out);
   /* In place: frame mapped for reading; the stage attaches metas to buf. */
   GstFlowReturn (*process_ip)(GstPseudo3DBase *self, GstPseudo3DPath path, GstBuffer *buf, GstVideoFrame *frame);
-  /* Frees the stage's device memory; called in stop() with the context current. */
-  void (*release_gpu)(GstPseudo3DBase *self);
+  /* Frees the stage's buffers and pools: in stop(), and when the element
+   * switches CUDA context (then with that context current). */
+  void (*release)(GstPseudo3DBase *self);
 };
 
 GType gst_pseudo3d_base_get_type(void);
@@ -88,19 +103,43 @@ GType gst_pseudo3d_base_get_type(void);
 /* Where frames of the negotiated caps are processed. */
 GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self);
 
-#if HAVE_CUDA
-/* Posts a GST_ELEMENT_ERROR naming the failed CUDA call; returns GST_FLOW_ERROR. */
-GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::CudaStatus &st, const char *what);
-/* Waits for the element's stream (1.22 has no stream tracking on memory,
- * so a buffer leaves only once the work on it is done). */
-GstFlowReturn gst_pseudo3d_base_sync(GstPseudo3DBase *self);
-#endif
+/* From set_info: refuses the caps with a CORE/NEGOTIATION error saying why.
+ * GstBaseTransform retries a failed negotiation for every buffer; the error
+ * is posted once per input caps. Returns FALSE (for set_info to return). */
+gboolean gst_pseudo3d_base_refuse_caps(GstPseudo3DBase *self, const char *text, const char *debug_format, ...)
+    G_GNUC_PRINTF(3, 4);
+
+/* TRUE once after a seek, a flush, a new stream or a discontinuity: a stage
+ * with temporal state forgets its history before the frame it processes. */
+gboolean gst_pseudo3d_base_take_history_reset(GstPseudo3DBase *self);
+
+/* The frame's depth map, checked to fit the frame (size, memory domain,
+ * CUDA context). Otherwise posts one element error that names pseudo3ddepth
+ * and says why, and returns null. */
+p3d::gst::DepthPlane *gst_pseudo3d_base_frame_depth(GstPseudo3DBase *self, GstBuffer *buf, GstPseudo3DPath path,
+                                                    int width, int height);
+/* Whether a plane fits a width x height frame on `path` (no error posted). */
+gboolean gst_pseudo3d_base_depth_fits(GstPseudo3DBase *self, const p3d::gst::DepthPlane *plane, GstPseudo3DPath path,
+                                      int width, int height);
+/* A depth plane for a frame of `path` from `pool`; posts an element error
+ * with the size on failure and returns null. */
+p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::gst::DepthPlanePool &pool,
+                                                    GstPseudo3DPath path, int width, int height);
+
+/* Caps helpers for transform_geometry: value * num / den for an int, an int
+ * range or a list of them (clamped to 1..G_MAXINT); caps holding one copy
+ * of a structure. */
+void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den);
+GstCaps *gst_pseudo3d_caps_of(GstStructure *s); /* takes s */
 
 G_DEFINE_AUTOPTR_CLEANUP_FUNC(GstPseudo3DBase, gst_object_unref)
 
 G_END_DECLS
 
 #if HAVE_CUDA
+/* Posts a GST_ELEMENT_ERROR naming the failed CUDA call; returns GST_FLOW_ERROR. */
+GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::CudaStatus &st, const char *what);
+
 namespace p3d::gst {
 /* The device view of a frame or depth map a stage reads (read = true: a
  * staged frame is uploaded) or writes: the mapped memory itself on
@@ -113,18 +152,16 @@ CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging:
 CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host);
 CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, ImageView<const float> dev,
                          ImageView<float> host);
+
+/* The GPU part of one frame, the same for every stage: `launch` queues the
+ * work on the element's stream (returning the first failure), then the
+ * stream is waited for, so the buffer leaves with its work done. A failure
+ * posts one element error naming `what` and the failed call. */
+template <typename Launch>
+GstFlowReturn run_gpu(GstPseudo3DBase *self, const char *what, Launch &&launch) {
+  CudaStatus st = launch();
+  if (st.ok()) st = self->gpu->sync();
+  return st.ok() ? GST_FLOW_OK : gst_pseudo3d_base_cuda_error(self, st, what);
+}
 }  // namespace p3d::gst
-
-/* Makes the element's CUDA context current on this thread for the scope. */
-class CudaContextScope {
- public:
-  explicit CudaContextScope(GstCudaContext *ctx) : pushed_(ctx && gst_cuda_context_push(ctx)) {}
-  ~CudaContextScope() {
-    if (pushed_) gst_cuda_context_pop(nullptr);
-  }
-  bool ok() const { return pushed_; }
-
- private:
-  bool pushed_;
-};
 #endif

@@ -36,6 +36,7 @@
 #include "gstpseudo3dfilter.h"
 #include "gstpseudo3dpack.h"
 #include "gstpseudo3dwarp.h"
+#include "property_guard.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_convert_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_convert_debug
@@ -93,6 +94,7 @@ static GParamSpec *clone_pspec(GParamSpec *p) {
 
 static void gst_pseudo3d_convert_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DConvert *self = GST_PSEUDO3D_CONVERT(object);
+  if (!p3d::gst::property_settable(GST_ELEMENT(self), pspec)) return;
   if (prop_id == PROP_CUDA_DEVICE_ID) {
     self->device_id = g_value_get_int(value);
     for (GstElement *e : self->stage) g_object_set_property(G_OBJECT(e), "cuda-device-id", value);

@@ -18,13 +18,14 @@
  */
 #include "gstpseudo3ddepth.h"
 
+#include <cstring>
 #include <memory>
-#include <string>
 
 #include "depth_estimate.h"
 #include "depth_meta.h"
 #include "depth_plane.h"
 #include "enums.h"
+#include "staged_geometry.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
@@ -54,12 +55,13 @@ struct DepthState {
   p3d::DepthEstimatorGpu gpu;
 #endif
   p3d::gst::DepthPlanePool pool;
+  // method decides the output width: it changes at a frame boundary (object lock).
+  p3d::gst::StagedGeometry<GstPseudo3DDepthMethod> method{DEFAULT_METHOD};
 };
 
 struct _GstPseudo3DDepth {
   GstPseudo3DBase parent;
-  GstPseudo3DDepthMethod method;
-  p3d::DepthParams params;
+  p3d::DepthParams params;  // object lock
   DepthState *state;
 };
 
@@ -67,79 +69,95 @@ struct _GstPseudo3DDepth {
 G_DEFINE_TYPE(GstPseudo3DDepth, gst_pseudo3d_depth, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3ddepth, "pseudo3ddepth", GST_RANK_NONE, GST_TYPE_PSEUDO3D_DEPTH);
 
-static void get_size_ratio(GstPseudo3DBase *base, gint *wn, gint *wd, gint *hn, gint *hd) {
+// method=rgbd outputs the colour half: half the input width.
+static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
   GST_OBJECT_LOCK(self);
-  const bool rgbd = self->method == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
+  const bool rgbd = self->state->method.negotiating() == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
   GST_OBJECT_UNLOCK(self);
-  *wn = 1;
-  *wd = rgbd ? 2 : 1;  // the colour half
-  *hn = *hd = 1;
+  GstStructure *s = gst_structure_copy(in);
+  if (rgbd) gst_pseudo3d_scale_field(s, "width", from == GST_PAD_SINK ? 1 : 2, from == GST_PAD_SINK ? 2 : 1);
+  return gst_pseudo3d_caps_of(s);
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
-  if (self->method == GST_PSEUDO3D_DEPTH_METHOD_RGBD) {
+  GST_OBJECT_LOCK(self);
+  const GstPseudo3DDepthMethod method = self->state->method.commit();
+  GST_OBJECT_UNLOCK(self);
+  const int in_w = GST_VIDEO_INFO_WIDTH(in), out_w = GST_VIDEO_INFO_WIDTH(out);
+  if (method == GST_PSEUDO3D_DEPTH_METHOD_RGBD) {
     // 4:2:0 halves must start on a chroma sample: the colour half's width must be even.
-    if (GST_VIDEO_INFO_WIDTH(out) * 2 != GST_VIDEO_INFO_WIDTH(in) ||
-        (!GST_VIDEO_FORMAT_INFO_IS_RGB(in->finfo) && GST_VIDEO_INFO_WIDTH(out) % 2 != 0)) {
-      GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, ("RGBD input must be twice as wide as its colour half"),
-                        ("input %dx%d (YUV formats need a width that is a multiple of 4)", GST_VIDEO_INFO_WIDTH(in),
-                         GST_VIDEO_INFO_HEIGHT(in)));
-      return FALSE;
+    if (out_w * 2 != in_w || (!GST_VIDEO_FORMAT_INFO_IS_RGB(in->finfo) && out_w % 2 != 0)) {
+      return gst_pseudo3d_base_refuse_caps(
+          base, "RGBD input must be twice as wide as its colour half",
+          "input %dx%d %s; YUV formats need a width that is a multiple of 4, RGB formats an even width", in_w,
+          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_NAME(in));
     }
+  } else if (out_w != in_w) {
+    return gst_pseudo3d_base_refuse_caps(base, "Output caps do not fit method=edges", "input width %d, output width %d",
+                                         in_w, out_w);
   }
-  self->state->cpu.reset();
-#if HAVE_CUDA
-  self->state->gpu.reset();
-#endif
+  gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), method == GST_PSEUDO3D_DEPTH_METHOD_EDGES);
   return TRUE;
 }
 
-static p3d::DepthParams read_params(GstPseudo3DDepth *self) {
+static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
+  GST_OBJECT_LOCK(self);
+  if (frozen)
+    self->state->method.begin_negotiation();
+  else
+    self->state->method.end_negotiation();
+  GST_OBJECT_UNLOCK(self);
+}
+
+static gboolean frame_boundary(GstPseudo3DBase *base) {
+  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
+  GST_OBJECT_LOCK(self);
+  const bool pending = self->state->method.pending();
+  GST_OBJECT_UNLOCK(self);
+  return pending;
+}
+
+// The parameters of this frame, read once; the temporal history is dropped
+// first when the stream was flushed, restarted or interrupted.
+static p3d::DepthParams frame_params(GstPseudo3DDepth *self) {
+  if (gst_pseudo3d_base_take_history_reset(GST_PSEUDO3D_BASE(self))) {
+    self->state->cpu.reset();
+#if HAVE_CUDA
+    self->state->gpu.reset();
+#endif
+  }
   GST_OBJECT_LOCK(self);
   const p3d::DepthParams p = self->params;
   GST_OBJECT_UNLOCK(self);
   return p;
 }
 
-// Device planes on the GPU path; host planes otherwise (staged results are downloaded).
-static p3d::gst::DepthPlanePtr new_plane(GstPseudo3DDepth *self, GstPseudo3DPath path, int w, int h) {
-  std::string error;
-#if HAVE_CUDA
-  p3d::gst::DepthPlanePtr plane =
-      self->state->pool.acquire(w, h, path == GST_PSEUDO3D_PATH_GPU ? self->parent.context : nullptr, &error);
-#else
-  (void)path;
-  p3d::gst::DepthPlanePtr plane = self->state->pool.acquire(w, h, nullptr, &error);
-#endif
-  if (!plane)
-    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT, ("Could not allocate a %dx%d depth map", w, h), ("%s", error.c_str()));
-  return plane;
-}
-
 // method=edges: frame unchanged, depth attached.
 static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,
                                 GstVideoFrame *frame) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
-  if (pseudo3d_buffer_get_depth(buf)) return GST_FLOW_OK;  // supplied upstream: nothing to estimate
   const p3d::FrameView view = p3d::gst::frame_view(frame);
-  p3d::gst::DepthPlanePtr plane = new_plane(self, path, view.width, view.height);
+  // Depth supplied upstream for this very frame is kept; one that no longer
+  // fits (another size or memory) is replaced by a fresh estimate.
+  if (gst_pseudo3d_base_depth_fits(base, pseudo3d_buffer_get_depth(buf), path, view.width, view.height))
+    return GST_FLOW_OK;
+  const p3d::DepthParams params = frame_params(self);
+  p3d::gst::DepthPlanePtr plane = gst_pseudo3d_base_new_depth(base, self->state->pool, path, view.width, view.height);
   if (!plane) return GST_FLOW_ERROR;
-  const p3d::DepthParams params = read_params(self);
 #if HAVE_CUDA
   if (path != GST_PSEUDO3D_PATH_CPU) {
     using p3d::gst::GpuStaging;
-    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&]() -> p3d::CudaStatus {
       p3d::FrameView f;
       p3d::ImageView<float> d;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, view, true, &f));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, plane->view(), false, &d));
-      P3D_CUDA_TRY_STATUS(self->state->gpu.estimate(params, f, d, base->stream));
+      P3D_CUDA_TRY_STATUS(self->state->gpu.estimate(params, f, d, base->gpu->stream()));
       return p3d::gst::depth_to_host(base, path, p3d::as_const(d), plane->view());
-    }();
-    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "estimating depth");
-    const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
+    });
     if (ret != GST_FLOW_OK) return ret;
   } else
 #endif
@@ -151,7 +169,7 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   return GST_FLOW_OK;
 }
 
-// Sub-view of the right half of an RGBD frame (the caller checked that the
+// Sub-view of the right half of an RGBD frame (set_info checked that the
 // offset is a whole chroma sample for 4:2:0 formats).
 static p3d::FrameView right_half(p3d::FrameView v, int half) {
   if (p3d::is_packed_rgb(v.format)) {
@@ -177,23 +195,20 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   const int half = GST_VIDEO_FRAME_WIDTH(out);
   const p3d::FrameView grey = right_half(p3d::gst::frame_view(in), half);
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
-  p3d::gst::DepthPlanePtr plane = new_plane(self, path, half, GST_VIDEO_FRAME_HEIGHT(out));
+  p3d::gst::DepthPlanePtr plane =
+      gst_pseudo3d_base_new_depth(base, self->state->pool, path, half, GST_VIDEO_FRAME_HEIGHT(out));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
-    for (guint i = 0; i < GST_VIDEO_FRAME_N_PLANES(out); ++i) {
-      const cudaError_t err = cudaMemcpy2DAsync(
-          GST_VIDEO_FRAME_PLANE_DATA(out, i), GST_VIDEO_FRAME_PLANE_STRIDE(out, i), GST_VIDEO_FRAME_PLANE_DATA(in, i),
-          GST_VIDEO_FRAME_PLANE_STRIDE(in, i),
-          GST_VIDEO_FRAME_COMP_WIDTH(out, i) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, i), GST_VIDEO_FRAME_COMP_HEIGHT(out, i),
-          cudaMemcpyDeviceToDevice, base->stream);
-      if (err != cudaSuccess)
-        return gst_pseudo3d_base_cuda_error(base, p3d::CudaStatus{err, "cudaMemcpy2DAsync(colour half)", __FILE__, __LINE__},
-                                            "copying the colour half");
-    }
-    const p3d::CudaStatus st = p3d::depth_from_grey_gpu(grey, yuv, plane->view(), base->stream);
-    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "reading RGBD depth");
-    const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "reading RGBD depth", [&]() -> p3d::CudaStatus {
+      for (guint i = 0; i < GST_VIDEO_FRAME_N_PLANES(out); ++i)
+        P3D_CUDA_TRY(cudaMemcpy2DAsync(GST_VIDEO_FRAME_PLANE_DATA(out, i), GST_VIDEO_FRAME_PLANE_STRIDE(out, i),
+                                       GST_VIDEO_FRAME_PLANE_DATA(in, i), GST_VIDEO_FRAME_PLANE_STRIDE(in, i),
+                                       GST_VIDEO_FRAME_COMP_WIDTH(out, i) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, i),
+                                       GST_VIDEO_FRAME_COMP_HEIGHT(out, i), cudaMemcpyDeviceToDevice,
+                                       base->gpu->stream()));
+      return p3d::depth_from_grey_gpu(grey, yuv, plane->view(), base->gpu->stream());
+    });
     if (ret != GST_FLOW_OK) return ret;
   } else
 #endif
@@ -212,16 +227,13 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   return GST_FLOW_OK;
 }
 
-static void release_gpu(GstPseudo3DBase *base) {
+static void release(GstPseudo3DBase *base) {
+  DepthState *state = GST_PSEUDO3D_DEPTH(base)->state;
+  state->cpu = p3d::DepthEstimatorCpu();
 #if HAVE_CUDA
-  GST_PSEUDO3D_DEPTH(base)->state->gpu = p3d::DepthEstimatorGpu();
-#else
-  (void)base;
+  state->gpu = p3d::DepthEstimatorGpu();
 #endif
-}
-
-static void update_in_place(GstPseudo3DDepth *self) {
-  gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), self->method == GST_PSEUDO3D_DEPTH_METHOD_EDGES);
+  state->pool.clear();
 }
 
 static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
@@ -230,8 +242,7 @@ static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, cons
   GST_OBJECT_LOCK(self);
   switch (prop_id) {
     case PROP_METHOD:
-      self->method = static_cast<GstPseudo3DDepthMethod>(g_value_get_enum(value));
-      reconfigure = TRUE;
+      reconfigure = self->state->method.request(static_cast<GstPseudo3DDepthMethod>(g_value_get_enum(value)));
       break;
     case PROP_HYPOTHESIS: self->params.hypothesis = static_cast<p3d::Hypothesis>(g_value_get_enum(value)); break;
     case PROP_BLOCK_SIZE: self->params.block_size = g_value_get_int(value); break;
@@ -243,17 +254,14 @@ static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, cons
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
-  if (reconfigure) {
-    update_in_place(self);
-    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
-  }
+  if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_pseudo3d_depth_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(object);
   GST_OBJECT_LOCK(self);
   switch (prop_id) {
-    case PROP_METHOD: g_value_set_enum(value, self->method); break;
+    case PROP_METHOD: g_value_set_enum(value, self->state->method.requested()); break;
     case PROP_HYPOTHESIS: g_value_set_enum(value, static_cast<gint>(self->params.hypothesis)); break;
     case PROP_BLOCK_SIZE: g_value_set_int(value, self->params.block_size); break;
     case PROP_EDGE_THRESHOLD: g_value_set_float(value, self->params.edge_threshold); break;
@@ -286,9 +294,9 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
       gobject_class, PROP_METHOD,
       g_param_spec_enum("method", "Method",
                         "Where depth comes from: estimated from edges, or read from the right half of RGBD frames "
-                        "(changes the output size, so the caps are renegotiated)",
-                        GST_TYPE_PSEUDO3D_DEPTH_METHOD, DEFAULT_METHOD,
-                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
+                        "(rgbd halves the output width: a change while playing renegotiates the caps before the "
+                        "next frame)",
+                        GST_TYPE_PSEUDO3D_DEPTH_METHOD, DEFAULT_METHOD, flags));
   g_object_class_install_property(
       gobject_class, PROP_HYPOTHESIS,
       g_param_spec_enum("hypothesis", "Depth-gradient hypothesis",
@@ -333,16 +341,18 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
                                         "Estimates a depth map (or reads it from RGBD frames) and attaches it to "
                                         "each frame for pseudo-stereo rendering",
                                         "pseudo3d developers");
-  GstCaps *caps = p3d::gst::caps_all_domains(P3D_ALL_FORMATS);
+  GstCaps *caps = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, p3d::kMaxFrameSide);
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, caps));
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
   gst_caps_unref(caps);
 
-  base_class->get_size_ratio = get_size_ratio;
+  base_class->transform_geometry = transform_geometry;
   base_class->set_info = set_info;
+  base_class->freeze_geometry = freeze_geometry;
+  base_class->frame_boundary = frame_boundary;
   base_class->process = process;
   base_class->process_ip = process_ip;
-  base_class->release_gpu = release_gpu;
+  base_class->release = release;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_depth_debug, "pseudo3ddepth", 0, "pseudo3d depth estimation");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_DEPTH_METHOD, (GstPluginAPIFlags)0);
@@ -350,8 +360,7 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
 }
 
 static void gst_pseudo3d_depth_init(GstPseudo3DDepth *self) {
-  self->method = DEFAULT_METHOD;
   self->params = p3d::DepthParams();
   self->state = new DepthState();
-  update_in_place(self);
+  gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), DEFAULT_METHOD == GST_PSEUDO3D_DEPTH_METHOD_EDGES);
 }

@@ -14,8 +14,6 @@
  */
 #include "gstpseudo3dfilter.h"
 
-#include <string>
-
 #include "bilateral.h"
 #include "depth_meta.h"
 #include "video_util.h"
@@ -48,50 +46,27 @@ GST_ELEMENT_REGISTER_DEFINE(pseudo3dfilter, "pseudo3dfilter", GST_RANK_NONE, GST
 
 static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,
                                 GstVideoFrame *frame) {
-  const bool device = path == GST_PSEUDO3D_PATH_GPU;
   GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(base);
-  p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(buf);
-  if (!depth) {
-    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Frame carries no depth map"),
-                      ("put pseudo3ddepth before pseudo3dfilter"));
-    return GST_FLOW_ERROR;
-  }
   const p3d::FrameView guide = p3d::gst::frame_view(frame);
-  if (depth->width != guide.width || depth->height != guide.height || depth->on_device != device) {
-    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Depth map does not match the frame"),
-                      ("depth %dx%d (%s), frame %dx%d (%s)", depth->width, depth->height,
-                       depth->on_device ? "device" : "host", guide.width, guide.height, device ? "device" : "host"));
-    return GST_FLOW_ERROR;
-  }
+  p3d::gst::DepthPlane *depth = gst_pseudo3d_base_frame_depth(base, buf, path, guide.width, guide.height);
+  if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
   const p3d::BilateralParams params = self->params;
   GST_OBJECT_UNLOCK(self);
-
-  std::string error;
-#if HAVE_CUDA
-  p3d::gst::DepthPlanePtr out =
-      self->state->pool.acquire(depth->width, depth->height, device ? base->context : nullptr, &error);
-#else
-  p3d::gst::DepthPlanePtr out = self->state->pool.acquire(depth->width, depth->height, nullptr, &error);
-#endif
-  if (!out) {
-    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT, ("Could not allocate a depth map"), ("%s", error.c_str()));
-    return GST_FLOW_ERROR;
-  }
+  p3d::gst::DepthPlanePtr out = gst_pseudo3d_base_new_depth(base, self->state->pool, path, depth->width, depth->height);
+  if (!out) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path != GST_PSEUDO3D_PATH_CPU) {
     using p3d::gst::GpuStaging;
-    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&]() -> p3d::CudaStatus {
       p3d::FrameView g;
       p3d::ImageView<float> din, dout;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, guide, true, &g));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->view(), true, &din));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, out->view(), false, &dout));
-      P3D_CUDA_TRY_STATUS(self->state->gpu.run(params, g, p3d::as_const(din), dout, base->stream));
+      P3D_CUDA_TRY_STATUS(self->state->gpu.run(params, g, p3d::as_const(din), dout, base->gpu->stream()));
       return p3d::gst::depth_to_host(base, path, p3d::as_const(dout), out->view());
-    }();
-    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "filtering depth");
-    const GstFlowReturn ret = gst_pseudo3d_base_sync(base);
+    });
     if (ret != GST_FLOW_OK) return ret;
   } else
 #endif
@@ -102,17 +77,22 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   return GST_FLOW_OK;
 }
 
-static void release_gpu(GstPseudo3DBase *base) {
+static void release(GstPseudo3DBase *base) {
+  FilterState *state = GST_PSEUDO3D_FILTER(base)->state;
 #if HAVE_CUDA
-  GST_PSEUDO3D_FILTER(base)->state->gpu = p3d::BilateralFilterGpu();
-#else
-  (void)base;
+  state->gpu = p3d::BilateralFilterGpu();
 #endif
+  state->pool.clear();
 }
 
 static void update_passthrough(GstPseudo3DFilter *self) {
-  // radius 0 is the identity: leave buffers untouched.
-  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), self->params.radius == 0);
+  // radius 0 is the identity: leave buffers untouched. (A frame already on
+  // its way filters with radius 0, which copies the depth: either way the
+  // frame leaves with its depth unchanged.)
+  GST_OBJECT_LOCK(self);
+  const bool identity = self->params.radius == 0;
+  GST_OBJECT_UNLOCK(self);
+  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), identity);
 }
 
 static void gst_pseudo3d_filter_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
@@ -175,13 +155,13 @@ static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
   gst_element_class_set_static_metadata(element_class, "pseudo3d depth filter", "Filter/Effect/Video",
                                         "Cross-bilateral filtering of a frame's depth map guided by the frame",
                                         "pseudo3d developers");
-  GstCaps *caps = p3d::gst::caps_all_domains(P3D_ALL_FORMATS);
+  GstCaps *caps = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, p3d::kMaxFrameSide);
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, caps));
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
   gst_caps_unref(caps);
 
   base_class->process_ip = process_ip;
-  base_class->release_gpu = release_gpu;
+  base_class->release = release;
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_filter_debug, "pseudo3dfilter", 0, "pseudo3d depth filter");
 }
 

@@ -2,24 +2,39 @@
  * SECTION:element-pseudo3dpack
  * @title: pseudo3dpack
  *
- * Packs a full-resolution side-by-side stereo pair (pseudo3dwarp's output,
- * or any 2W x H side-by-side frame) into a display or delivery format:
+ * A stereo converter: reads a stereo frame (pseudo3dwarp's full side-by-side
+ * pair, or any side-by-side, top-bottom, row/column-interleaved or
+ * checkerboard frame, full or half resolution, either eye first, as its
+ * caps' multiview-mode and multiview-flags declare) and writes it as an
  * anaglyph (red-cyan, green-magenta, amber-blue; Dubois, colour, half colour
  * or grey), side-by-side or top-bottom at full or half ("anamorphic")
- * resolution, row- or column-interleaved, checkerboard, or one view. Output
- * caps carry multiview-mode/multiview-flags so encoders and muxers can
- * signal the packing (half-aspect for the half formats, mono for anaglyph).
- * layout=side-by-side without swap-eyes passes buffers through.
+ * resolution, row- or column-interleaved, checkerboard, or one view. The
+ * output caps follow GStreamer's multiview conventions, so encoders and
+ * muxers signal the packing: multiview-mode per layout, half-aspect on every
+ * layout whose views are squeezed, the pixel-aspect-ratio of the input kept,
+ * right-view-first exactly when swap-eyes puts the right view first.
  *
- * ## Example launch line
+ * Plain 2D input is refused: declare how the frame holds the pair with
+ * input-layout (and input-right-first). An output in the input's own
+ * arrangement and eye order passes buffers through.
+ *
+ * Every property can be changed while playing; a change that alters the
+ * output caps is renegotiated before the next frame, and each frame is
+ * packed with the values its caps belong to.
+ *
+ * ## Example launch lines
  * |[
  * gst-launch-1.0 videotestsrc ! pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack layout=anaglyph glasses=red-cyan anaglyph-method=dubois ! videoconvert ! autovideosink
- * ]|
+ * gst-launch-1.0 filesrc location=sbs-film.mkv ! decodebin ! videoconvert ! pseudo3dpack layout=top-bottom-half ! videoconvert ! autovideosink
+ * ]| The second line turns a film whose caps say side-by-side into half
+ * top-bottom for a passive 3D TV.
  */
 #include "gstpseudo3dpack.h"
 
 #include "enums.h"
 #include "pack.h"
+#include "staged_geometry.h"
+#include "stereo_caps.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
@@ -29,109 +44,231 @@
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_pack_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_pack_debug
 
-enum { PROP_0, PROP_LAYOUT, PROP_GLASSES, PROP_ANAGLYPH_METHOD, PROP_SWAP_EYES };
+enum {
+  PROP_0,
+  PROP_LAYOUT,
+  PROP_GLASSES,
+  PROP_ANAGLYPH_METHOD,
+  PROP_SWAP_EYES,
+  PROP_INPUT_LAYOUT,
+  PROP_INPUT_RIGHT_FIRST,
+};
+
+// The properties that decide the output caps (see staged_geometry.h).
+struct PackGeometry {
+  p3d::PackLayout layout = p3d::PackLayout::Anaglyph;
+  bool swap_eyes = false;
+  GstPseudo3DInputLayout input = GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS;
+  bool input_right_first = false;
+  bool operator==(const PackGeometry &o) const {
+    return layout == o.layout && swap_eyes == o.swap_eyes && input == o.input &&
+           input_right_first == o.input_right_first;
+  }
+};
 
 struct _GstPseudo3DPack {
   GstPseudo3DBase parent;
-  p3d::PackParams params;
+  /* object lock */
+  p3d::PackParams params;  // glasses and method are read per frame; the rest through geometry
+  p3d::gst::StagedGeometry<PackGeometry> *geometry;
+  p3d::PackParams active;  // the geometry of the negotiated caps, resolved against the input caps
 };
 
 #define gst_pseudo3d_pack_parent_class parent_class
 G_DEFINE_TYPE(GstPseudo3DPack, gst_pseudo3d_pack, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dpack, "pseudo3dpack", GST_RANK_NONE, GST_TYPE_PSEUDO3D_PACK);
 
-static p3d::PackParams read_params(GstPseudo3DPack *self) {
+// A declared input layout, or none (from-caps).
+static bool declared_input(const PackGeometry &g, p3d::StereoInput *arrangement) {
+  if (g.input == GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS) return false;
+  *arrangement = static_cast<p3d::StereoInput>(g.input - 1);
+  return true;
+}
+
+// The parameters a frame of this input is packed with: the geometry plus the
+// input arrangement (declared, or read from the input's multiview signal).
+// False, with *why, when the input holds no stereo pair pseudo3dpack reads.
+static bool resolve(const PackGeometry &g, GstVideoMultiviewMode mode, GstVideoMultiviewFlags flags,
+                    p3d::PackParams *p, const char **why) {
+  p->layout = g.layout;
+  p->swap_eyes = g.swap_eyes;
+  if (declared_input(g, &p->input)) {
+    p->input_right_first = g.input_right_first;
+    return true;
+  }
+  return p3d::gst::arrangement_from_multiview(mode, flags, &p->input, &p->input_right_first, why);
+}
+
+// Output size over input size per axis, as a ratio, for views of `input`.
+static void size_ratio(p3d::StereoInput input, p3d::PackLayout layout, gint *wn, gint *wd, gint *hn, gint *hd) {
+  *wn = layout == p3d::PackLayout::SideBySide ? 2 : 1;
+  *wd = input == p3d::StereoInput::SideBySide ? 2 : 1;
+  *hn = layout == p3d::PackLayout::TopBottom ? 2 : 1;
+  *hd = input == p3d::StereoInput::TopBottom ? 2 : 1;
+}
+
+// One input arrangement's variant of a caps structure, towards `to_src` or back.
+static GstStructure *transformed(const GstStructure *in, gboolean to_src, p3d::StereoInput input,
+                                 const PackGeometry &g) {
+  GstStructure *s = gst_structure_copy(in);
+  gint wn, wd, hn, hd;
+  size_ratio(input, g.layout, &wn, &wd, &hn, &hd);
+  gst_pseudo3d_scale_field(s, "width", to_src ? wn : wd, to_src ? wd : wn);
+  gst_pseudo3d_scale_field(s, "height", to_src ? hn : hd, to_src ? hd : hn);
+  return s;
+}
+
+static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
+  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   GST_OBJECT_LOCK(self);
-  const p3d::PackParams p = self->params;
+  const PackGeometry g = self->geometry->negotiating();
   GST_OBJECT_UNLOCK(self);
-  return p;
+  p3d::StereoInput input;
+  const bool declared = declared_input(g, &input);
+
+  if (from == GST_PAD_SINK) {
+    bool right_first = false;
+    const char *why = nullptr;
+    // Input that holds no pair still gets output caps: set_info then refuses
+    // it with a message that says how to declare the layout.
+    if (!declared && !p3d::gst::arrangement_from_structure(in, &input, &right_first, &why))
+      input = p3d::StereoInput::SideBySide;
+    GstStructure *s = transformed(in, TRUE, input, g);
+    p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
+    return gst_pseudo3d_caps_of(s);
+  }
+
+  // Towards the sink: the input sizes that give this output. A declared
+  // layout says nothing about the input's caps. From-caps lists first a
+  // structure that leaves multiview-mode open, so that upstream elements
+  // that do not set it (2D video) keep it unset rather than fixating the
+  // first stereo mode offered here, which would relabel 2D frames as a
+  // pair: set_info then refuses them with a message. The arrangements
+  // pseudo3dpack reads follow (either eye first).
+  GstStructure *open = transformed(in, FALSE, declared ? input : p3d::StereoInput::SideBySide, g);
+  gst_structure_remove_fields(open, "multiview-mode", "multiview-flags", "views", NULL);
+  GstCaps *caps = gst_pseudo3d_caps_of(open);
+  if (declared) return caps;
+  for (int a = 0; a <= static_cast<int>(p3d::StereoInput::Checkerboard); ++a) {
+    const auto arrangement = static_cast<p3d::StereoInput>(a);
+    GstStructure *s = transformed(in, FALSE, arrangement, g);
+    p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),
+                                   GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
+    caps = gst_caps_merge_structure(caps, s);
+  }
+  return caps;
 }
 
-// Output size over the 2W x H input, per axis (pack_size() in ratio form).
-static void get_size_ratio(GstPseudo3DBase *base, gint *wn, gint *wd, gint *hn, gint *hd) {
-  const p3d::PackLayout layout = read_params(GST_PSEUDO3D_PACK(base)).layout;
-  *wn = *wd = *hn = *hd = 1;
-  switch (layout) {
-    case p3d::PackLayout::SideBySide: break;
-    case p3d::PackLayout::TopBottom:
-      *wd = 2;
-      *hn = 2;
-      break;
-    default: *wd = 2; break;
+// The output frame the parameters give for this input, or false with *why.
+static bool output_for(const p3d::PackParams &p, const GstVideoInfo *in, int *w, int *h, const char **why) {
+  int vw = 0, vh = 0;
+  if (!p3d::input_view_size(p.input, GST_VIDEO_INFO_WIDTH(in), GST_VIDEO_INFO_HEIGHT(in), &vw, &vh)) {
+    *why = p.input == p3d::StereoInput::TopBottom ? "a full top-bottom pair needs an even height"
+                                                  : "a full side-by-side pair needs an even width";
+    return false;
   }
-}
-
-static void set_src_multiview(GstPseudo3DBase *base, GstStructure *s) {
-  const p3d::PackLayout layout = read_params(GST_PSEUDO3D_PACK(base)).layout;
-  const char *mode = "mono";
-  guint flags = 0;
-  gint par_n = 1, par_d = 1;  // factor on the input's pixel-aspect-ratio
-  switch (layout) {
-    case p3d::PackLayout::Anaglyph: mode = "mono"; break;
-    case p3d::PackLayout::SideBySide: mode = "side-by-side"; break;
-    case p3d::PackLayout::SideBySideHalf:
-      mode = "side-by-side";
-      flags = GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT;
-      par_n = 2;  // as gst_video_info_to_caps folds half-aspect into the PAR
-      break;
-    case p3d::PackLayout::TopBottom: mode = "top-bottom"; break;
-    case p3d::PackLayout::TopBottomHalf:
-      mode = "top-bottom";
-      flags = GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT;
-      par_d = 2;
-      break;
-    case p3d::PackLayout::RowInterleaved: mode = "row-interleaved"; break;
-    case p3d::PackLayout::ColumnInterleaved: mode = "column-interleaved"; break;
-    case p3d::PackLayout::Checkerboard: mode = "checkerboard"; break;
-    case p3d::PackLayout::Left: mode = "left"; break;
-    case p3d::PackLayout::Right: mode = "right"; break;
-  }
-  gst_structure_set(s, "multiview-mode", G_TYPE_STRING, mode, "multiview-flags", GST_TYPE_VIDEO_MULTIVIEW_FLAGSET,
-                    flags, GST_FLAG_SET_MASK_EXACT, NULL);
-  if (par_n != par_d) {
-    gint n = 1, d = 1;
-    if (gst_structure_get_fraction(s, "pixel-aspect-ratio", &n, &d) || !gst_structure_has_field(s, "pixel-aspect-ratio"))
-      gst_structure_set(s, "pixel-aspect-ratio", GST_TYPE_FRACTION, n * par_n, d * par_d, NULL);
-  }
-}
-
-static void update_passthrough(GstPseudo3DPack *self) {
-  const p3d::PackParams p = read_params(self);
-  // The input already is a full side-by-side pair.
-  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self),
-                                     p.layout == p3d::PackLayout::SideBySide && !p.swap_eyes);
+  p3d::pack_size(p.layout, vw, vh, w, h);
+  return true;
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
-  int w = 0, h = 0;
-  const p3d::PackParams p = read_params(GST_PSEUDO3D_PACK(base));
-  p3d::pack_size(p.layout, GST_VIDEO_INFO_WIDTH(in) / 2, GST_VIDEO_INFO_HEIGHT(in), &w, &h);
-  if (GST_VIDEO_INFO_WIDTH(in) % 2 != 0 || w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out)) {
-    GST_ELEMENT_ERROR(base, CORE, NEGOTIATION, ("Input is not a side-by-side pair of the expected size"),
-                      ("input %dx%d, output %dx%d, expected output %dx%d", GST_VIDEO_INFO_WIDTH(in),
-                       GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out), GST_VIDEO_INFO_HEIGHT(out), w, h));
+  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
+  GST_OBJECT_LOCK(self);
+  const PackGeometry g = self->geometry->commit();
+  GST_OBJECT_UNLOCK(self);
+  p3d::PackParams p;
+  const char *why = nullptr;
+  if (!resolve(g, GST_VIDEO_INFO_MULTIVIEW_MODE(in), GST_VIDEO_INFO_MULTIVIEW_FLAGS(in), &p, &why)) {
+    gchar *text = g_strdup_printf("pseudo3dpack needs a stereo pair, and its input is %s", why);
+    gst_pseudo3d_base_refuse_caps(
+        base, text, "%s",
+        "declare how the frames hold the pair with input-layout=side-by-side (or side-by-side-half, top-bottom, "
+        "top-bottom-half, row-interleaved, column-interleaved, checkerboard) and input-right-first=true if the right "
+        "view comes first; to make 3D from 2D video, put pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp before "
+        "pseudo3dpack, or use pseudo3dconvert");
+    g_free(text);
     return FALSE;
   }
-  update_passthrough(GST_PSEUDO3D_PACK(base));
+  int w = 0, h = 0;
+  if (!output_for(p, in, &w, &h, &why) || w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out)) {
+    return gst_pseudo3d_base_refuse_caps(base, "The input frame does not hold a stereo pair of the declared kind",
+                                         "input %dx%d, output %dx%d: %s", GST_VIDEO_INFO_WIDTH(in),
+                                         GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
+                                         GST_VIDEO_INFO_HEIGHT(out), why ? why : "the output size does not fit the layout");
+  }
+  GST_OBJECT_LOCK(self);
+  p.glasses = self->params.glasses;
+  p.method = self->params.method;
+  self->active = p;
+  GST_OBJECT_UNLOCK(self);
+  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), p3d::pack_is_identity(p));
   return TRUE;
+}
+
+// A request whose output caps equal the negotiated ones (swap-eyes of an
+// anaglyph, or a declared input layout that the caps already said) takes
+// effect at once; any other asks for renegotiation.
+static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
+  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
+  GST_OBJECT_LOCK(self);
+  if (frozen)
+    self->geometry->begin_negotiation();
+  else
+    self->geometry->end_negotiation();
+  GST_OBJECT_UNLOCK(self);
+}
+
+static gboolean frame_boundary(GstPseudo3DBase *base) {
+  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
+  GST_OBJECT_LOCK(self);
+  const bool pending = self->geometry->pending();
+  const PackGeometry want = self->geometry->requested();
+  GST_OBJECT_UNLOCK(self);
+  if (!pending) return FALSE;
+  const GstVideoInfo *in = &base->in_info, *out = &base->out_info;
+  p3d::PackParams p;
+  const char *why = nullptr;
+  int w = 0, h = 0;
+  if (!resolve(want, GST_VIDEO_INFO_MULTIVIEW_MODE(in), GST_VIDEO_INFO_MULTIVIEW_FLAGS(in), &p, &why) ||
+      !output_for(p, in, &w, &h, &why))
+    return TRUE;  // renegotiation will say why
+  const p3d::gst::MultiviewSignal sig = p3d::gst::layout_signal(p.layout, p.swap_eyes);
+  if (w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out) ||
+      sig.mode != GST_VIDEO_INFO_MULTIVIEW_MODE(out) || sig.flags != GST_VIDEO_INFO_MULTIVIEW_FLAGS(out))
+    return TRUE;
+  GST_OBJECT_LOCK(self);
+  self->geometry->activate(want);
+  p.glasses = self->params.glasses;
+  p.method = self->params.method;
+  const bool was_identity = p3d::pack_is_identity(self->active);
+  self->active = p;
+  GST_OBJECT_UNLOCK(self);
+  if (was_identity != p3d::pack_is_identity(p)) {
+    gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), p3d::pack_is_identity(p));
+    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));  // redo the allocation
+  }
+  return FALSE;
 }
 
 static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *, GstVideoFrame *in,
                              GstVideoFrame *out) {
-  const p3d::PackParams params = read_params(GST_PSEUDO3D_PACK(base));
+  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
+  GST_OBJECT_LOCK(self);
+  p3d::PackParams params = self->active;
+  params.glasses = self->params.glasses;
+  params.method = self->params.method;
+  GST_OBJECT_UNLOCK(self);
   const p3d::FrameView src = p3d::gst::frame_view(in), dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
   if (path != GST_PSEUDO3D_PATH_CPU) {
     using p3d::gst::GpuStaging;
-    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+    return p3d::gst::run_gpu(base, "packing the stereo pair", [&]() -> p3d::CudaStatus {
       p3d::FrameView fin, fout;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
-      P3D_CUDA_TRY_STATUS(p3d::pack_gpu(params, fin, fout, base->stream));
+      P3D_CUDA_TRY_STATUS(p3d::pack_gpu(params, fin, fout, base->gpu->stream()));
       return p3d::gst::frame_to_host(base, path, fout, dst);
-    }();
-    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "packing the stereo pair");
-    return gst_pseudo3d_base_sync(base);
+    });
   }
 #else
   (void)path;
@@ -143,30 +280,50 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
 static void gst_pseudo3d_pack_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(object);
   GST_OBJECT_LOCK(self);
+  PackGeometry g = self->geometry->requested();
+  bool geometry = true;
   switch (prop_id) {
-    case PROP_LAYOUT: self->params.layout = static_cast<p3d::PackLayout>(g_value_get_enum(value)); break;
-    case PROP_GLASSES: self->params.glasses = static_cast<p3d::AnaglyphGlasses>(g_value_get_enum(value)); break;
-    case PROP_ANAGLYPH_METHOD: self->params.method = static_cast<p3d::AnaglyphMethod>(g_value_get_enum(value)); break;
-    case PROP_SWAP_EYES: self->params.swap_eyes = g_value_get_boolean(value); break;
-    default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
+    case PROP_LAYOUT: g.layout = static_cast<p3d::PackLayout>(g_value_get_enum(value)); break;
+    case PROP_SWAP_EYES: g.swap_eyes = g_value_get_boolean(value); break;
+    case PROP_INPUT_LAYOUT: g.input = static_cast<GstPseudo3DInputLayout>(g_value_get_enum(value)); break;
+    case PROP_INPUT_RIGHT_FIRST: g.input_right_first = g_value_get_boolean(value); break;
+    case PROP_GLASSES:
+      self->params.glasses = static_cast<p3d::AnaglyphGlasses>(g_value_get_enum(value));
+      geometry = false;
+      break;
+    case PROP_ANAGLYPH_METHOD:
+      self->params.method = static_cast<p3d::AnaglyphMethod>(g_value_get_enum(value));
+      geometry = false;
+      break;
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      geometry = false;
+      break;
   }
+  const bool reconfigure = geometry && self->geometry->request(g);
   GST_OBJECT_UNLOCK(self);
-  update_passthrough(self);
-  // The layout decides the output size and multiview caps.
-  if (prop_id == PROP_LAYOUT) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
+  if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_pseudo3d_pack_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(object);
   GST_OBJECT_LOCK(self);
+  const PackGeometry g = self->geometry->requested();
   switch (prop_id) {
-    case PROP_LAYOUT: g_value_set_enum(value, static_cast<gint>(self->params.layout)); break;
+    case PROP_LAYOUT: g_value_set_enum(value, static_cast<gint>(g.layout)); break;
+    case PROP_SWAP_EYES: g_value_set_boolean(value, g.swap_eyes); break;
+    case PROP_INPUT_LAYOUT: g_value_set_enum(value, g.input); break;
+    case PROP_INPUT_RIGHT_FIRST: g_value_set_boolean(value, g.input_right_first); break;
     case PROP_GLASSES: g_value_set_enum(value, static_cast<gint>(self->params.glasses)); break;
     case PROP_ANAGLYPH_METHOD: g_value_set_enum(value, static_cast<gint>(self->params.method)); break;
-    case PROP_SWAP_EYES: g_value_set_boolean(value, self->params.swap_eyes); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_pseudo3d_pack_finalize(GObject *object) {
+  delete GST_PSEUDO3D_PACK(object)->geometry;
+  G_OBJECT_CLASS(parent_class)->finalize(object);
 }
 
 static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
@@ -174,16 +331,19 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
   GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
   GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
   const p3d::PackParams d;
+  const PackGeometry dg;
   const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
 
   gobject_class->set_property = gst_pseudo3d_pack_set_property;
   gobject_class->get_property = gst_pseudo3d_pack_get_property;
+  gobject_class->finalize = gst_pseudo3d_pack_finalize;
 
   g_object_class_install_property(
       gobject_class, PROP_LAYOUT,
       g_param_spec_enum("layout", "Layout",
-                        "Stereo format of the output (changing it renegotiates the output caps)",
-                        GST_TYPE_PSEUDO3D_LAYOUT, static_cast<gint>(d.layout), flags));
+                        "Stereo format of the output (a change while playing renegotiates the output caps before "
+                        "the next frame)",
+                        GST_TYPE_PSEUDO3D_LAYOUT, static_cast<gint>(dg.layout), flags));
   g_object_class_install_property(
       gobject_class, PROP_GLASSES,
       g_param_spec_enum("glasses", "Anaglyph glasses", "Colour filters of the glasses (layout=anaglyph)",
@@ -192,36 +352,54 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
       gobject_class, PROP_ANAGLYPH_METHOD,
       g_param_spec_enum("anaglyph-method", "Anaglyph method",
                         "How colours are mixed for the glasses (layout=anaglyph): Dubois least squares ghosts "
-                        "least; colour keeps most colour; grey is the most comfortable",
+                        "least; colour keeps most colour; grey is the most comfortable. Encode anaglyphs as RGB or "
+                        "4:4:4: 4:2:0 chroma smears the red channel",
                         GST_TYPE_PSEUDO3D_ANAGLYPH_METHOD, static_cast<gint>(d.method), flags));
   g_object_class_install_property(
       gobject_class, PROP_SWAP_EYES,
       g_param_spec_boolean("swap-eyes", "Swap eyes",
-                           "Exchange the left and right views (cross-eyed viewing, reversed glasses)", d.swap_eyes,
-                           flags));
+                           "Exchange the left and right views (cross-eyed viewing, reversed glasses); the output "
+                           "caps then say right-view-first",
+                           dg.swap_eyes, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_INPUT_LAYOUT,
+      g_param_spec_enum("input-layout", "Input layout",
+                        "How the input frames hold the stereo pair: from the caps' multiview-mode and "
+                        "multiview-flags (pseudo3dwarp, 3D decoders and demuxers set them), or declared here for "
+                        "input whose caps say nothing (plain 2D caps)",
+                        GST_TYPE_PSEUDO3D_INPUT_LAYOUT, dg.input, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_INPUT_RIGHT_FIRST,
+      g_param_spec_boolean("input-right-first", "Input right view first",
+                           "With a declared input-layout: the right view comes first (left half, top half, even "
+                           "rows or columns); with from-caps the caps' right-view-first flag decides",
+                           dg.input_right_first, flags));
 
   gst_element_class_set_static_metadata(element_class, "pseudo3d stereo packing", "Filter/Converter/Video",
-                                        "Packs a side-by-side stereo pair into anaglyph, side-by-side, top-bottom, "
+                                        "Converts a stereo pair into anaglyph, side-by-side, top-bottom, "
                                         "interleaved or single-view output",
                                         "pseudo3d developers");
-  GstCaps *caps = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS);
+  GstCaps *caps = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, 2 * p3d::kMaxFrameSide);
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, caps));
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
   gst_caps_unref(caps);
 
-  base_class->get_size_ratio = get_size_ratio;
-  base_class->set_src_multiview = set_src_multiview;
+  base_class->transform_geometry = transform_geometry;
   base_class->set_info = set_info;
+  base_class->freeze_geometry = freeze_geometry;
+  base_class->frame_boundary = frame_boundary;
   base_class->process = process;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_pack_debug, "pseudo3dpack", 0, "pseudo3d stereo packing");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_LAYOUT, (GstPluginAPIFlags)0);
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_GLASSES, (GstPluginAPIFlags)0);
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_ANAGLYPH_METHOD, (GstPluginAPIFlags)0);
+  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_INPUT_LAYOUT, (GstPluginAPIFlags)0);
 }
 
 static void gst_pseudo3d_pack_init(GstPseudo3DPack *self) {
   self->params = p3d::PackParams();
+  self->geometry = new p3d::gst::StagedGeometry<PackGeometry>();
+  self->active = p3d::PackParams();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
-  update_passthrough(self);
 }

@@ -50,32 +50,37 @@ struct _GstPseudo3DWarp {
 G_DEFINE_TYPE(GstPseudo3DWarp, gst_pseudo3d_warp, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dwarp, "pseudo3dwarp", GST_RANK_NONE, GST_TYPE_PSEUDO3D_WARP);
 
-static void get_size_ratio(GstPseudo3DBase *, gint *wn, gint *wd, gint *hn, gint *hd) {
-  *wn = 2;  // the two views side by side
-  *wd = *hn = *hd = 1;
+// Output: the two views side by side (2W x H), signalled as a full-size,
+// left-first side-by-side pair; the pixel aspect ratio is the input's.
+static GstCaps *transform_geometry(GstPseudo3DBase *, GstPadDirection from, const GstStructure *in) {
+  GstStructure *s = gst_structure_copy(in);
+  if (from == GST_PAD_SINK) {
+    gst_pseudo3d_scale_field(s, "width", 2, 1);
+    gst_structure_set(s, "multiview-mode", G_TYPE_STRING, "side-by-side", "multiview-flags",
+                      GST_TYPE_VIDEO_MULTIVIEW_FLAGSET, 0, GST_FLAG_SET_MASK_EXACT, "views", G_TYPE_INT, 2, NULL);
+  } else {
+    gst_pseudo3d_scale_field(s, "width", 1, 2);
+    gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
+  }
+  return gst_pseudo3d_caps_of(s);
 }
 
-static void set_src_multiview(GstPseudo3DBase *, GstStructure *s) {
-  gst_structure_set(s, "multiview-mode", G_TYPE_STRING, "side-by-side", "multiview-flags",
-                    GST_TYPE_VIDEO_MULTIVIEW_FLAGSET, 0, GST_FLAG_SET_MASK_EXACT, "views", G_TYPE_INT, 2, NULL);
+static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
+  if (GST_VIDEO_INFO_WIDTH(out) != 2 * GST_VIDEO_INFO_WIDTH(in) || GST_VIDEO_INFO_HEIGHT(out) != GST_VIDEO_INFO_HEIGHT(in)) {
+    return gst_pseudo3d_base_refuse_caps(base, "The output must be twice as wide as the input",
+                                         "input %dx%d, output %dx%d", GST_VIDEO_INFO_WIDTH(in),
+                                         GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
+                                         GST_VIDEO_INFO_HEIGHT(out));
+  }
+  return TRUE;
 }
 
 static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
                              GstVideoFrame *out) {
-  const bool device = path == GST_PSEUDO3D_PATH_GPU;
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
-  p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(inbuf);
   const p3d::FrameView src = p3d::gst::frame_view(in);
-  if (!depth) {
-    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Frame carries no depth map"), ("put pseudo3ddepth before pseudo3dwarp"));
-    return GST_FLOW_ERROR;
-  }
-  if (depth->width != src.width || depth->height != src.height || depth->on_device != device) {
-    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("Depth map does not match the frame"),
-                      ("depth %dx%d (%s), frame %dx%d (%s)", depth->width, depth->height,
-                       depth->on_device ? "device" : "host", src.width, src.height, device ? "device" : "host"));
-    return GST_FLOW_ERROR;
-  }
+  p3d::gst::DepthPlane *depth = gst_pseudo3d_base_frame_depth(base, inbuf, path, src.width, src.height);
+  if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
   const p3d::WarpParams params = self->params;
   GST_OBJECT_UNLOCK(self);
@@ -84,17 +89,15 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
 #if HAVE_CUDA
   if (path != GST_PSEUDO3D_PATH_CPU) {
     using p3d::gst::GpuStaging;
-    const p3d::CudaStatus st = [&]() -> p3d::CudaStatus {
+    return p3d::gst::run_gpu(base, "rendering the views", [&]() -> p3d::CudaStatus {
       p3d::FrameView fin, fout;
       p3d::ImageView<float> d;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->view(), true, &d));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
-      P3D_CUDA_TRY_STATUS(self->state->gpu.render(params, fin, yuv, p3d::as_const(d), fout, base->stream));
+      P3D_CUDA_TRY_STATUS(self->state->gpu.render(params, fin, yuv, p3d::as_const(d), fout, base->gpu->stream()));
       return p3d::gst::frame_to_host(base, path, fout, dst);
-    }();
-    if (!st.ok()) return gst_pseudo3d_base_cuda_error(base, st, "rendering the views");
-    return gst_pseudo3d_base_sync(base);
+    });
   }
 #endif
   const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), dst);
@@ -107,7 +110,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   return GST_FLOW_OK;
 }
 
-static void release_gpu(GstPseudo3DBase *base) {
+static void release(GstPseudo3DBase *base) {
 #if HAVE_CUDA
   GST_PSEUDO3D_WARP(base)->state->gpu = p3d::WarpRendererGpu();
 #else
@@ -183,19 +186,20 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
   gst_element_class_set_static_metadata(element_class, "pseudo3d DIBR view synthesis", "Filter/Effect/Video",
                                         "Renders left and right views from a frame and its depth map, side by side",
                                         "pseudo3d developers");
-  GstCaps *sink = p3d::gst::caps_all_domains(P3D_ALL_FORMATS);
-  GstCaps *src = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, ", multiview-mode=(string)side-by-side");
+  GstCaps *sink = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, p3d::kMaxFrameSide);
+  GstCaps *src = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, 2 * p3d::kMaxFrameSide,
+                                            ", multiview-mode=(string)side-by-side");
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, sink));
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, src));
   gst_caps_unref(sink);
   gst_caps_unref(src);
 
-  base_class->get_size_ratio = get_size_ratio;
   base_class->src_formats = P3D_PACKED_FORMATS;
   base_class->sink_formats = P3D_ALL_FORMATS;
-  base_class->set_src_multiview = set_src_multiview;
+  base_class->transform_geometry = transform_geometry;
+  base_class->set_info = set_info;
   base_class->process = process;
-  base_class->release_gpu = release_gpu;
+  base_class->release = release;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_warp_debug, "pseudo3dwarp", 0, "pseudo3d DIBR view synthesis");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_VIEW, (GstPluginAPIFlags)0);

@@ -7,6 +7,7 @@
 #include "gstpseudo3ddepth.h"
 #include "gstpseudo3dfilter.h"
 #include "gstpseudo3dpack.h"
+#include "gstpseudo3dsignal.h"
 #include "gstpseudo3dwarp.h"
 
 #if HAVE_CUDA
@@ -32,6 +33,7 @@ static gboolean plugin_init(GstPlugin *plugin) {
   ok &= GST_ELEMENT_REGISTER(pseudo3dwarp, plugin);
   ok &= GST_ELEMENT_REGISTER(pseudo3dpack, plugin);
   ok &= GST_ELEMENT_REGISTER(pseudo3dconvert, plugin);
+  ok &= GST_ELEMENT_REGISTER(pseudo3dsignal, plugin);
   return ok;
 }
 

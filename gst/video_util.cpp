@@ -41,11 +41,12 @@ YuvToRgb yuv_params(const GstVideoInfo *info) {
   return yuv_to_rgb_params(kr, kb, info->colorimetry.range == GST_VIDEO_COLOR_RANGE_0_255);
 }
 
-GstCaps *caps_all_domains(const char *formats, const char *extra_fields) {
+GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_fields) {
   const char *extra = extra_fields ? extra_fields : "";
-  gchar *sys = g_strdup_printf("video/x-raw, format=(string)%s, width=" GST_VIDEO_SIZE_RANGE
-                               ", height=" GST_VIDEO_SIZE_RANGE ", framerate=" GST_VIDEO_FPS_RANGE "%s",
-                               formats, extra);
+  // Interlaced video is refused in the caps: the stages treat rows as one picture.
+  gchar *sys = g_strdup_printf("video/x-raw, format=(string)%s, width=(int)[ 1, %d ], height=(int)[ 1, %d ], "
+                               "framerate=" GST_VIDEO_FPS_RANGE ", interlace-mode=(string)progressive%s",
+                               formats, max_side, max_side, extra);
   GstCaps *caps = gst_caps_from_string(sys);
   g_free(sys);
 #if HAVE_CUDA

@@ -1,0 +1,66 @@
+// Properties that decide the output caps (pack's layout, depth's method...)
+// may be set from any thread at any time, but a frame must be processed with
+// the values its negotiated caps were computed from. As in videoflip, such a
+// value lives in three places:
+//
+//   requested    what the property was last set to (set_property);
+//   configuring  what a negotiation in the streaming thread works with: the
+//                request as it was when the negotiation began, frozen until
+//                it ends, so that all its transform_caps calls and set_info
+//                agree (caps queries at other times see the request);
+//   active       what the negotiated caps belong to: set_info commits the
+//                configuring value, and every frame is processed with it.
+//
+// A request that differs from the active value asks for renegotiation
+// (gst_base_transform_reconfigure_src); GstBaseTransform renegotiates before
+// the next buffer, so a change takes effect at a frame boundary.
+//
+// Not thread-safe by itself: every call is made with the element's object
+// lock held. G needs operator==.
+#pragma once
+
+namespace p3d::gst {
+
+template <typename G>
+class StagedGeometry {
+ public:
+  explicit StagedGeometry(const G &initial = G()) : requested_(initial), configuring_(initial), active_(initial) {}
+
+  // set_property: returns true when the caps must be renegotiated.
+  bool request(const G &g) {
+    requested_ = g;
+    return !(requested_ == active_);
+  }
+  const G &requested() const { return requested_; }
+
+  // Around a negotiation in the streaming thread (a CAPS event, or a
+  // renegotiation before a buffer).
+  void begin_negotiation() {
+    configuring_ = requested_;
+    frozen_ = true;
+  }
+  void end_negotiation() { frozen_ = false; }
+
+  // transform_caps: the value to negotiate with.
+  const G &negotiating() const { return frozen_ ? configuring_ : requested_; }
+
+  // set_info: the negotiated caps belong to negotiating()'s value.
+  const G &commit() {
+    active_ = negotiating();
+    return active_;
+  }
+  const G &active() const { return active_; }
+
+  // A request whose output caps equal the negotiated ones becomes active at
+  // once (GstBaseTransform calls set_caps only when the caps change).
+  void activate(const G &g) { active_ = g; }
+
+  // Before a frame: whether the request still differs from the active value.
+  bool pending() const { return !(requested_ == active_); }
+
+ private:
+  G requested_, configuring_, active_;
+  bool frozen_ = false;
+};
+
+}  // namespace p3d::gst
