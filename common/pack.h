@@ -12,12 +12,13 @@
 //   TopBottom         W = Win, H = Hin / 2       the half of the frame
 //   SideBySideHalf    W = Win, H = Hin           the first view's samples are
 //                     columns [0, half_split(W)), the second's the rest; view
-//                     column X comes from sample i = min(X / 2, n - 1) of the
-//                     view's n samples and its neighbour j = i - 1 (X even) or
-//                     i + 1 (X odd), clamped to the view: (3 s_i + s_j + 2) / 4
-//                     per channel (linear interpolation between sample
-//                     centres; it inverts the half formats' pair means up to
-//                     rounding)
+//                     column X comes from sample i = X / 2 of the view's n
+//                     samples and its neighbour j = i - 1 (X even) or i + 1
+//                     (X odd), clamped to the view: (3 s_i + s_j + 2) / 4 per
+//                     channel (linear interpolation between sample centres;
+//                     it inverts the half formats' pair means up to
+//                     rounding); past the last sample (i >= n, the shorter
+//                     view of an odd width) the last sample itself
 //   TopBottomHalf     likewise along rows
 //   RowInterleaved    W = Win, H = Hin; the first view owns the even rows:
 //                     a row the view owns is read as is, any other row is the
@@ -182,7 +183,11 @@ P3D_HD void unsqueeze(int X, int n, int slot, int *s0, int *s1) {
     start = 0;
     count = split;
   }
-  const int i = X / 2 < count - 1 ? X / 2 : count - 1;
+  if (X / 2 >= count) {  // past the view's last sample (the shorter view of an odd axis): repeat it
+    *s0 = *s1 = start + count - 1;
+    return;
+  }
+  const int i = X / 2;
   const int j = clamp_index((X & 1) ? i + 1 : i - 1, count);
   *s0 = start + i;
   *s1 = start + j;

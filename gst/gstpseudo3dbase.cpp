@@ -329,7 +329,15 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
 #endif
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
   self->negotiating_caps = incaps;
-  const gboolean accepted = !klass->set_info || klass->set_info(self, incaps, &in, outcaps, &out);
+  gboolean accepted;
+  if (GST_VIDEO_INFO_IS_INTERLACED(&in))
+    // The stages treat every row as part of one picture: fields would be torn apart.
+    accepted = gst_pseudo3d_base_refuse_caps(self, "Interlaced video is not supported",
+                                             "interlace-mode %s; put deinterlace before %s",
+                                             gst_video_interlace_mode_to_string(GST_VIDEO_INFO_INTERLACE_MODE(&in)),
+                                             GST_ELEMENT_NAME(self));
+  else
+    accepted = !klass->set_info || klass->set_info(self, incaps, &in, outcaps, &out);
   self->negotiating_caps = nullptr;
   if (!accepted) return FALSE;
   gst_clear_caps(&self->refused_caps);

@@ -43,9 +43,12 @@ YuvToRgb yuv_params(const GstVideoInfo *info) {
 
 GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_fields) {
   const char *extra = extra_fields ? extra_fields : "";
-  // Interlaced video is refused in the caps: the stages treat rows as one picture.
+  // No interlace-mode field: caps without one mean progressive, and a
+  // template that demanded "progressive" would refuse them in the subset
+  // checks of ghost pads. Interlaced caps are refused in set_caps, with a
+  // message.
   gchar *sys = g_strdup_printf("video/x-raw, format=(string)%s, width=(int)[ 1, %d ], height=(int)[ 1, %d ], "
-                               "framerate=" GST_VIDEO_FPS_RANGE ", interlace-mode=(string)progressive%s",
+                               "framerate=" GST_VIDEO_FPS_RANGE "%s",
                                formats, max_side, max_side, extra);
   GstCaps *caps = gst_caps_from_string(sys);
   g_free(sys);

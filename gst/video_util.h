@@ -18,8 +18,8 @@ FrameView frame_view(const GstVideoFrame *frame);
 // Y'CbCr -> R'G'B' of the info's colorimetry (BT.601 if unknown).
 YuvToRgb yuv_params(const GstVideoInfo *info);
 
-// Progressive raw video of `formats` up to max_side pixels wide and high, in
-// both memory domains: CUDA memory first (preferred), then system memory.
+// Raw video of `formats` up to max_side pixels wide and high, in both memory
+// domains: CUDA memory first (preferred), then system memory.
 GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_fields = nullptr);
 
 }  // namespace p3d::gst

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "pack.h"
+#include "stereo_frames.h"
 #include "test_data.h"
 
 namespace p3d {
@@ -324,7 +325,8 @@ TEST(PackAnaglyph, DuboisMatricesArePublishedOnes) {
 TEST(PackAnaglyph, FilterMatricesFeedEachChannelFromOneEye) {
   for (AnaglyphGlasses g : kAllGlasses)
     for (AnaglyphMethod m : kAllMethods) {
-      if (m == AnaglyphMethod::Dubois) continue;
+      if (m == AnaglyphMethod::Dubois || m == AnaglyphMethod::DuboisFfmpeg || m == AnaglyphMethod::DuboisLinear)
+        continue;
       const AnaglyphMatrices am = anaglyph_matrices(g, m);
       for (int c = 0; c < 3; ++c) {
         const float *rows[2] = {am.left + 3 * c, am.right + 3 * c};
@@ -371,10 +373,199 @@ TEST(PackAnaglyph, ColorOfTheAloePair) {
   }));
 }
 
+// ffmpeg's stereo3d ana_coeff (16.16), arcd: the fractions, entry for entry.
+TEST(PackAnaglyph, DuboisFfmpegIsStereo3dsTable) {
+  const AnaglyphMatrices rc = anaglyph_matrices(AnaglyphGlasses::RedCyan, AnaglyphMethod::DuboisFfmpeg);
+  EXPECT_FLOAT_EQ(rc.left[0], 29891 / 65536.f);   // R out from left R
+  EXPECT_FLOAT_EQ(rc.right[0], -2849 / 65536.f);  // R out from right R
+  EXPECT_FLOAT_EQ(rc.right[4], 48080 / 65536.f);  // G out from right G
+  EXPECT_FLOAT_EQ(rc.right[8], 80373 / 65536.f);  // B out from right B
+  EXPECT_FALSE(rc.linear_light);
+  const AnaglyphMatrices ab = anaglyph_matrices(AnaglyphGlasses::AmberBlue, AnaglyphMethod::DuboisFfmpeg);
+  EXPECT_FLOAT_EQ(ab.left[0], 65535 / 65536.f);
+  EXPECT_FLOAT_EQ(ab.right[8], 56217 / 65536.f);
+  // Grey 100 on both eyes, red row: (29891 + 32800 + 11559 - 2849 - 5763 - 102) * 100 / 65536 = 100.0
+  const Rgba g100{100, 100, 100, 255};
+  EXPECT_EQ(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::DuboisFfmpeg, g100, g100).r, 100);
+}
+
+// Linear light: the tables are the sRGB transfer, and codes come back to
+// themselves through them (the nearest code of a code's own linear value).
+TEST(PackAnaglyph, DuboisLinearTables) {
+  const AnaglyphMatrices am = anaglyph_matrices(AnaglyphGlasses::RedCyan, AnaglyphMethod::DuboisLinear);
+  ASSERT_TRUE(am.linear_light);
+  EXPECT_FLOAT_EQ(am.to_linear[0], 0.f);
+  EXPECT_FLOAT_EQ(am.to_linear[255], 1.f);
+  EXPECT_NEAR(am.to_linear[128], 0.2158605, 1e-6);  // ((128/255 + 0.055) / 1.055)^2.4
+  EXPECT_NEAR(am.to_linear[10], 10 / 255.0 / 12.92, 1e-7);
+  for (int v = 0; v < 256; ++v) EXPECT_EQ(pack_detail::linear_to_code(am, am.to_linear[v]), v);
+  EXPECT_EQ(pack_detail::linear_to_code(am, -1.f), 0);
+  EXPECT_EQ(pack_detail::linear_to_code(am, 2.f), 255);
+  // The same matrices as Dubois: black stays black, and with the eyes mixed
+  // in linear light a mid grey pair comes out brighter than the gamma-space mix.
+  const Rgba g0{0, 0, 0, 255}, g128{128, 128, 128, 255};
+  EXPECT_TRUE(same(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::DuboisLinear, g0, g0), Rgba{0, 0, 0, 255}));
+  // Red row sum 1.050 (left) - 0.050 (right): linear 0.2158605 -> 0.2158605, code 128.
+  EXPECT_EQ(anaglyph_of(AnaglyphGlasses::RedCyan, AnaglyphMethod::DuboisLinear, g128, g128).r, 128);
+}
+
+// ---- stereo input arrangements ---------------------------------------------------------
+
+PackParams input_params(StereoInput input, bool right_first, PackLayout out, bool swap = false) {
+  PackParams p = layout_params(out, swap);
+  p.input = input;
+  p.input_right_first = right_first;
+  return p;
+}
+
+HostFrame pack_input(const PackParams &p, const HostFrame &in) {
+  int vw = 0, vh = 0, w = 0, h = 0;
+  EXPECT_TRUE(input_view_size(p.input, in.width(), in.height(), &vw, &vh));
+  pack_size(p.layout, vw, vh, &w, &h);
+  HostFrame out(in.format(), w, h, 3);
+  out.fill(kPoison);
+  pack_cpu(p, in.view(), out.view());
+  return out;
+}
+
+// Full-resolution arrangements hold the views exactly: any of them, either
+// eye first, converts to a full side-by-side pair (and back) losslessly.
+TEST(PackInputs, FullArrangementsRoundTrip) {
+  HostFrame l(PixelFormat::RGBA, 9, 6), r(PixelFormat::RGBA, 9, 6);
+  l.fill_random(31);
+  r.fill_random(32);
+  for (StereoInput in : {StereoInput::SideBySide, StereoInput::TopBottom})
+    for (bool rf : {false, true}) {
+      const HostFrame sbs = pack_input(input_params(in, rf, PackLayout::SideBySide), test::arrange_pair(in, rf, l, r));
+      EXPECT_TRUE(all_pixels(sbs, [&](int x, int y) { return x < 9 ? at(l, x, y) : at(r, x - 9, y); }))
+          << int(in) << " right first " << rf;
+      const HostFrame tb = pack_input(input_params(StereoInput::SideBySide, false, PackLayout::TopBottom, rf), sbs);
+      EXPECT_TRUE(equal_bgra(tb.to_bgra(), test::arrange_pair(StereoInput::TopBottom, rf, l, r).to_bgra()));
+    }
+}
+
+// Half inputs: view column X is (3 s_i + s_j + 2) / 4 of the view's squeezed
+// samples, i = X / 2, j = i -+ 1 clamped; hand-computed on a ramp.
+TEST(PackInputs, HalfSideBySideInterpolatesBetweenSamples) {
+  // A 5-wide frame: first view samples 0..2 (values 10, 50, 90), second 3..4 (200, 100).
+  HostFrame in(PixelFormat::RGBx, 5, 1);
+  const int v[5] = {10, 50, 90, 200, 100};
+  for (int x = 0; x < 5; ++x) store_rgba(in.view(), x, 0, Rgba{uint8_t(v[x]), 0, 0, 255});
+  const HostFrame out = pack_input(input_params(StereoInput::SideBySideHalf, false, PackLayout::SideBySide), in);
+  ASSERT_EQ(out.width(), 10);
+  // Left view X = 0..4: i = 0,0,1,1,2; j = 0,1,0,2,1 -> (30+10+2)/4=10, (30+50+2)/4=20, (150+10+2)/4=40,
+  // (150+90+2)/4=60, (270+50+2)/4=80.
+  const int left[5] = {10, 20, 40, 60, 80};
+  // Right view: 2 samples; X = 0..4: i = 0,0,1,1,1(clamped); j = 0,1,0,1,1 ->
+  // 200, (600+100+2)/4=175, (300+200+2)/4=125, 100, 100.
+  const int right[5] = {200, 175, 125, 100, 100};
+  for (int x = 0; x < 5; ++x) {
+    EXPECT_EQ(at(out, x, 0).r, left[x]) << x;
+    EXPECT_EQ(at(out, 5 + x, 0).r, right[x]) << x;
+  }
+}
+
+// Interleaved and checkerboard views: owned samples as they are, the others
+// the rounded mean of the owned neighbours (hand-computed).
+TEST(PackInputs, InterleavedAndCheckerboardFillTheOtherSamples) {
+  HostFrame in(PixelFormat::RGBA, 3, 3);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 3; ++x) store_rgba(in.view(), x, y, Rgba{uint8_t(10 * (3 * y + x)), 0, 0, 255});
+  // Row-interleaved, second view (odd rows): row 0 from row 1 (clamped: 30,40,50), row 2 likewise.
+  const HostFrame rows = pack_input(input_params(StereoInput::RowInterleaved, false, PackLayout::Right), in);
+  EXPECT_EQ(at(rows, 1, 0).r, 40);
+  EXPECT_EQ(at(rows, 1, 1).r, 40);
+  EXPECT_EQ(at(rows, 1, 2).r, 40);
+  // First view at row 1: mean of rows 0 and 2 = (10 + 70 + 1) / 2 = 40.
+  const HostFrame rows_l = pack_input(input_params(StereoInput::RowInterleaved, false, PackLayout::Left), in);
+  EXPECT_EQ(at(rows_l, 1, 1).r, 40);
+  EXPECT_EQ(at(rows_l, 0, 1).r, 30);  // (0 + 60 + 1) / 2
+  // Column-interleaved, first view at column 1: (30 + 50 + 1) / 2 = 40 in row 1.
+  const HostFrame cols = pack_input(input_params(StereoInput::ColumnInterleaved, false, PackLayout::Left), in);
+  EXPECT_EQ(at(cols, 1, 1).r, 40);
+  // Checkerboard, first view ((x+y) even) at the centre's neighbour (1,0):
+  // neighbours (0,0)=0, (2,0)=20, (1,1)=40 -> (60 + 1) / 3 = 20.
+  const HostFrame chk = pack_input(input_params(StereoInput::Checkerboard, false, PackLayout::Left), in);
+  EXPECT_EQ(at(chk, 1, 0).r, 20);
+  EXPECT_EQ(at(chk, 1, 1).r, 40);  // owned
+  // Second view at the centre (owned by the first): (10 + 30 + 50 + 70 + 2) / 4 = 40.
+  const HostFrame chk_r = pack_input(input_params(StereoInput::Checkerboard, false, PackLayout::Right), in);
+  EXPECT_EQ(at(chk_r, 1, 1).r, 40);
+  EXPECT_EQ(at(chk_r, 0, 0).r, 20);  // (10 + 30 + 1) / 2
+}
+
+// Views of one colour each survive every arrangement exactly, and the eye
+// order and swap_eyes decide which view lands where.
+TEST(PackInputs, EveryArrangementKeepsTheViewsApart) {
+  HostFrame l(PixelFormat::RGBA, 6, 4), r(PixelFormat::RGBA, 6, 4);
+  l.fill(40);
+  r.fill(200);
+  for (StereoInput in : test::kAllInputs)
+    for (bool rf : {false, true})
+      for (bool swap : {false, true}) {
+        const HostFrame frame = test::arrange_pair(in, rf, l, r);
+        const HostFrame out = pack_input(input_params(in, rf, PackLayout::SideBySide, swap), frame);
+        ASSERT_EQ(out.width(), 12);
+        ASSERT_EQ(out.height(), 4);
+        const uint8_t first = swap ? 200 : 40, second = swap ? 40 : 200;
+        EXPECT_TRUE(all_pixels(out, [&](int x, int) {
+          const uint8_t v = x < 6 ? first : second;
+          return Rgba{v, v, v, v};
+        })) << "input " << int(in) << " right first " << rf << " swap " << swap;
+      }
+}
+
+// Random pairs in every arrangement, either eye first, into full
+// side-by-side: the views must be the reference reconstruction exactly.
+TEST(PackInputs, EveryArrangementMatchesTheReference) {
+  const int sizes[][2] = {{1, 1}, {2, 3}, {7, 5}, {32, 18}};
+  for (const auto &sz : sizes) {
+    HostFrame l(PixelFormat::RGBA, sz[0], sz[1]), r(PixelFormat::RGBA, sz[0], sz[1]);
+    l.fill_random(41 + sz[0]);
+    r.fill_random(42 + sz[1]);
+    for (StereoInput in : test::kAllInputs)
+      for (bool rf : {false, true}) {
+        const HostFrame frame = test::arrange_pair(in, rf, l, r);
+        const HostFrame out = pack_input(input_params(in, rf, PackLayout::SideBySide), frame);
+        const HostFrame ref_l = test::reference_view(in, rf, frame, 0), ref_r = test::reference_view(in, rf, frame, 1);
+        ASSERT_EQ(out.width(), 2 * ref_l.width());
+        EXPECT_TRUE(all_pixels(out, [&](int x, int y) {
+          return x < ref_l.width() ? at(ref_l, x, y) : at(ref_r, x - ref_l.width(), y);
+        })) << "input " << int(in) << " right first " << rf << " " << sz[0] << "x" << sz[1];
+      }
+  }
+}
+
+TEST(PackInputs, IdentityAndSizes) {
+  PackParams p = input_params(StereoInput::SideBySideHalf, true, PackLayout::SideBySideHalf, true);
+  EXPECT_TRUE(pack_is_identity(p));
+  p.swap_eyes = false;
+  EXPECT_FALSE(pack_is_identity(p));
+  EXPECT_FALSE(pack_is_identity(input_params(StereoInput::SideBySide, false, PackLayout::Anaglyph)));
+  EXPECT_TRUE(pack_is_identity(input_params(StereoInput::Checkerboard, false, PackLayout::Checkerboard)));
+  int w = 0, h = 0;
+  EXPECT_FALSE(input_view_size(StereoInput::SideBySide, 7, 4, &w, &h));
+  EXPECT_FALSE(input_view_size(StereoInput::TopBottom, 8, 5, &w, &h));
+  ASSERT_TRUE(input_view_size(StereoInput::TopBottom, 8, 6, &w, &h));
+  EXPECT_EQ(w, 8);
+  EXPECT_EQ(h, 3);
+  ASSERT_TRUE(input_view_size(StereoInput::SideBySideHalf, 7, 5, &w, &h));
+  EXPECT_EQ(w, 7);
+  EXPECT_EQ(h, 5);
+  HostFrame odd(PixelFormat::RGBA, 7, 3), out(PixelFormat::RGBA, 7, 3);
+  EXPECT_FALSE(pack_args_valid(input_params(StereoInput::SideBySide, false, PackLayout::Left), odd.view(), out.view()));
+  EXPECT_TRUE(pack_args_valid(input_params(StereoInput::RowInterleaved, false, PackLayout::Left), odd.view(), out.view()));
+}
+
 // ---- every layout and format ---------------------------------------------------------
 
 std::vector<PackParams> every_params() {
   std::vector<PackParams> all;
+  for (StereoInput in : test::kAllInputs)
+    for (bool rf : {false, true}) {
+      if (in == StereoInput::SideBySide && !rf) continue;  // the loop below
+      all.push_back(input_params(in, rf, PackLayout::SideBySideHalf));
+    }
   for (PackLayout l : kAllLayouts)
     for (bool swap : {false, true}) {
       if (l != PackLayout::Anaglyph) {
@@ -392,12 +583,12 @@ std::vector<PackParams> every_params() {
 }
 
 TEST(PackFormats, EveryPackedFormatGivesTheSameResult) {
-  cv::Mat bgr(17, 2 * 33, CV_8UC3);
+  cv::Mat bgr(18, 2 * 33, CV_8UC3);  // even height: a full top-bottom pair too
   cv::randu(bgr, 0, 256);
   for (const PackParams &p : every_params()) {
-    const cv::Mat want = pack(p, HostFrame::from_bgr(bgr, PixelFormat::RGBA)).to_bgra();
+    const cv::Mat want = pack_input(p, HostFrame::from_bgr(bgr, PixelFormat::RGBA)).to_bgra();
     for (PixelFormat f : kPackedFormats) {
-      const cv::Mat got = pack(p, HostFrame::from_bgr(bgr, f, 12), 4).to_bgra();
+      const cv::Mat got = pack_input(p, HostFrame::from_bgr(bgr, f, 12)).to_bgra();
       EXPECT_TRUE(equal_bgra(got, want)) << test::format_name(f) << " layout " << int(p.layout) << " glasses "
                                          << int(p.glasses) << " method " << int(p.method) << " swap " << p.swap_eyes;
     }
@@ -413,7 +604,13 @@ TEST(PackFormats, NoWriteOutsideTheRows) {
       for (const PackParams &p : every_params()) {
         HostFrame in(f, 2 * s[0], s[1], 5);
         in.fill_random(15);
-        const HostFrame out = pack(p, in, 7);
+        if (p.input == StereoInput::TopBottom && s[1] % 2) continue;  // holds no full top-bottom pair
+        int vw = 0, vh = 0, ow = 0, oh = 0;
+        ASSERT_TRUE(input_view_size(p.input, in.width(), in.height(), &vw, &vh));
+        pack_size(p.layout, vw, vh, &ow, &oh);
+        HostFrame out(f, ow, oh, 7);
+        out.fill(kPoison);
+        pack_cpu(p, in.view(), out.view());
         const FrameView v = out.view();
         long long padding_hits = 0, unwritten = 0;
         for (int y = 0; y < v.height; ++y) {

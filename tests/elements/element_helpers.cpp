@@ -132,4 +132,49 @@ std::string output_dir() {
   return dir;
 }
 
+BusMessages::BusMessages(GstElement *element) : element_(GST_ELEMENT(gst_object_ref(element))), bus_(gst_bus_new()) {
+  gst_element_set_bus(element_, bus_);
+}
+
+BusMessages::~BusMessages() {
+  for (GstMessage *m : pending_) gst_message_unref(m);
+  gst_element_set_bus(element_, nullptr);
+  gst_object_unref(bus_);
+  gst_object_unref(element_);
+}
+
+std::vector<std::string> BusMessages::take(GstMessageType type) {
+  while (GstMessage *m = gst_bus_pop(bus_)) pending_.push_back(m);
+  std::vector<std::string> texts;
+  std::vector<GstMessage *> kept;
+  for (GstMessage *m : pending_) {
+    if (GST_MESSAGE_TYPE(m) != type) {
+      kept.push_back(m);
+      continue;
+    }
+    GError *e = nullptr;
+    gchar *dbg = nullptr;
+    if (type == GST_MESSAGE_ERROR)
+      gst_message_parse_error(m, &e, &dbg);
+    else if (type == GST_MESSAGE_WARNING)
+      gst_message_parse_warning(m, &e, &dbg);
+    texts.push_back(std::string(e ? e->message : "") + " (" + (dbg ? dbg : "") + ")");
+    g_clear_error(&e);
+    g_free(dbg);
+    gst_message_unref(m);
+  }
+  pending_ = kept;
+  return texts;
+}
+
+std::string current_caps(GstPad *pad) {
+  GstCaps *caps = gst_pad_get_current_caps(pad);
+  if (!caps) return "";
+  gchar *s = gst_caps_to_string(caps);
+  std::string out = s;
+  g_free(s);
+  gst_caps_unref(caps);
+  return out;
+}
+
 }  // namespace p3d::test

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <gst/check/gstharness.h>
 #include <gst/gst.h>
@@ -29,5 +30,25 @@ cv::Mat buffer_depth(GstBuffer *buf);
 std::string run_to_eos(const std::string &launch, int timeout_s = 60);
 // Folder for files tests write (pictures of outputs).
 std::string output_dir();
+
+// Collects the error and warning messages an element (a harness's element,
+// which has no pipeline) posts: it gets a bus of its own.
+class BusMessages {
+ public:
+  explicit BusMessages(GstElement *element);
+  ~BusMessages();
+  BusMessages(const BusMessages &) = delete;
+  BusMessages &operator=(const BusMessages &) = delete;
+  // Texts ("message (debug)") of the messages of `type` posted so far.
+  std::vector<std::string> take(GstMessageType type);
+
+ private:
+  GstElement *element_;
+  GstBus *bus_;
+  std::vector<GstMessage *> pending_;  // popped, not yet asked for
+};
+
+// The caps on the pad (empty string if none).
+std::string current_caps(GstPad *pad);
 
 }  // namespace p3d::test

@@ -9,6 +9,9 @@
 #include "element_helpers.h"
 #include "test_data.h"
 
+#include "bilateral.h"
+#include "warp.h"
+
 using namespace p3d;
 using namespace p3d::test;
 
@@ -76,17 +79,71 @@ TEST(Plugin, PropertiesAreDocumented) {
   }
 }
 
-// Out-of-range values are refused by GObject (value unchanged).
-TEST(Plugin, OutOfRangePropertyIsRejected) {
-  GstElement *warp = gst_element_factory_make("pseudo3dwarp", nullptr);
-  GValue v = G_VALUE_INIT;
-  g_value_init(&v, G_TYPE_FLOAT);
-  g_value_set_float(&v, 1000.f);
-  GParamSpec *p = g_object_class_find_property(G_OBJECT_GET_CLASS(warp), "max-disparity");
-  EXPECT_TRUE(g_param_value_validate(p, &v)) << "1000% must be clamped by the spec";
-  EXPECT_LE(g_value_get_float(&v), 25.f);
-  g_value_unset(&v);
-  gst_object_unref(warp);
+// Every numeric property at both ends of its range (and every enum value)
+// runs through the whole chain: no error, a finite depth in [0, 1], output
+// of the expected size. (Range checks themselves are GObject's job.)
+TEST(Plugin, EveryPropertyAtItsExtremesProcessesFrames) {
+  const char *kStages[] = {"pseudo3ddepth", "pseudo3dfilter", "pseudo3dwarp", "pseudo3dpack"};
+  for (int stage = 0; stage < 4; ++stage) {
+    GstElement *probe = gst_element_factory_make(kStages[stage], nullptr);
+    guint n = 0;
+    GParamSpec **specs = g_object_class_list_properties(G_OBJECT_GET_CLASS(probe), &n);
+    for (guint i = 0; i < n; ++i) {
+      GParamSpec *p = specs[i];
+      if (!(p->flags & GST_PARAM_MUTABLE_PLAYING)) continue;
+      std::vector<std::string> values;
+      if (G_IS_PARAM_SPEC_INT(p)) {
+        values = {std::to_string(G_PARAM_SPEC_INT(p)->minimum), std::to_string(G_PARAM_SPEC_INT(p)->maximum)};
+      } else if (G_IS_PARAM_SPEC_FLOAT(p)) {
+        values = {std::to_string(G_PARAM_SPEC_FLOAT(p)->minimum), std::to_string(G_PARAM_SPEC_FLOAT(p)->maximum)};
+      } else if (G_IS_PARAM_SPEC_ENUM(p)) {
+        GEnumClass *e = G_PARAM_SPEC_ENUM(p)->enum_class;
+        for (guint k = 0; k < e->n_values; ++k) values.push_back(e->values[k].value_nick);
+      } else if (G_IS_PARAM_SPEC_BOOLEAN(p)) {
+        values = {"true", "false"};
+      }
+      for (const std::string &v : values) {
+        // rgbd needs a frame that holds colour and depth: keep the pipeline's own input otherwise.
+        if (std::string(p->name) == "method" && v == "rgbd") continue;
+        std::string chain;
+        for (int k = 0; k < 4; ++k)
+          chain += std::string(k ? " ! " : "") + kStages[k] + (k == stage ? std::string(" ") + p->name + "=" + v : "");
+        GstHarness *h = gst_harness_new_parse((chain + " ! capsfilter caps=video/x-raw,format=RGBA").c_str());
+        BusMessages bus(h->element);
+        gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::NV12, 40, 24).c_str());
+        GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(test_frame(PixelFormat::NV12, 40, 24, 3)));
+        EXPECT_NE(out, nullptr) << kStages[stage] << " " << p->name << "=" << v;
+        EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{}) << p->name << "=" << v;
+        if (out) {
+          GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+          GstVideoInfo info;
+          ASSERT_TRUE(gst_video_info_from_caps(&info, caps));
+          EXPECT_GE(gst_buffer_get_size(out), GST_VIDEO_INFO_SIZE(&info));
+          gst_caps_unref(caps);
+          gst_buffer_unref(out);
+        }
+        gst_harness_teardown(h);
+        // The depth itself at these settings: finite and in range.
+        if (stage < 2) {
+          GstHarness *d = gst_harness_new_parse(
+              (std::string("pseudo3ddepth ! pseudo3dfilter") + " " + (stage == 1 ? std::string(p->name) + "=" + v : "")).c_str());
+          if (stage == 0) {
+            gst_harness_teardown(d);
+            d = gst_harness_new_parse((std::string("pseudo3ddepth ") + p->name + "=" + v + " ! pseudo3dfilter").c_str());
+          }
+          gst_harness_set_src_caps_str(d, raw_caps(PixelFormat::NV12, 40, 24).c_str());
+          GstBuffer *o = gst_harness_push_and_pull(d, buffer_from_frame(test_frame(PixelFormat::NV12, 40, 24, 3)));
+          ASSERT_NE(o, nullptr);
+          const cv::Mat depth = buffer_depth(o);
+          EXPECT_TRUE(cv::checkRange(depth, true, nullptr, 0.0, 1.0 + 1e-6)) << p->name << "=" << v;
+          gst_buffer_unref(o);
+          gst_harness_teardown(d);
+        }
+      }
+    }
+    g_free(specs);
+    gst_object_unref(probe);
+  }
 }
 
 class DepthFormats : public ::testing::TestWithParam<std::tuple<PixelFormat, Size>> {};
@@ -177,13 +234,60 @@ TEST(Depth, RgbdSplitsColourAndDepth) {
   }
 }
 
-// 4:2:0 RGBD halves must start on a chroma sample.
+// 4:2:0 RGBD halves must start on a chroma sample: 14 wide is refused with
+// the element's own reason, once; 16 wide is accepted.
 TEST(Depth, RgbdRejectsUnsplittableYuvWidth) {
   GstHarness *h = gst_harness_new_parse("pseudo3ddepth method=rgbd");
+  BusMessages bus(h->element);
   gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::NV12, 14, 8).c_str());
-  GstBuffer *in = buffer_from_frame(test_frame(PixelFormat::NV12, 14, 8, 1));
-  EXPECT_NE(gst_harness_push(h, in), GST_FLOW_OK);
+  EXPECT_NE(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::NV12, 14, 8, 1))), GST_FLOW_OK);
+  EXPECT_NE(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::NV12, 14, 8, 1))), GST_FLOW_OK);
+  const std::vector<std::string> errors = bus.take(GST_MESSAGE_ERROR);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("RGBD input must be twice as wide as its colour half"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("multiple of 4"), std::string::npos) << errors[0];
   gst_harness_teardown(h);
+  GstHarness *ok = gst_harness_new_parse("pseudo3ddepth method=rgbd");
+  gst_harness_set_src_caps_str(ok, raw_caps(PixelFormat::NV12, 16, 8).c_str());
+  EXPECT_EQ(gst_harness_push(ok, buffer_from_frame(test_frame(PixelFormat::NV12, 16, 8, 1))), GST_FLOW_OK);
+  gst_harness_teardown(ok);
+}
+
+// Interlaced video is refused with a message, not processed as progressive.
+TEST(Depth, InterlacedInputIsRefused) {
+  GstHarness *h = gst_harness_new_parse("pseudo3ddepth");
+  BusMessages bus(h->element);
+  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::I420, 16, 8, ",interlace-mode=interleaved").c_str());
+  EXPECT_NE(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::I420, 16, 8, 1))), GST_FLOW_OK);
+  const std::vector<std::string> errors = bus.take(GST_MESSAGE_ERROR);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("Interlaced video is not supported"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("deinterlace"), std::string::npos) << errors[0];
+  gst_harness_teardown(h);
+}
+
+// The caps admit what the kernels accept: frames up to 8192 pixels a side
+// for the source stages, stereo frames up to twice that after the warp.
+TEST(Caps, LimitedToWhatTheKernelsAccept) {
+  struct Limit {
+    const char *factory;
+    const char *pad;
+    int max;
+  };
+  for (const Limit &l : {Limit{"pseudo3ddepth", "sink", 8192}, Limit{"pseudo3dfilter", "sink", 8192},
+                         Limit{"pseudo3dwarp", "sink", 8192}, Limit{"pseudo3dwarp", "src", 16384},
+                         Limit{"pseudo3dpack", "sink", 16384}, Limit{"pseudo3dconvert", "sink", 8192}}) {
+    GstElement *e = gst_element_factory_make(l.factory, nullptr);
+    GstPad *pad = gst_element_get_static_pad(e, l.pad);
+    const char *extra = std::string(l.factory) == "pseudo3dpack" ? ",multiview-mode=side-by-side" : "";
+    for (int w : {l.max, l.max + 1}) {
+      GstCaps *caps = gst_caps_from_string(raw_caps(PixelFormat::RGBA, w, 16, extra).c_str());
+      EXPECT_EQ(gst_pad_query_accept_caps(pad, caps), w == l.max) << l.factory << " " << l.pad << " width " << w;
+      gst_caps_unref(caps);
+    }
+    gst_object_unref(pad);
+    gst_object_unref(e);
+  }
 }
 
 // radius 0: the buffer passes through untouched (same buffer).
@@ -215,7 +319,8 @@ TEST(Filter, WithoutDepthIsAnError) { expect_error_without_depth("pseudo3dfilter
 
 class FilterFormats : public ::testing::TestWithParam<std::tuple<PixelFormat, Size>> {};
 
-// The filtered depth differs from the blocky estimate and stays in [0,1].
+// The element's filtered depth is bilateral_filter_cpu of the depth it was
+// given, guided by the frame, bit for bit.
 TEST_P(FilterFormats, FiltersDepth) {
   const auto [fmt, size] = GetParam();
   GstHarness *ref = harness("pseudo3ddepth", fmt, size.w, size.h);
@@ -225,7 +330,11 @@ TEST_P(FilterFormats, FiltersDepth) {
   GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(frame));
   const cv::Mat da = buffer_depth(a), db = buffer_depth(b);
   ASSERT_EQ(db.size(), cv::Size(size.w, size.h));
-  EXPECT_TRUE(cv::checkRange(db, true, nullptr, 0.0, 1.0 + 1e-6));
+  cv::Mat want(size.h, size.w, CV_32FC1);
+  BilateralParams p;
+  p.radius = 3;
+  bilateral_filter_cpu(p, frame.view(), depth_view_of(da), depth_view_of(want));
+  EXPECT_EQ(cv::norm(db, want, cv::NORM_INF), 0) << "the element is bilateral_filter_cpu";
   if (size.w >= 16) {
     EXPECT_GT(cv::norm(da, db, cv::NORM_INF), 1e-4) << "a radius-3 filter changes blocky depth";
   }
@@ -270,76 +379,44 @@ INSTANTIATE_TEST_SUITE_P(AllFormatsAndSizes, WarpFormats,
                                             ::testing::Values(Size{1, 1}, Size{3, 2}, Size{64, 48}, Size{4097, 2161})),
                          format_and_size_name);
 
-// With disparity, the two views differ and nothing is left unfilled (no magenta).
-TEST(Warp, ViewsDifferAndHolesAreFilled) {
-  GstHarness *h = harness("pseudo3ddepth ! pseudo3dwarp max-disparity=5 ! capsfilter caps=video/x-raw,format=RGBA",
-                          PixelFormat::RGBA, 128, 64);
-  GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(test_frame(PixelFormat::RGBA, 128, 64, 11)));
-  GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
-  const cv::Mat pair = buffer_to_bgra(out, caps);
-  EXPECT_GT(cv::norm(pair(cv::Rect(0, 0, 128, 64)), pair(cv::Rect(128, 0, 128, 64)), cv::NORM_L1), 0);
+// With disparity the warp leaves holes (fill=none paints them magenta) and
+// the default fill closes every one of them: the output is warp_render_cpu's
+// for the frame and the depth the element received.
+TEST(Warp, LeavesHolesAndFillsThem) {
+  const HostFrame frame = test_frame(PixelFormat::RGBA, 128, 64, 11);
+  auto render = [&](const char *fill, cv::Mat *depth) {
+    GstHarness *h = harness(std::string("pseudo3ddepth ! pseudo3dwarp max-disparity=5 fill=") + fill +
+                                " ! capsfilter caps=video/x-raw,format=RGBA",
+                            PixelFormat::RGBA, 128, 64);
+    GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(frame));
+    GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+    const cv::Mat pair = buffer_to_bgra(out, caps);
+    // The depth the warp got: the same estimate on the same frame.
+    GstHarness *d = harness("pseudo3ddepth", PixelFormat::RGBA, 128, 64);
+    GstBuffer *dout = gst_harness_push_and_pull(d, buffer_from_frame(frame));
+    *depth = buffer_depth(dout).clone();
+    gst_buffer_unref(dout);
+    gst_harness_teardown(d);
+    gst_caps_unref(caps);
+    gst_buffer_unref(out);
+    gst_harness_teardown(h);
+    return pair;
+  };
+  cv::Mat depth;
+  const cv::Mat holes = render("none", &depth);
   cv::Mat magenta;
-  cv::inRange(pair, cv::Scalar(255, 0, 255, 0), cv::Scalar(255, 0, 255, 255), magenta);
-  EXPECT_EQ(cv::countNonZero(magenta), 0);
-  gst_caps_unref(caps);
-  gst_buffer_unref(out);
-  gst_harness_teardown(h);
+  cv::inRange(holes, cv::Scalar(255, 0, 255, 0), cv::Scalar(255, 0, 255, 255), magenta);
+  EXPECT_GT(cv::countNonZero(magenta), 10) << "5% disparity over a depth edge must disocclude pixels";
+  const cv::Mat filled = render("background", &depth);
+  HostFrame want(PixelFormat::RGBA, 256, 64);
+  WarpParams p;
+  p.max_disparity = 5.f;
+  ASSERT_GT(warp_render_cpu(p, frame.view(), YuvToRgb(), as_const(depth_view_of(depth)), want.view()), 0);
+  EXPECT_EQ(cv::norm(filled, want.to_bgra(), cv::NORM_INF), 0) << "the fill must close every hole as the reference does";
+  EXPECT_GT(cv::norm(filled(cv::Rect(0, 0, 128, 64)), filled(cv::Rect(128, 0, 128, 64)), cv::NORM_L1), 0);
 }
 
 TEST(Warp, WithoutDepthIsAnError) { expect_error_without_depth("pseudo3dwarp"); }
-
-struct LayoutCase {
-  const char *layout;
-  int w_num, w_den, h_num;  // output size over the W x H view
-  GstVideoMultiviewMode mode;
-  bool half_aspect;
-};
-
-class PackLayouts : public ::testing::TestWithParam<LayoutCase> {};
-
-// Sizes and multiview signalling of every layout, on a 2W x H pair.
-TEST_P(PackLayouts, SizeAndMultiviewCaps) {
-  const LayoutCase c = GetParam();
-  const int w = 21, hgt = 9;  // odd view sizes
-  GstHarness *h = gst_harness_new_parse((std::string("pseudo3dpack layout=") + c.layout).c_str());
-  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::BGRx, 2 * w, hgt, ",multiview-mode=side-by-side").c_str());
-  GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(test_frame(PixelFormat::BGRx, 2 * w, hgt, 2)));
-  ASSERT_NE(out, nullptr) << c.layout;
-  GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
-  GstVideoInfo info;
-  ASSERT_TRUE(gst_video_info_from_caps(&info, caps));
-  EXPECT_EQ(GST_VIDEO_INFO_WIDTH(&info), w * c.w_num / c.w_den) << c.layout;
-  EXPECT_EQ(GST_VIDEO_INFO_HEIGHT(&info), hgt * c.h_num) << c.layout;
-  EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_MODE(&info), c.mode) << c.layout;
-  EXPECT_EQ((GST_VIDEO_INFO_MULTIVIEW_FLAGS(&info) & GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT) != 0, c.half_aspect)
-      << c.layout;
-  // As gst_video_info_to_caps does: half-aspect doubles the PAR along the squeezed axis.
-  const bool sbs = c.mode == GST_VIDEO_MULTIVIEW_MODE_SIDE_BY_SIDE, tb = c.mode == GST_VIDEO_MULTIVIEW_MODE_TOP_BOTTOM;
-  EXPECT_EQ(GST_VIDEO_INFO_PAR_N(&info), c.half_aspect && sbs ? 2 : 1) << c.layout;
-  EXPECT_EQ(GST_VIDEO_INFO_PAR_D(&info), c.half_aspect && tb ? 2 : 1) << c.layout;
-  gst_caps_unref(caps);
-  gst_buffer_unref(out);
-  gst_harness_teardown(h);
-}
-
-INSTANTIATE_TEST_SUITE_P(
-    Layouts, PackLayouts,
-    ::testing::Values(LayoutCase{"anaglyph", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_MONO, false},
-                      LayoutCase{"side-by-side", 2, 1, 1, GST_VIDEO_MULTIVIEW_MODE_SIDE_BY_SIDE, false},
-                      LayoutCase{"side-by-side-half", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_SIDE_BY_SIDE, true},
-                      LayoutCase{"top-bottom", 1, 1, 2, GST_VIDEO_MULTIVIEW_MODE_TOP_BOTTOM, false},
-                      LayoutCase{"top-bottom-half", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_TOP_BOTTOM, true},
-                      LayoutCase{"row-interleaved", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_ROW_INTERLEAVED, false},
-                      LayoutCase{"column-interleaved", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_COLUMN_INTERLEAVED, false},
-                      LayoutCase{"checkerboard", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_CHECKERBOARD, false},
-                      LayoutCase{"left", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_LEFT, false},
-                      LayoutCase{"right", 1, 1, 1, GST_VIDEO_MULTIVIEW_MODE_RIGHT, false}),
-    [](const auto &info) {
-      std::string n = info.param.layout;
-      for (char &ch : n)
-        if (ch == '-') ch = '_';
-      return n;
-    });
 
 // A full side-by-side pair is already packed: the same buffer comes out.
 TEST(Pack, SideBySideIsPassthrough) {

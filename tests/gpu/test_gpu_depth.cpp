@@ -10,7 +10,6 @@
 // real error (one hypothesis quantum, 1/65535 = 1.5e-5, or a block in the
 // wrong region) is far larger. Every output starts poisoned with NaN, so an
 // unwritten pixel counts as non-finite and fails.
-#include <chrono>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -376,10 +375,9 @@ TEST(GpuDepth, DepthFromGreyMatchesCpu) {
   cudaStreamDestroy(stream);
 }
 
-// Not a pass/fail test of speed (machines differ): prints the time of one
-// estimate at 4K and 8K for the record, and checks that a steady stream of
-// frames keeps giving the CPU's answer with the buffers reused.
-TEST(GpuDepth, TimingLargeFrames) {
+// 4K and 8K frames, as a stream: the estimator keeps giving the CPU's answer
+// with its buffers reused. (Speed is pseudo3d-bench's job, not a test's.)
+TEST(GpuDepth, LargeFramesMatchCpu) {
   const cv::Mat aloe = test::load_data_image("aloeL.jpg");
   ASSERT_FALSE(aloe.empty());
   struct Case {
@@ -398,24 +396,10 @@ TEST(GpuDepth, TimingLargeFrames) {
     GpuRunner gpu;
     DepthParams p;
     p.block_size = k.block;
-    p.static_threshold = -1.f;  // never reuse: time the full computation
-    cudaEvent_t start, stop;
-    ASSERT_EQ(cudaSuccess, cudaEventCreate(&start));
-    ASSERT_EQ(cudaSuccess, cudaEventCreate(&stop));
+    p.static_threshold = -1.f;  // never reuse: the full computation every frame
     for (int i = 0; i < 3; ++i) check_cuda(gpu.estimator().estimate(p, frame.view(), depth.view(), gpu.stream()));
-    const int runs = 20;
-    ASSERT_EQ(cudaSuccess, cudaEventRecord(start, gpu.stream()));
-    for (int i = 0; i < runs; ++i) check_cuda(gpu.estimator().estimate(p, frame.view(), depth.view(), gpu.stream()));
-    ASSERT_EQ(cudaSuccess, cudaEventRecord(stop, gpu.stream()));
-    ASSERT_EQ(cudaSuccess, cudaEventSynchronize(stop));
-    float ms = 0;
-    ASSERT_EQ(cudaSuccess, cudaEventElapsedTime(&ms, start, stop));
     const std::string name = std::to_string(k.w) + "x" + std::to_string(k.h) + "_" + format_name(k.fmt) + "_B" +
                              std::to_string(k.block);
-    std::printf("[ timing   ] depth estimate %s: %.3f ms/frame\n", name.c_str(), ms / runs);
-    RecordProperty("ms_per_frame_" + name, std::to_string(ms / runs));
-    cudaEventDestroy(start);
-    cudaEventDestroy(stop);
     DepthEstimatorCpu cpu;
     const Result c = run_cpu(cpu, p, f);
     std::vector<int> labels;

@@ -87,8 +87,13 @@ inline constexpr PackLayout kAllLayouts[] = {
     PackLayout::Left,          PackLayout::Right};
 inline constexpr AnaglyphGlasses kAllGlasses[] = {AnaglyphGlasses::RedCyan, AnaglyphGlasses::GreenMagenta,
                                                   AnaglyphGlasses::AmberBlue};
-inline constexpr AnaglyphMethod kAllMethods[] = {AnaglyphMethod::Dubois, AnaglyphMethod::Color,
-                                                 AnaglyphMethod::HalfColor, AnaglyphMethod::Gray};
+inline constexpr AnaglyphMethod kAllMethods[] = {AnaglyphMethod::Dubois,       AnaglyphMethod::Color,
+                                                 AnaglyphMethod::HalfColor,    AnaglyphMethod::Gray,
+                                                 AnaglyphMethod::DuboisFfmpeg, AnaglyphMethod::DuboisLinear};
+inline constexpr StereoInput kAllInputs[] = {StereoInput::SideBySide,     StereoInput::SideBySideHalf,
+                                             StereoInput::TopBottom,      StereoInput::TopBottomHalf,
+                                             StereoInput::RowInterleaved, StereoInput::ColumnInterleaved,
+                                             StereoInput::Checkerboard};
 inline constexpr HoleFill kAllFills[] = {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None};
 inline constexpr StereoView kAllViews[] = {StereoView::Both, StereoView::Left, StereoView::Right};
 

@@ -1,0 +1,377 @@
+// Properties changed while frames flow: every property documented as
+// changeable while playing, set from a second thread hundreds of times, with
+// no error and every frame consistent with its caps; geometry-changing
+// properties (pack's layout, swap-eyes and input layout, depth's method)
+// checked frame by frame against the reference for the caps each frame came
+// with; READY-only properties refused while playing; caps renegotiation mid
+// stream (size and format).
+#include <gst/check/gstharness.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "depth_estimate.h"
+#include "element_helpers.h"
+#include "pack.h"
+#include "test_data.h"
+
+using namespace p3d;
+using namespace p3d::test;
+
+namespace {
+
+// A second thread that sets properties until stopped.
+class PropertyChanger {
+ public:
+  template <typename F>
+  explicit PropertyChanger(F &&change) : thread_([this, change] {
+      std::mt19937 rng(12345);
+      while (!stop_.load()) {
+        change(rng);
+        ++changes_;
+        std::this_thread::sleep_for(std::chrono::microseconds(150));
+      }
+    }) {}
+  ~PropertyChanger() { finish(); }
+  int finish() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    return changes_;
+  }
+  int changes() const { return changes_; }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::atomic<int> changes_{0};
+  std::thread thread_;
+};
+
+// A random valid value of a property (extremes often).
+void set_random(GObject *obj, GParamSpec *p, std::mt19937 &rng) {
+  GValue v = G_VALUE_INIT;
+  g_value_init(&v, p->value_type);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double t = u(rng) < 0.2 ? 0.0 : (u(rng) < 0.25 ? 1.0 : u(rng));
+  if (G_IS_PARAM_SPEC_ENUM(p)) {
+    GEnumClass *e = G_PARAM_SPEC_ENUM(p)->enum_class;
+    g_value_set_enum(&v, e->values[rng() % e->n_values].value);
+  } else if (G_IS_PARAM_SPEC_INT(p)) {
+    const auto *i = G_PARAM_SPEC_INT(p);
+    g_value_set_int(&v, i->minimum + static_cast<int>(t * (static_cast<double>(i->maximum) - i->minimum)));
+  } else if (G_IS_PARAM_SPEC_FLOAT(p)) {
+    const auto *f = G_PARAM_SPEC_FLOAT(p);
+    g_value_set_float(&v, static_cast<float>(f->minimum + t * (static_cast<double>(f->maximum) - f->minimum)));
+  } else if (G_IS_PARAM_SPEC_BOOLEAN(p)) {
+    g_value_set_boolean(&v, rng() % 2);
+  }
+  g_object_set_property(obj, p->name, &v);
+  g_value_unset(&v);
+}
+
+// The element's properties documented as changeable while playing.
+std::vector<GParamSpec *> live_properties(GstElement *e) {
+  guint n = 0;
+  GParamSpec **specs = g_object_class_list_properties(G_OBJECT_GET_CLASS(e), &n);
+  std::vector<GParamSpec *> live;
+  for (guint i = 0; i < n; ++i)
+    if ((specs[i]->flags & GST_PARAM_MUTABLE_PLAYING) && (specs[i]->flags & G_PARAM_WRITABLE)) live.push_back(specs[i]);
+  g_free(specs);
+  return live;
+}
+
+GstElement *find(GstHarness *h, const char *factory) {
+  if (g_str_equal(GST_OBJECT_NAME(gst_element_get_factory(h->element)), factory))
+    return GST_ELEMENT(gst_object_ref(h->element));
+  GstIterator *it = gst_bin_iterate_recurse(GST_BIN(h->element));
+  GValue v = G_VALUE_INIT;
+  GstElement *found = nullptr;
+  while (!found && gst_iterator_next(it, &v) == GST_ITERATOR_OK) {
+    GstElement *e = GST_ELEMENT(g_value_get_object(&v));
+    if (g_str_equal(GST_OBJECT_NAME(gst_element_get_factory(e)), factory)) found = GST_ELEMENT(gst_object_ref(e));
+    g_value_reset(&v);
+  }
+  g_value_unset(&v);
+  gst_iterator_free(it);
+  return found;
+}
+
+// The frames a harness's output buffer belongs to: size and format from the caps.
+GstVideoInfo output_info(GstHarness *h) {
+  GstVideoInfo info;
+  gst_video_info_init(&info);
+  GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+  if (caps) gst_video_info_from_caps(&info, caps);
+  if (caps) gst_caps_unref(caps);
+  return info;
+}
+
+HostFrame textured(PixelFormat f, int w, int h, uint32_t seed) {
+  cv::Mat bgr(h, w, CV_8UC3);
+  cv::RNG rng(seed);
+  rng.fill(bgr, cv::RNG::UNIFORM, 0, 255);
+  bgr(cv::Rect(0, 0, w, h / 2)).setTo(cv::Scalar(30, 160, 220));
+  return HostFrame::from_bgr(bgr, f);
+}
+
+}  // namespace
+
+// Every live property of every element, changed from a second thread while
+// frames are pushed through the whole chain: every frame comes out, sized as
+// its caps say, and nothing posts an error or a warning.
+TEST(LiveProperties, EveryLivePropertyFromASecondThread) {
+  const char *chains[] = {"pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack",
+                          "pseudo3dconvert processing=cpu"};
+  const char *factories[][4] = {{"pseudo3ddepth", "pseudo3dfilter", "pseudo3dwarp", "pseudo3dpack"},
+                                {"pseudo3dconvert", nullptr, nullptr, nullptr}};
+  for (int c = 0; c < 2; ++c) {
+    GstHarness *h = gst_harness_new_parse(chains[c]);
+    BusMessages bus(h->element);
+    gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::I420, 64, 48).c_str());
+    std::vector<std::pair<GstElement *, GParamSpec *>> targets;
+    for (const char *f : factories[c]) {
+      if (!f) continue;
+      GstElement *e = find(h, f);
+      ASSERT_NE(e, nullptr) << f;
+      for (GParamSpec *p : live_properties(e)) targets.emplace_back(e, p);
+    }
+    ASSERT_GT(targets.size(), 10u);
+    std::vector<HostFrame> frames;
+    for (uint32_t s = 0; s < 4; ++s) frames.push_back(textured(PixelFormat::I420, 64, 48, s));
+    int pushed = 0;
+    {
+      PropertyChanger changer([&](std::mt19937 &rng) {
+        auto &t = targets[rng() % targets.size()];
+        set_random(G_OBJECT(t.first), t.second, rng);
+      });
+      for (; pushed < 400 || changer.changes() < 300; ++pushed) {
+        GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(frames[pushed % frames.size()]));
+        ASSERT_NE(out, nullptr) << chains[c] << " frame " << pushed;
+        const GstVideoInfo info = output_info(h);
+        EXPECT_GE(gst_buffer_get_size(out), GST_VIDEO_INFO_SIZE(&info)) << "frame " << pushed;
+        EXPECT_GT(GST_VIDEO_INFO_WIDTH(&info), 0);
+        gst_buffer_unref(out);
+        if (HasFailure()) break;
+      }
+      const int changes = changer.finish();
+      EXPECT_GE(changes, 200) << "the second thread should have made hundreds of changes";
+    }
+    EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{}) << chains[c];
+    EXPECT_EQ(bus.take(GST_MESSAGE_WARNING), std::vector<std::string>{}) << chains[c];
+    std::vector<GstElement *> unique;
+    for (auto &t : targets)
+      if (std::find(unique.begin(), unique.end(), t.first) == unique.end()) unique.push_back(t.first);
+    for (GstElement *e : unique) gst_object_unref(e);
+    gst_harness_teardown(h);
+  }
+}
+
+// pseudo3dpack while layout, swap-eyes and input-layout change from another
+// thread: each frame is exactly the conversion its own caps describe.
+TEST(LiveProperties, PackFramesMatchTheirCaps) {
+  const int w = 12, h = 8;
+  HostFrame pair(PixelFormat::RGBA, 2 * w, h);
+  pair.fill_random(77);
+  GstHarness *hx = gst_harness_new_parse("pseudo3dpack glasses=green-magenta anaglyph-method=color");
+  GstElement *pack = find(hx, "pseudo3dpack");
+  BusMessages bus(hx->element);
+  gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::RGBA, 2 * w, h, ",multiview-mode=side-by-side").c_str());
+  GEnumClass *layouts = G_ENUM_CLASS(g_type_class_ref(g_type_from_name("GstPseudo3DLayout")));
+  int checked = 0;
+  {
+    PropertyChanger changer([&](std::mt19937 &rng) {
+      switch (rng() % 3) {
+        case 0: g_object_set(pack, "layout", layouts->values[rng() % layouts->n_values].value, NULL); break;
+        case 1: g_object_set(pack, "swap-eyes", (gboolean)(rng() % 2), NULL); break;
+        default: gst_util_set_object_arg(G_OBJECT(pack), "input-layout", rng() % 2 ? "from-caps" : "side-by-side");
+      }
+    });
+    for (int i = 0; i < 300 || changer.changes() < 300; ++i) {
+      GstBuffer *out = gst_harness_push_and_pull(hx, buffer_from_frame(pair));
+      ASSERT_NE(out, nullptr) << "frame " << i;
+      GstCaps *caps = gst_pad_get_current_caps(hx->sinkpad);
+      GstVideoInfo info;
+      ASSERT_TRUE(gst_video_info_from_caps(&info, caps));
+      // What the caps say the frame is.
+      PackParams p;
+      p.glasses = AnaglyphGlasses::GreenMagenta;
+      p.method = AnaglyphMethod::Color;
+      const GstVideoMultiviewMode mode = GST_VIDEO_INFO_MULTIVIEW_MODE(&info);
+      const guint flags = GST_VIDEO_INFO_MULTIVIEW_FLAGS(&info);
+      const bool half = flags & GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT;
+      p.swap_eyes = flags & GST_VIDEO_MULTIVIEW_FLAGS_RIGHT_VIEW_FIRST;
+      bool known = true;
+      switch (mode) {
+        case GST_VIDEO_MULTIVIEW_MODE_MONO: p.layout = PackLayout::Anaglyph; break;
+        case GST_VIDEO_MULTIVIEW_MODE_LEFT: p.layout = PackLayout::Left; break;
+        case GST_VIDEO_MULTIVIEW_MODE_RIGHT: p.layout = PackLayout::Right; break;
+        case GST_VIDEO_MULTIVIEW_MODE_SIDE_BY_SIDE:
+          p.layout = half ? PackLayout::SideBySideHalf : PackLayout::SideBySide;
+          break;
+        case GST_VIDEO_MULTIVIEW_MODE_TOP_BOTTOM: p.layout = half ? PackLayout::TopBottomHalf : PackLayout::TopBottom; break;
+        case GST_VIDEO_MULTIVIEW_MODE_ROW_INTERLEAVED: p.layout = PackLayout::RowInterleaved; break;
+        case GST_VIDEO_MULTIVIEW_MODE_COLUMN_INTERLEAVED: p.layout = PackLayout::ColumnInterleaved; break;
+        case GST_VIDEO_MULTIVIEW_MODE_CHECKERBOARD: p.layout = PackLayout::Checkerboard; break;
+        default: known = false;
+      }
+      ASSERT_TRUE(known) << "frame " << i << " mode " << mode;
+      // An anaglyph's swap-eyes is not in the caps: both are possible, one must match.
+      int ow = 0, oh = 0;
+      pack_size(p.layout, w, h, &ow, &oh);
+      ASSERT_EQ(GST_VIDEO_INFO_WIDTH(&info), ow) << "frame " << i;
+      ASSERT_EQ(GST_VIDEO_INFO_HEIGHT(&info), oh) << "frame " << i;
+      const cv::Mat got = buffer_to_bgra(out, caps);
+      bool match = false;
+      for (bool swap : {p.swap_eyes, !p.swap_eyes}) {
+        if (swap != p.swap_eyes && p.layout != PackLayout::Anaglyph) continue;
+        PackParams q = p;
+        q.swap_eyes = swap;
+        HostFrame want(PixelFormat::RGBA, ow, oh);
+        pack_cpu(q, pair.view(), want.view());
+        match = match || cv::norm(got, want.to_bgra(), cv::NORM_INF) == 0;
+      }
+      EXPECT_TRUE(match) << "frame " << i << " is not the conversion its caps describe";
+      ++checked;
+      gst_caps_unref(caps);
+      gst_buffer_unref(out);
+      if (HasFailure()) break;
+    }
+    EXPECT_GE(changer.finish(), 300);
+  }
+  EXPECT_GE(checked, 300);
+  EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{});
+  g_type_class_unref(layouts);
+  gst_object_unref(pack);
+  gst_harness_teardown(hx);
+}
+
+// pseudo3ddepth while method switches between edges and rgbd: an rgbd frame
+// is the colour half with the grey half as depth, an edges frame is the
+// whole input with depth of its size; never anything in between.
+TEST(LiveProperties, DepthMethodFramesMatchTheirCaps) {
+  const int w = 16, h = 8;
+  for (PixelFormat fmt : {PixelFormat::RGBA, PixelFormat::I420}) {
+    cv::Mat bgr(h, 2 * w, CV_8UC3);
+    cv::randu(bgr, 0, 256);
+    const HostFrame rgbd = HostFrame::from_bgr(bgr, fmt);
+    GstHarness *hx = gst_harness_new_parse("pseudo3ddepth");
+    GstElement *depth_el = find(hx, "pseudo3ddepth");
+    BusMessages bus(hx->element);
+    gst_harness_set_src_caps_str(hx, raw_caps(fmt, 2 * w, h).c_str());
+    int seen_rgbd = 0, seen_edges = 0;
+    {
+      PropertyChanger changer([&](std::mt19937 &rng) {
+        gst_util_set_object_arg(G_OBJECT(depth_el), "method", rng() % 2 ? "rgbd" : "edges");
+      });
+      for (int i = 0; i < 300 || changer.changes() < 300; ++i) {
+        GstBuffer *out = gst_harness_push_and_pull(hx, buffer_from_frame(rgbd));
+        ASSERT_NE(out, nullptr);
+        GstCaps *caps = gst_pad_get_current_caps(hx->sinkpad);
+        const cv::Mat frame = buffer_to_bgra(out, caps), depth = buffer_depth(out);
+        const cv::Mat input = rgbd.to_bgra(yuv_to_rgb_params(0.299, 0.114, false));
+        if (frame.cols == w) {
+          ++seen_rgbd;
+          EXPECT_EQ(cv::norm(frame, input(cv::Rect(0, 0, w, h)), cv::NORM_INF), 0) << "frame " << i;
+          ASSERT_EQ(depth.size(), cv::Size(w, h));
+          HostFrame grey(fmt, w, h);
+          cv::Mat want(h, w, CV_32FC1);
+          FrameView half = rgbd.view();
+          half.width = w;
+          if (is_packed_rgb(fmt)) {
+            half.plane[0] += 4 * w;
+          } else {
+            half.plane[0] += w;
+            half.plane[1] += w / 2;
+            half.plane[2] += w / 2;
+          }
+          depth_from_grey_cpu(half, yuv_to_rgb_params(0.299, 0.114, false), depth_view_of(want));
+          EXPECT_EQ(cv::norm(depth, want, cv::NORM_INF), 0) << "frame " << i;
+        } else {
+          ++seen_edges;
+          EXPECT_EQ(frame.cols, 2 * w) << "frame " << i;
+          EXPECT_EQ(cv::norm(frame, input, cv::NORM_INF), 0) << "frame " << i;
+          EXPECT_EQ(depth.size(), cv::Size(2 * w, h)) << "frame " << i;
+        }
+        gst_caps_unref(caps);
+        gst_buffer_unref(out);
+        if (HasFailure()) break;
+      }
+    }
+    EXPECT_GT(seen_rgbd, 10);
+    EXPECT_GT(seen_edges, 10);
+    EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{});
+    gst_object_unref(depth_el);
+    gst_harness_teardown(hx);
+  }
+}
+
+// processing and cuda-device-id may only change in NULL or READY: while
+// playing the change is refused with a warning, and the value stays.
+TEST(LiveProperties, ReadyOnlyPropertiesAreRefusedWhilePlaying) {
+  for (const char *factory : {"pseudo3dwarp", "pseudo3dconvert"}) {
+    GstHarness *h = gst_harness_new(factory);
+    BusMessages bus(h->element);
+    ASSERT_EQ(GST_STATE(h->element), GST_STATE_PLAYING);
+    gst_util_set_object_arg(G_OBJECT(h->element), "processing", "gpu");
+    g_object_set(h->element, "cuda-device-id", 3, NULL);
+    gint device = 0;
+    GValue v = G_VALUE_INIT;
+    g_value_init(&v, g_type_from_name("GstPseudo3DProcessing"));
+    g_object_get_property(G_OBJECT(h->element), "processing", &v);
+    EXPECT_EQ(g_value_get_enum(&v), 0) << factory << ": processing stays auto";
+    g_value_unset(&v);
+    g_object_get(h->element, "cuda-device-id", &device, NULL);
+    EXPECT_EQ(device, -1) << factory;
+    const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
+    ASSERT_EQ(warnings.size(), 2u) << factory;
+    EXPECT_NE(warnings[0].find("'processing' cannot be changed"), std::string::npos) << warnings[0];
+    // In READY the same change is taken.
+    gst_element_set_state(h->element, GST_STATE_READY);
+    g_object_set(h->element, "cuda-device-id", 3, NULL);
+    g_object_get(h->element, "cuda-device-id", &device, NULL);
+    EXPECT_EQ(device, 3) << factory;
+    gst_harness_teardown(h);
+  }
+}
+
+// New caps mid-stream (another size, another format): the first frame after
+// each change is what a fresh element gives for it (the history does not
+// carry over), and the output caps follow.
+TEST(Renegotiation, SizeAndFormatMidStream) {
+  const char *chain = "pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack layout=side-by-side-half";
+  struct Step {
+    PixelFormat f;
+    int w, h;
+  };
+  const Step steps[] = {{PixelFormat::RGBA, 64, 48}, {PixelFormat::NV12, 80, 40}, {PixelFormat::NV12, 64, 48},
+                        {PixelFormat::BGRx, 64, 48}};
+  GstHarness *h = gst_harness_new_parse(chain);
+  for (const Step &s : steps) {
+    gst_harness_set_src_caps_str(h, raw_caps(s.f, s.w, s.h).c_str());
+    const HostFrame a = textured(s.f, s.w, s.h, 1), b = textured(s.f, s.w, s.h, 2);
+    GstBuffer *first = gst_harness_push_and_pull(h, buffer_from_frame(a));
+    GstBuffer *second = gst_harness_push_and_pull(h, buffer_from_frame(b));
+    ASSERT_NE(first, nullptr);
+    ASSERT_NE(second, nullptr);
+    const GstVideoInfo info = output_info(h);
+    EXPECT_EQ(GST_VIDEO_INFO_WIDTH(&info), s.w);
+    EXPECT_EQ(GST_VIDEO_INFO_HEIGHT(&info), s.h);
+    GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+    const cv::Mat got = buffer_to_bgra(first, caps);
+    // A fresh chain given the same first frame.
+    GstHarness *fresh = gst_harness_new_parse(chain);
+    gst_harness_set_src_caps_str(fresh, raw_caps(s.f, s.w, s.h).c_str());
+    GstBuffer *want_buf = gst_harness_push_and_pull(fresh, buffer_from_frame(a));
+    ASSERT_NE(want_buf, nullptr);
+    EXPECT_EQ(cv::norm(got, buffer_to_bgra(want_buf, caps), cv::NORM_INF), 0) << format_name(s.f) << " " << s.w;
+    gst_buffer_unref(want_buf);
+    gst_harness_teardown(fresh);
+    gst_caps_unref(caps);
+    gst_buffer_unref(first);
+    gst_buffer_unref(second);
+  }
+  gst_harness_teardown(h);
+}
