@@ -6,6 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <glib/gstdio.h>
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -250,4 +255,37 @@ TEST(Pipeline, LatencyIsForwarded) {
   EXPECT_TRUE(std::get<1>(stages));
   EXPECT_EQ(std::get<2>(stages), std::get<2>(plain));
   EXPECT_EQ(std::get<3>(stages), std::get<3>(plain));
+}
+
+namespace {
+
+// In a child process: an address-space limit that holds the input frame and
+// its depth map but not the warp's 2W x H output; the warp must post an
+// element error naming the size (GLib's allocator would abort the process).
+void allocation_failure_child() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  long long vm_kb = 0;
+  while (std::getline(status, line))
+    if (line.rfind("VmSize:", 0) == 0) vm_kb = std::atoll(line.c_str() + 7);
+  const rlim_t limit = static_cast<rlim_t>(vm_kb) * 1024 + (420ll << 20);
+  const rlimit rl{limit, limit};
+  if (vm_kb == 0 || setrlimit(RLIMIT_AS, &rl) != 0) std::exit(2);
+  const std::string err = run_to_eos(
+      "videotestsrc num-buffers=1 ! video/x-raw,format=RGBA,width=8192,height=4096 ! pseudo3ddepth processing=cpu ! "
+      "pseudo3dwarp processing=cpu ! fakesink",
+      120);
+  std::fprintf(stderr, "error: %s\n", err.c_str());
+  std::exit(err.find("Could not allocate a 16384x4096 output frame (268435456 bytes)") != std::string::npos ? 0 : 1);
+}
+
+}  // namespace
+
+TEST(Pipeline, OutputAllocationFailureIsAnElementError) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves the address space that RLIMIT_AS limits";
+#else
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(allocation_failure_child(), ::testing::ExitedWithCode(0), "Could not allocate");
+#endif
 }
