@@ -56,6 +56,10 @@ bool mkv_stereo_mode_written(MkvStereoLayout layout, bool right_first);
 // element).
 // WebM allows StereoMode only for mono, side by side and top-bottom; other
 // layouts are refused there.
+// Meant for files whose H.264/H.265 frame-packing SEI already carries the
+// eye order (pseudo3dsignal before the muxer): GStreamer ignores StereoMode
+// 6, 7, 8 and 11 and takes the layout from the SEI, and x264 alone always
+// writes "left first" there.
 // Returns false with *error (the file unchanged and valid) when the file
 // is not Matroska/WebM, is truncated or corrupt, has no video track, or the
 // Tracks element has no room for the new fields.
