@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs what pseudo3d needs on Debian 12 (run as root, or with sudo):
 # build tools, GStreamer 1.22 with base/good/bad/ugly plugins and libgstcuda,
-# OpenCV, GoogleTest, and opencv-doc (the Middlebury Aloe pair and vtest.avi
-# used by the tests). The CUDA toolkit (nvcc) is optional: with it the GPU
-# path is built too.
+# OpenCV, GoogleTest, opencv-doc (the Middlebury Aloe pair and vtest.avi
+# used by the tests), ffmpeg and mkvtoolnix (the tests read Matroska files
+# back with ffprobe and mkvinfo). The CUDA toolkit (nvcc) is optional: with
+# it the GPU path is built too.
 set -euo pipefail
 packages=(
   meson ninja-build pkg-config g++ git
@@ -11,6 +12,7 @@ packages=(
   gstreamer1.0-tools gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-plugins-bad
   gstreamer1.0-plugins-ugly gstreamer1.0-libav
   libopencv-dev libgtest-dev opencv-doc python3-matplotlib python3-numpy
+  ffmpeg mkvtoolnix
 )
 missing=()
 for p in "${packages[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done

@@ -83,7 +83,7 @@ cv::Mat buffer_depth(GstBuffer *buf) {
   return m;
 }
 
-std::string run_to_eos(const std::string &launch, int timeout_s) {
+std::string run_to_eos(const std::string &launch, int timeout_s, const std::function<void(GstElement *)> &at_eos) {
   GError *err = nullptr;
   GstElement *pipeline = gst_parse_launch(launch.c_str(), &err);
   if (!pipeline) {
@@ -116,6 +116,8 @@ std::string run_to_eos(const std::string &launch, int timeout_s) {
       g_free(dbg);
     } else if (failed) {
       result = "state change failed";
+    } else if (at_eos) {
+      at_eos(pipeline);
     }
     gst_message_unref(msg);
   }

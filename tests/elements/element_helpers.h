@@ -2,6 +2,7 @@
 // caps strings, reading the depth meta, running a launch line to EOS.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,10 @@ cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps);
 // The depth meta as a CV_32FC1 copy; empty if none.
 cv::Mat buffer_depth(GstBuffer *buf);
 // Runs a launch line to EOS (timeout in seconds); returns the error message
-// or "" on success.
-std::string run_to_eos(const std::string &launch, int timeout_s = 60);
+// or "" on success. at_eos, if given, sees the pipeline at EOS before it is
+// stopped (negotiated caps and sink statistics are still there).
+std::string run_to_eos(const std::string &launch, int timeout_s = 60,
+                       const std::function<void(GstElement *pipeline)> &at_eos = {});
 // Folder for files tests write (pictures of outputs).
 std::string output_dir();
 
