@@ -36,7 +36,9 @@ typedef enum { GST_PSEUDO3D_DEPTH_METHOD_EDGES = 0, GST_PSEUDO3D_DEPTH_METHOD_RG
 
 #define GST_TYPE_PSEUDO3D_INPUT_LAYOUT (gst_pseudo3d_input_layout_get_type())
 GType gst_pseudo3d_input_layout_get_type(void);
-// pseudo3dpack's input-layout property: from the caps, or p3d::StereoInput + 1.
-typedef enum { GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS = 0 } GstPseudo3DInputLayout;
+// pseudo3dpack's input-layout property: from the caps, or p3d::StereoInput + 1
+// (an int, so every value of the GEnum is a valid value of the type).
+typedef gint GstPseudo3DInputLayout;
+#define GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS 0
 
 G_END_DECLS

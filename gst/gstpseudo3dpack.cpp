@@ -285,7 +285,7 @@ static void gst_pseudo3d_pack_set_property(GObject *object, guint prop_id, const
   switch (prop_id) {
     case PROP_LAYOUT: g.layout = static_cast<p3d::PackLayout>(g_value_get_enum(value)); break;
     case PROP_SWAP_EYES: g.swap_eyes = g_value_get_boolean(value); break;
-    case PROP_INPUT_LAYOUT: g.input = static_cast<GstPseudo3DInputLayout>(g_value_get_enum(value)); break;
+    case PROP_INPUT_LAYOUT: g.input = g_value_get_enum(value); break;
     case PROP_INPUT_RIGHT_FIRST: g.input_right_first = g_value_get_boolean(value); break;
     case PROP_GLASSES:
       self->params.glasses = static_cast<p3d::AnaglyphGlasses>(g_value_get_enum(value));

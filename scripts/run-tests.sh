@@ -9,19 +9,5 @@ cd "$top"
 "$top/scripts/build.sh" || exit 1
 meson test -C build --print-errorlogs --num-processes 2 "$@"
 rc=$?
-# Closing line over every test case (gtest cases as meson's JUnit log lists them).
-python3 - "$top/build/meson-logs/testlog.junit.xml" <<'PY'
-import sys
-import xml.etree.ElementTree as ET
-passed = failed = skipped = 0
-for case in ET.parse(sys.argv[1]).getroot().iter("testcase"):
-    kinds = {child.tag for child in case}
-    if kinds & {"failure", "error"}:
-        failed += 1
-    elif "skipped" in kinds:
-        skipped += 1
-    else:
-        passed += 1
-print(f"{passed} passed, {failed} failed, {skipped} skipped")
-PY
+python3 "$top/scripts/junit_summary.py" "$top/build/meson-logs/testlog.junit.xml"
 exit $rc

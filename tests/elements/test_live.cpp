@@ -149,7 +149,11 @@ TEST(LiveProperties, EveryLivePropertyFromASecondThread) {
       });
       for (; pushed < 400 || changer.changes() < 300; ++pushed) {
         GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(frames[pushed % frames.size()]));
-        ASSERT_NE(out, nullptr) << chains[c] << " frame " << pushed;
+        if (!out) {
+          std::string errors;
+          for (const std::string &e : bus.take(GST_MESSAGE_ERROR)) errors += e + "\n";
+          FAIL() << chains[c] << ": no output for frame " << pushed << "; errors:\n" << errors;
+        }
         const GstVideoInfo info = output_info(h);
         EXPECT_GE(gst_buffer_get_size(out), GST_VIDEO_INFO_SIZE(&info)) << "frame " << pushed;
         EXPECT_GT(GST_VIDEO_INFO_WIDTH(&info), 0);

@@ -3,6 +3,7 @@
 // format, odd sizes and 4K; device memory flat over 1000 frames. Skipped
 // (exit 77) without a CUDA device or without nvcodec's cudaupload.
 #include <gst/check/gstharness.h>
+#include <gmodule.h>
 #include <gst/gst.h>
 #include <gtest/gtest.h>
 
@@ -197,6 +198,87 @@ TEST(GpuChainMemory, FlatOver1000Frames) {
   RecordProperty("device_memory_growth_bytes", std::to_string(grown));
   EXPECT_LE(grown, 2ll << 20) << "device memory grew by " << grown << " bytes over 1000 frames";
   gst_harness_teardown(hx);
+}
+
+// The plugin's fault-injection hook (gst/fault_hook.cpp): the n-th checked
+// CUDA call inside the plugin reports a failure.
+using InjectFn = void (*)(int);
+InjectFn fault_hook() {
+  GstPlugin *plugin = gst_registry_find_plugin(gst_registry_get(), "pseudo3d");
+  if (!plugin) return nullptr;
+  gst_plugin_load(plugin);
+  GModule *module = g_module_open(gst_plugin_get_filename(plugin), G_MODULE_BIND_LOCAL);
+  gst_object_unref(plugin);
+  gpointer fn = nullptr;
+  if (module) g_module_symbol(module, "pseudo3d_test_inject_cuda_fault", &fn);
+  return reinterpret_cast<InjectFn>(fn);
+}
+
+// Waits for an error or EOS; returns the error text ("" for EOS), or
+// "timeout" when neither came.
+std::string wait_end(GstElement *pipeline, std::string *source) {
+  GstBus *bus = gst_element_get_bus(pipeline);
+  GstMessage *m =
+      gst_bus_timed_pop_filtered(bus, 60 * GST_SECOND, (GstMessageType)(GST_MESSAGE_ERROR | GST_MESSAGE_EOS));
+  gst_object_unref(bus);
+  if (!m) return "timeout";
+  std::string text;
+  if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
+    GError *e = nullptr;
+    gchar *dbg = nullptr;
+    gst_message_parse_error(m, &e, &dbg);
+    text = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
+    if (source) *source = GST_OBJECT_NAME(GST_MESSAGE_SRC(m));
+    g_clear_error(&e);
+    g_free(dbg);
+  }
+  gst_message_unref(m);
+  return text;
+}
+
+// A CUDA call failing in the middle of a stream (after frames have flowed):
+// one clean element error that names the CUDA failure, no crash and no
+// hang; the same pipeline then goes to NULL and runs to EOS again.
+TEST(GpuFaults, MidStreamFailureIsACleanErrorAndThePipelineIsReusable) {
+  const InjectFn inject = fault_hook();
+  ASSERT_NE(inject, nullptr) << "pseudo3d_test_inject_cuda_fault not found in the plugin";
+  GstElement *p = gst_parse_launch(
+      "videotestsrc num-buffers=120 ! video/x-raw,format=NV12,width=320,height=240 ! cudaupload ! "
+      "video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack ! cudadownload ! "
+      "fakesink name=sink sync=false",
+      nullptr);
+  ASSERT_NE(p, nullptr);
+  GstElement *sink = gst_bin_get_by_name(GST_BIN(p), "sink");
+  for (int after : {1, 5, 23}) {
+    SCOPED_TRACE("failing call " + std::to_string(after));
+    inject(0);
+    ASSERT_NE(gst_element_set_state(p, GST_STATE_PLAYING), GST_STATE_CHANGE_FAILURE);
+    // Let frames flow first: the failure must hit a running stream.
+    for (int waited = 0; waited < 200; ++waited) {
+      GstStructure *stats = nullptr;
+      guint64 rendered = 0;
+      g_object_get(sink, "stats", &stats, NULL);
+      gst_structure_get_uint64(stats, "rendered", &rendered);
+      gst_structure_free(stats);
+      if (rendered >= 5) break;
+      g_usleep(10000);
+    }
+    inject(after);
+    std::string source;
+    const std::string err = wait_end(p, &source);
+    EXPECT_NE(err, "timeout") << "the pipeline hung";
+    EXPECT_NE(err.find("CUDA failure"), std::string::npos) << err;
+    EXPECT_NE(err.find("cudaErrorLaunchFailure"), std::string::npos) << err;
+    EXPECT_TRUE(g_str_has_prefix(source.c_str(), "pseudo3d")) << source;
+    inject(0);
+    ASSERT_EQ(gst_element_set_state(p, GST_STATE_NULL), GST_STATE_CHANGE_SUCCESS);
+    // Reused: the same pipeline plays through.
+    ASSERT_NE(gst_element_set_state(p, GST_STATE_PLAYING), GST_STATE_CHANGE_FAILURE);
+    EXPECT_EQ(wait_end(p, nullptr), "");
+    ASSERT_EQ(gst_element_set_state(p, GST_STATE_NULL), GST_STATE_CHANGE_SUCCESS);
+  }
+  gst_object_unref(sink);
+  gst_object_unref(p);
 }
 
 }  // namespace

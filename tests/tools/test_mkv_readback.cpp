@@ -13,7 +13,7 @@
 #include <gst/gst.h>
 
 #include "mkv_files.h"
-#include "mkv_readers.h"
+#include "stereo_readers.h"
 #include "mkv_stereo.h"
 
 namespace p3d::test {

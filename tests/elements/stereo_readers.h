@@ -1,6 +1,6 @@
-// What each reader makes of a Matroska file's stereo signalling: GStreamer
-// (in process: matroskademux ! h264parse, decodebin), ffprobe/ffmpeg and
-// mkvinfo (as programs; tests skip where they are missing).
+// What each reader makes of an MP4 or Matroska file's stereo signalling:
+// GStreamer (in process: qtdemux/matroskademux ! h264parse, decodebin),
+// ffprobe/ffmpeg and mkvinfo (as programs; tests skip where they are missing).
 #pragma once
 
 #include <map>
@@ -15,7 +15,8 @@ bool have_program(const char *name);
 int run_program(const std::vector<std::string> &argv, std::string *out, std::string *err = nullptr);
 
 // Caps after the demuxer (h264parse's sink) and after h264parse, where
-// decodebin and playbin take the layout from.
+// decodebin and playbin take the layout from. The demuxer follows the file
+// name: qtdemux for .mp4/.mov, matroskademux otherwise.
 struct GstStereo {
   std::string error;  // "" when the pipeline reached EOS
   std::string demux_mode;  // "" when the demuxer set no multiview-mode
