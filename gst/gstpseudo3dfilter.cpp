@@ -85,14 +85,16 @@ static void release(GstPseudo3DBase *base) {
   state->pool.clear();
 }
 
-static void update_passthrough(GstPseudo3DFilter *self) {
-  // radius 0 is the identity: leave buffers untouched. (A frame already on
-  // its way filters with radius 0, which copies the depth: either way the
-  // frame leaves with its depth unchanged.)
+// radius 0 is the identity: buffers pass untouched. Switched at the frame
+// boundary in the streaming thread, never between a frame's output buffer
+// and its transform (radius 0 within a frame copies the depth: the same).
+static gboolean frame_boundary(GstPseudo3DBase *base) {
+  GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(base);
   GST_OBJECT_LOCK(self);
   const bool identity = self->params.radius == 0;
   GST_OBJECT_UNLOCK(self);
   gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), identity);
+  return FALSE;  // the caps never change
 }
 
 static void gst_pseudo3d_filter_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
@@ -105,7 +107,6 @@ static void gst_pseudo3d_filter_set_property(GObject *object, guint prop_id, con
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
-  if (prop_id == PROP_RADIUS) update_passthrough(self);
 }
 
 static void gst_pseudo3d_filter_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
@@ -160,6 +161,7 @@ static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
   gst_caps_unref(caps);
 
+  base_class->frame_boundary = frame_boundary;
   base_class->process_ip = process_ip;
   base_class->release = release;
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_filter_debug, "pseudo3dfilter", 0, "pseudo3d depth filter");
@@ -169,5 +171,4 @@ static void gst_pseudo3d_filter_init(GstPseudo3DFilter *self) {
   self->params = p3d::BilateralParams();
   self->state = new FilterState();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), TRUE);
-  update_passthrough(self);
 }

@@ -108,12 +108,7 @@ std::string run_to_eos(const std::string &launch, int timeout_s, const std::func
     result = failed ? "state change failed" : "timeout";
   } else {
     if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR) {
-      GError *e = nullptr;
-      gchar *dbg = nullptr;
-      gst_message_parse_error(msg, &e, &dbg);
-      result = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
-      g_clear_error(&e);
-      g_free(dbg);
+      result = message_text(msg);
     } else if (failed) {
       result = "state change failed";
     } else if (at_eos) {
@@ -154,19 +149,24 @@ std::vector<std::string> BusMessages::take(GstMessageType type) {
       kept.push_back(m);
       continue;
     }
-    GError *e = nullptr;
-    gchar *dbg = nullptr;
-    if (type == GST_MESSAGE_ERROR)
-      gst_message_parse_error(m, &e, &dbg);
-    else if (type == GST_MESSAGE_WARNING)
-      gst_message_parse_warning(m, &e, &dbg);
-    texts.push_back(std::string(e ? e->message : "") + " (" + (dbg ? dbg : "") + ")");
-    g_clear_error(&e);
-    g_free(dbg);
+    texts.push_back(message_text(m));
     gst_message_unref(m);
   }
   pending_ = kept;
   return texts;
+}
+
+std::string message_text(GstMessage *msg) {
+  GError *e = nullptr;
+  gchar *dbg = nullptr;
+  if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR)
+    gst_message_parse_error(msg, &e, &dbg);
+  else if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_WARNING)
+    gst_message_parse_warning(msg, &e, &dbg);
+  std::string text = std::string(e ? e->message : "") + " (" + (dbg ? dbg : "") + ")";
+  g_clear_error(&e);
+  g_free(dbg);
+  return text;
 }
 
 std::string current_caps(GstPad *pad) {

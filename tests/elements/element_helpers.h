@@ -51,6 +51,9 @@ class BusMessages {
   std::vector<GstMessage *> pending_;  // popped, not yet asked for
 };
 
+// "message (debug)" of an error or warning message.
+std::string message_text(GstMessage *msg);
+
 // The caps on the pad (empty string if none).
 std::string current_caps(GstPad *pad);
 

@@ -8,6 +8,8 @@
 #include <map>
 #include <string>
 
+#include "element_helpers.h"
+
 namespace {
 
 GstTracer *leaks_tracer() {
@@ -43,12 +45,7 @@ std::string bus_error(GstElement *pipeline) {
   GstBus *bus = gst_element_get_bus(pipeline);
   std::string text;
   if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
-    GError *e = nullptr;
-    gchar *dbg = nullptr;
-    gst_message_parse_error(m, &e, &dbg);
-    text = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
-    g_clear_error(&e);
-    g_free(dbg);
+    text = p3d::test::message_text(m);
     gst_message_unref(m);
   }
   gst_object_unref(bus);

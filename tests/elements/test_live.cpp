@@ -152,6 +152,7 @@ TEST(LiveProperties, EveryLivePropertyFromASecondThread) {
         if (!out) {
           std::string errors;
           for (const std::string &e : bus.take(GST_MESSAGE_ERROR)) errors += e + "\n";
+          for (const std::string &w : bus.take(GST_MESSAGE_WARNING)) errors += "warning: " + w + "\n";
           FAIL() << chains[c] << ": no output for frame " << pushed << "; errors:\n" << errors;
         }
         const GstVideoInfo info = output_info(h);

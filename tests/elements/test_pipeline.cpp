@@ -45,10 +45,7 @@ void collect(const std::string &launch, Collected *c, int timeout_s = 60) {
   while (GstSample *s = gst_app_sink_try_pull_sample(GST_APP_SINK(sink), timeout_s * GST_SECOND)) c->samples.push_back(s);
   GstBus *bus = gst_element_get_bus(p);
   if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
-    GError *e = nullptr;
-    gst_message_parse_error(m, &e, nullptr);
-    c->error = e->message;
-    g_clear_error(&e);
+    c->error = message_text(m);
     gst_message_unref(m);
   }
   gst_object_unref(bus);

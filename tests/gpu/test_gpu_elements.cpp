@@ -5,11 +5,18 @@
 #include <gst/check/gstharness.h>
 #include <gmodule.h>
 #include <gst/gst.h>
+#include <gst/app/gstappsink.h>
+#include <gst/cuda/gstcudacontext.h>
+#include <gst/cuda/gstcudautils.h>
 #include <gtest/gtest.h>
 
 #include <cuda_runtime_api.h>
 
 #include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <climits>
+#include <cstdlib>
 
 #include "../elements/element_helpers.h"
 #include "test_data.h"
@@ -224,13 +231,8 @@ std::string wait_end(GstElement *pipeline, std::string *source) {
   if (!m) return "timeout";
   std::string text;
   if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
-    GError *e = nullptr;
-    gchar *dbg = nullptr;
-    gst_message_parse_error(m, &e, &dbg);
-    text = std::string(e->message) + " (" + (dbg ? dbg : "") + ")";
+    text = message_text(m);
     if (source) *source = GST_OBJECT_NAME(GST_MESSAGE_SRC(m));
-    g_clear_error(&e);
-    g_free(dbg);
   }
   gst_message_unref(m);
   return text;
@@ -278,6 +280,164 @@ TEST(GpuFaults, MidStreamFailureIsACleanErrorAndThePipelineIsReusable) {
     ASSERT_EQ(gst_element_set_state(p, GST_STATE_NULL), GST_STATE_CHANGE_SUCCESS);
   }
   gst_object_unref(sink);
+  gst_object_unref(p);
+}
+
+// Plays `launch` to EOS (or an error) and returns the error text ("" for
+// EOS); `setup` may touch the elements before PLAYING.
+template <typename Setup>
+std::string play(const std::string &launch, Setup &&setup) {
+  GstElement *p = gst_parse_launch(launch.c_str(), nullptr);
+  if (!p) return "parse failed";
+  setup(p);
+  gst_element_set_state(p, GST_STATE_PLAYING);
+  const std::string err = wait_end(p, nullptr);
+  gst_element_set_state(p, GST_STATE_NULL);
+  gst_object_unref(p);
+  return err;
+}
+
+// A change of memory domain drops the depth: after cudaupload or
+// cudadownload the warp says it needs pseudo3ddepth; a pseudo3ddepth placed
+// after them estimates afresh and the chain runs.
+TEST(GpuDepthMeta, CudaUploadAndDownloadDropTheDepth) {
+  const char *src = "videotestsrc num-buffers=3 ! video/x-raw,format=NV12,width=64,height=48 ! ";
+  std::string err = play(std::string(src) + "pseudo3ddepth ! cudaupload ! video/x-raw(memory:CUDAMemory) ! "
+                         "pseudo3dwarp ! fakesink", [](GstElement *) {});
+  EXPECT_NE(err.find("needs a depth map"), std::string::npos) << err;
+  err = play(std::string(src) + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! cudadownload ! "
+             "pseudo3dwarp ! fakesink", [](GstElement *) {});
+  EXPECT_NE(err.find("needs a depth map"), std::string::npos) << err;
+  err = play(std::string(src) + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! cudadownload ! "
+             "pseudo3ddepth ! pseudo3dwarp ! fakesink", [](GstElement *) {});
+  EXPECT_EQ(err, "");
+}
+
+// Every frame an appsink named "out" receives, as BGRA.
+std::vector<cv::Mat> pull_all(GstElement *pipeline) {
+  std::vector<cv::Mat> frames;
+  GstElement *sink = gst_bin_get_by_name(GST_BIN(pipeline), "out");
+  while (GstSample *s = gst_app_sink_try_pull_sample(GST_APP_SINK(sink), 30 * GST_SECOND)) {
+    frames.push_back(buffer_to_bgra(gst_sample_get_buffer(s), gst_sample_get_caps(s)));
+    gst_sample_unref(s);
+  }
+  gst_object_unref(sink);
+  return frames;
+}
+
+// cudaupload on one CUDA context, the stages given another (both device 0,
+// set before they start, so nothing shares them): with cuda-device-id -1
+// the stages adopt the context of the incoming buffers and give the CPU
+// chain's output, instead of failing.
+TEST(GpuContext, StagesAdoptTheUpstreamContext) {
+  const char *src = "videotestsrc num-buffers=3 pattern=ball ! video/x-raw,format=NV12,width=320,height=240 ! ";
+  const char *stages = "pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack";
+  GstCudaContext *a = gst_cuda_context_new(0), *b = gst_cuda_context_new(0);
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(b, nullptr);
+  GstContext *ca = gst_context_new_cuda_context(a), *cb = gst_context_new_cuda_context(b);
+  GstElement *gpu = gst_parse_launch((std::string(src) + "cudaupload name=up ! video/x-raw(memory:CUDAMemory) ! " +
+                                      stages + " ! cudadownload ! video/x-raw,format=RGBA ! appsink name=out sync=false")
+                                         .c_str(),
+                                     nullptr);
+  ASSERT_NE(gpu, nullptr);
+  GstIterator *it = gst_bin_iterate_elements(GST_BIN(gpu));
+  GValue v = G_VALUE_INIT;
+  while (gst_iterator_next(it, &v) == GST_ITERATOR_OK) {
+    GstElement *e = GST_ELEMENT(g_value_get_object(&v));
+    const gchar *name = GST_OBJECT_NAME(gst_element_get_factory(e));
+    if (g_str_equal(name, "cudaupload")) gst_element_set_context(e, ca);
+    if (g_str_has_prefix(name, "pseudo3d")) gst_element_set_context(e, cb);
+    g_value_reset(&v);
+  }
+  g_value_unset(&v);
+  gst_iterator_free(it);
+  gst_element_set_state(gpu, GST_STATE_PLAYING);
+  const std::vector<cv::Mat> got = pull_all(gpu);
+  EXPECT_EQ(wait_end(gpu, nullptr), "");
+  gst_element_set_state(gpu, GST_STATE_NULL);
+  gst_object_unref(gpu);
+
+  GstElement *cpu = gst_parse_launch((std::string(src) + "pseudo3ddepth processing=cpu ! pseudo3dfilter processing=cpu ! "
+                                      "pseudo3dwarp processing=cpu ! pseudo3dpack processing=cpu ! "
+                                      "video/x-raw,format=RGBA ! appsink name=out sync=false")
+                                         .c_str(),
+                                     nullptr);
+  gst_element_set_state(cpu, GST_STATE_PLAYING);
+  const std::vector<cv::Mat> want = pull_all(cpu);
+  gst_element_set_state(cpu, GST_STATE_NULL);
+  gst_object_unref(cpu);
+  ASSERT_EQ(got.size(), 3u);
+  expect_same(got, want, "adopted context");
+  gst_context_unref(ca);
+  gst_context_unref(cb);
+  gst_object_unref(a);
+  gst_object_unref(b);
+}
+
+// processing=gpu asks upstream for CUDA memory: after a plain cudaupload
+// (which prefers passing system memory through) the stage negotiates
+// memory:CUDAMemory. On system memory it runs staged, with one warning.
+TEST(GpuNegotiation, ProcessingGpuNegotiatesCudaMemoryAndWarnsOnceWhenStaged) {
+  GstElement *p = gst_parse_launch("videotestsrc num-buffers=3 ! video/x-raw,format=NV12,width=64,height=48 ! "
+                                   "cudaupload ! pseudo3ddepth name=d processing=gpu ! cudadownload ! fakesink",
+                                   nullptr);
+  gst_element_set_state(p, GST_STATE_PLAYING);
+  EXPECT_EQ(wait_end(p, nullptr), "");
+  GstElement *d = gst_bin_get_by_name(GST_BIN(p), "d");
+  GstPad *sink = gst_element_get_static_pad(d, "sink");
+  // Caps stay set until NULL: read them at EOS.
+  EXPECT_NE(current_caps(sink).find("memory:CUDAMemory"), std::string::npos) << current_caps(sink);
+  gst_object_unref(sink);
+  gst_object_unref(d);
+  gst_element_set_state(p, GST_STATE_NULL);
+  gst_object_unref(p);
+
+  GstHarness *h = gst_harness_new_parse("pseudo3ddepth processing=gpu ! pseudo3dfilter processing=gpu");
+  BusMessages bus(h->element);
+  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::NV12, 64, 48).c_str());
+  for (int i = 0; i < 3; ++i) {
+    GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(picture(PixelFormat::NV12, 64, 48, i)));
+    ASSERT_NE(b, nullptr);
+    gst_buffer_unref(b);
+  }
+  const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
+  EXPECT_EQ(warnings.size(), 2u) << "one per element, once";
+  for (const std::string &w : warnings) EXPECT_NE(w.find("copied to the GPU and back"), std::string::npos) << w;
+  gst_harness_teardown(h);
+}
+
+// stop() frees the stages' device memory (frames, depth planes, pools):
+// the same pipeline, in NULL after a 4K run, holds what it holds after a run
+// of no frames at all (the CUDA context, which the pipeline keeps cached).
+TEST(GpuChainMemory, FreedAtStop) {
+  GstElement *p = gst_parse_launch(
+      "videotestsrc name=src ! video/x-raw,format=NV12,width=3840,height=2160 ! cudaupload ! "
+      "video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! "
+      "pseudo3dpack layout=side-by-side-half ! cudadownload ! fakesink",
+      nullptr);
+  ASSERT_NE(p, nullptr);
+  GstElement *src = gst_bin_get_by_name(GST_BIN(p), "src");
+  size_t total = 0, free_idle = 0, free_running = SIZE_MAX, free_stopped = 0;
+  auto run = [&](int frames, size_t *free_after) {
+    g_object_set(src, "num-buffers", frames, NULL);
+    gst_element_set_state(p, GST_STATE_PLAYING);
+    gst_element_get_state(p, nullptr, nullptr, 30 * GST_SECOND);
+    size_t f = 0;
+    ASSERT_EQ(cudaMemGetInfo(&f, &total), cudaSuccess);
+    free_running = std::min(free_running, f);
+    EXPECT_EQ(wait_end(p, nullptr), "");
+    gst_element_set_state(p, GST_STATE_NULL);
+    ASSERT_EQ(cudaMemGetInfo(free_after, &total), cudaSuccess);
+  };
+  run(0, &free_idle);  // the context only
+  run(20, &free_stopped);
+  RecordProperty("device_memory_held_running_bytes", std::to_string((long long)free_idle - (long long)free_running));
+  EXPECT_GT((long long)free_idle - (long long)free_running, 100ll << 20) << "a 4K chain holds its buffers while running";
+  const long long kept = (long long)free_idle - (long long)free_stopped;
+  RecordProperty("device_memory_kept_after_stop_bytes", std::to_string(kept));
+  EXPECT_LE(kept, 8ll << 20) << "device memory still held after stop(): " << kept << " bytes";
+  gst_object_unref(src);
   gst_object_unref(p);
 }
 
