@@ -173,14 +173,34 @@ bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameV
   return out.width == w && out.height == h;
 }
 
+namespace {
+
+// The frame for input arrangement I: one loop instantiation per arrangement
+// (the per-pixel function inlines into it, as in the kernel).
+template <StereoInput I>
+void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out) {
+  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_detail::pack_pixel_for<I>(params, am, in, x, y));
+  });
+}
+
+}  // namespace
+
 void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out) {
   if (!pack_args_valid(params, in, out))
     throw std::invalid_argument("pack_cpu: frames do not match the layout (see pack_args_valid)");
   const AnaglyphMatrices am = anaglyph_matrices(params.glasses, params.method);
-  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y)
-      for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_pixel(params, am, in, x, y));
-  });
+  switch (params.input) {
+    case StereoInput::SideBySideHalf: return pack_rows<StereoInput::SideBySideHalf>(params, am, in, out);
+    case StereoInput::TopBottom: return pack_rows<StereoInput::TopBottom>(params, am, in, out);
+    case StereoInput::TopBottomHalf: return pack_rows<StereoInput::TopBottomHalf>(params, am, in, out);
+    case StereoInput::RowInterleaved: return pack_rows<StereoInput::RowInterleaved>(params, am, in, out);
+    case StereoInput::ColumnInterleaved: return pack_rows<StereoInput::ColumnInterleaved>(params, am, in, out);
+    case StereoInput::Checkerboard: return pack_rows<StereoInput::Checkerboard>(params, am, in, out);
+    case StereoInput::SideBySide:
+    default: return pack_rows<StereoInput::SideBySide>(params, am, in, out);
+  }
 }
 
 }  // namespace p3d

@@ -230,12 +230,15 @@ P3D_HD Rgba checker_pixel(const FrameView &in, int slot, int x, int y) {
 }
 
 // Pixel (x, y) of the left (eye 0) or right (eye 1) view as the output
-// shows it (swap_eyes exchanges them), read from the input arrangement.
+// shows it (swap_eyes exchanges them), read from the input arrangement I
+// (a template argument, so the kernel of the common case, a side-by-side
+// pair, carries no code for the others).
+template <StereoInput I>
 P3D_HD Rgba view_pixel(const PackParams &p, const FrameView &in, int eye, int x, int y) {
   const int view = eye ^ (p.swap_eyes ? 1 : 0);
   const int slot = view ^ (p.input_right_first ? 1 : 0);  // 0: first in the frame
   int a = 0, b = 0;
-  switch (p.input) {
+  switch (I) {
     case StereoInput::TopBottom: return pixel_at(in, x, y + slot * (in.height / 2));
     case StereoInput::SideBySideHalf:
       unsqueeze(x, in.width, slot, &a, &b);
@@ -316,40 +319,55 @@ P3D_HD void view_size(StereoInput input, int in_width, int in_height, int *w, in
   *h = input == StereoInput::TopBottom ? in_height / 2 : in_height;
 }
 
-}  // namespace pack_detail
-
-P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
-  using namespace pack_detail;
+// pack_pixel for input arrangement I (p.input must be I).
+template <StereoInput I>
+P3D_HD Rgba pack_pixel_for(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
   int w = 0, h = 0;
-  view_size(p.input, in.width, in.height, &w, &h);
+  view_size(I, in.width, in.height, &w, &h);
   switch (p.layout) {
     case PackLayout::SideBySide:
-      return X < w ? view_pixel(p, in, 0, X, Y) : view_pixel(p, in, 1, X - w, Y);
+      return X < w ? view_pixel<I>(p, in, 0, X, Y) : view_pixel<I>(p, in, 1, X - w, Y);
     case PackLayout::TopBottom:
-      return Y < h ? view_pixel(p, in, 0, X, Y) : view_pixel(p, in, 1, X, Y - h);
+      return Y < h ? view_pixel<I>(p, in, 0, X, Y) : view_pixel<I>(p, in, 1, X, Y - h);
     case PackLayout::SideBySideHalf: {
       int x0, x1;
       const int eye = half_source(X, w, &x0, &x1);
-      return mean2(view_pixel(p, in, eye, x0, Y), view_pixel(p, in, eye, x1, Y));
+      return mean2(view_pixel<I>(p, in, eye, x0, Y), view_pixel<I>(p, in, eye, x1, Y));
     }
     case PackLayout::TopBottomHalf: {
       int y0, y1;
       const int eye = half_source(Y, h, &y0, &y1);
-      return mean2(view_pixel(p, in, eye, X, y0), view_pixel(p, in, eye, X, y1));
+      return mean2(view_pixel<I>(p, in, eye, X, y0), view_pixel<I>(p, in, eye, X, y1));
     }
     case PackLayout::RowInterleaved:
-      return view_pixel(p, in, Y & 1, X, Y);
+      return view_pixel<I>(p, in, Y & 1, X, Y);
     case PackLayout::ColumnInterleaved:
-      return view_pixel(p, in, X & 1, X, Y);
+      return view_pixel<I>(p, in, X & 1, X, Y);
     case PackLayout::Checkerboard:
-      return view_pixel(p, in, (X + Y) & 1, X, Y);
+      return view_pixel<I>(p, in, (X + Y) & 1, X, Y);
     case PackLayout::Left:
-      return view_pixel(p, in, 0, X, Y);
+      return view_pixel<I>(p, in, 0, X, Y);
     case PackLayout::Right:
-      return view_pixel(p, in, 1, X, Y);
+      return view_pixel<I>(p, in, 1, X, Y);
     case PackLayout::Anaglyph:
     default:
-      return anaglyph(am, view_pixel(p, in, 0, X, Y), view_pixel(p, in, 1, X, Y));
+      return anaglyph(am, view_pixel<I>(p, in, 0, X, Y), view_pixel<I>(p, in, 1, X, Y));
+  }
+}
+
+}  // namespace pack_detail
+
+P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
+  switch (p.input) {
+    case StereoInput::SideBySideHalf: return pack_detail::pack_pixel_for<StereoInput::SideBySideHalf>(p, am, in, X, Y);
+    case StereoInput::TopBottom: return pack_detail::pack_pixel_for<StereoInput::TopBottom>(p, am, in, X, Y);
+    case StereoInput::TopBottomHalf: return pack_detail::pack_pixel_for<StereoInput::TopBottomHalf>(p, am, in, X, Y);
+    case StereoInput::RowInterleaved: return pack_detail::pack_pixel_for<StereoInput::RowInterleaved>(p, am, in, X, Y);
+    case StereoInput::ColumnInterleaved:
+      return pack_detail::pack_pixel_for<StereoInput::ColumnInterleaved>(p, am, in, X, Y);
+    case StereoInput::Checkerboard: return pack_detail::pack_pixel_for<StereoInput::Checkerboard>(p, am, in, X, Y);
+    case StereoInput::SideBySide:
+    default: return pack_detail::pack_pixel_for<StereoInput::SideBySide>(p, am, in, X, Y);
   }
 }
 

@@ -20,23 +20,28 @@ constexpr int kBlockX = 32, kBlockY = 8;
 // 16-byte store.
 constexpr int kVec = 4;
 
+// One instantiation per input arrangement: the common side-by-side input
+// runs without the code of the others.
+template <StereoInput I>
 __global__ void pack_kernel(const PackKernelParams kp) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= kp.out.width || y >= kp.out.height) return;
-  store_rgba(kp.out, x, y, pack_pixel(kp.p, kp.am, kp.in, x, y));
+  store_rgba(kp.out, x, y, pack_detail::pack_pixel_for<I>(kp.p, kp.am, kp.in, x, y));
 }
 
 // kVec pixels per thread. The pixels are laid out in memory order by
 // store_rgba itself (into registers), then written with one 16-byte store;
 // the ragged end of a row falls back to per-pixel stores. Needs 16-byte
 // aligned rows (checked by the launcher).
+template <StereoInput I>
 __global__ void pack_kernel_vec(const PackKernelParams kp) {
   const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x0 >= kp.out.width || y >= kp.out.height) return;
   if (x0 + kVec > kp.out.width) {
-    for (int x = x0; x < kp.out.width; ++x) store_rgba(kp.out, x, y, pack_pixel(kp.p, kp.am, kp.in, x, y));
+    for (int x = x0; x < kp.out.width; ++x)
+      store_rgba(kp.out, x, y, pack_detail::pack_pixel_for<I>(kp.p, kp.am, kp.in, x, y));
     return;
   }
   uint4 packed;
@@ -44,7 +49,7 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
   reg.plane[0] = reinterpret_cast<uint8_t *>(&packed);
   reg.stride[0] = 4 * kVec;
 #pragma unroll
-  for (int i = 0; i < kVec; ++i) store_rgba(reg, i, 0, pack_pixel(kp.p, kp.am, kp.in, x0 + i, y));
+  for (int i = 0; i < kVec; ++i) store_rgba(reg, i, 0, pack_detail::pack_pixel_for<I>(kp.p, kp.am, kp.in, x0 + i, y));
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
 }
 
@@ -59,24 +64,39 @@ bool use_vector_stores(const PackParams &p, const FrameView &out) {
   return p.layout != PackLayout::SideBySideHalf && rows_16byte_aligned(out);
 }
 
+template <StereoInput I>
+CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t stream) {
+  const dim3 block(kBlockX, kBlockY);
+  if (vector_stores) {
+    const int threads_x = (kp.out.width + kVec - 1) / kVec;
+    const dim3 grid((threads_x + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
+    pack_kernel_vec<I><<<grid, block, 0, stream>>>(kp);
+    P3D_CUDA_TRY_LAUNCH(pack_kernel_vec);
+  } else {
+    const dim3 grid((kp.out.width + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
+    pack_kernel<I><<<grid, block, 0, stream>>>(kp);
+    P3D_CUDA_TRY_LAUNCH(pack_kernel);
+  }
+  return {};
+}
+
 }  // namespace
 
 CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream) {
   if (!pack_args_valid(params, in, out))
     return CudaStatus{cudaErrorInvalidValue, "pack_gpu: pack_args_valid(params, in, out)", __FILE__, __LINE__};
   const PackKernelParams kp{params, anaglyph_matrices(params.glasses, params.method), in, out};
-  const dim3 block(kBlockX, kBlockY);
-  if (use_vector_stores(params, out)) {
-    const int threads_x = (out.width + kVec - 1) / kVec;
-    const dim3 grid((threads_x + kBlockX - 1) / kBlockX, (out.height + kBlockY - 1) / kBlockY);
-    pack_kernel_vec<<<grid, block, 0, stream>>>(kp);
-    P3D_CUDA_TRY_LAUNCH(pack_kernel_vec);
-  } else {
-    const dim3 grid((out.width + kBlockX - 1) / kBlockX, (out.height + kBlockY - 1) / kBlockY);
-    pack_kernel<<<grid, block, 0, stream>>>(kp);
-    P3D_CUDA_TRY_LAUNCH(pack_kernel);
+  const bool vec = use_vector_stores(params, out);
+  switch (params.input) {
+    case StereoInput::SideBySideHalf: return launch<StereoInput::SideBySideHalf>(kp, vec, stream);
+    case StereoInput::TopBottom: return launch<StereoInput::TopBottom>(kp, vec, stream);
+    case StereoInput::TopBottomHalf: return launch<StereoInput::TopBottomHalf>(kp, vec, stream);
+    case StereoInput::RowInterleaved: return launch<StereoInput::RowInterleaved>(kp, vec, stream);
+    case StereoInput::ColumnInterleaved: return launch<StereoInput::ColumnInterleaved>(kp, vec, stream);
+    case StereoInput::Checkerboard: return launch<StereoInput::Checkerboard>(kp, vec, stream);
+    case StereoInput::SideBySide:
+    default: return launch<StereoInput::SideBySide>(kp, vec, stream);
   }
-  return {};
 }
 
 }  // namespace p3d

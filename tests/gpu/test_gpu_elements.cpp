@@ -305,11 +305,13 @@ TEST(GpuDepthMeta, CudaUploadAndDownloadDropTheDepth) {
   std::string err = play(std::string(src) + "pseudo3ddepth ! cudaupload ! video/x-raw(memory:CUDAMemory) ! "
                          "pseudo3dwarp ! fakesink", [](GstElement *) {});
   EXPECT_NE(err.find("needs a depth map"), std::string::npos) << err;
+  // (Without the system-memory caps cudadownload would pass CUDA memory
+  // through to the warp, which takes it: no change of domain, depth kept.)
   err = play(std::string(src) + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! cudadownload ! "
-             "pseudo3dwarp ! fakesink", [](GstElement *) {});
+             "video/x-raw ! pseudo3dwarp ! fakesink", [](GstElement *) {});
   EXPECT_NE(err.find("needs a depth map"), std::string::npos) << err;
   err = play(std::string(src) + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! cudadownload ! "
-             "pseudo3ddepth ! pseudo3dwarp ! fakesink", [](GstElement *) {});
+             "video/x-raw ! pseudo3ddepth ! pseudo3dwarp ! fakesink", [](GstElement *) {});
   EXPECT_EQ(err, "");
 }
 
