@@ -70,20 +70,31 @@ uint64_t fnv1a(uint64_t h, const uint8_t *p, size_t n) {
   return h;
 }
 
+// A probed stream's events: keeps its segment and caps (as text, and the
+// structure while the event lives). True for an event.
+bool stream_event(GstPadProbeInfo *info, GstSegment *segment, std::string *caps_text,
+                  const GstStructure **structure) {
+  if (!(info->type & GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM)) return false;
+  GstEvent *ev = GST_PAD_PROBE_INFO_EVENT(info);
+  if (GST_EVENT_TYPE(ev) == GST_EVENT_SEGMENT) gst_event_copy_segment(ev, segment);
+  if (GST_EVENT_TYPE(ev) == GST_EVENT_CAPS) {
+    GstCaps *caps;
+    gst_event_parse_caps(ev, &caps);
+    gchar *str = gst_caps_to_string(caps);
+    *caps_text = str;
+    g_free(str);
+    *structure = gst_caps_get_structure(caps, 0);
+  }
+  return true;
+}
+
 GstPadProbeReturn video_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
   auto *s = static_cast<ReadState *>(data);
   std::lock_guard<std::mutex> l(s->lock);
   ReadBack &r = *s->r;
-  if (info->type & GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM) {
-    GstEvent *ev = GST_PAD_PROBE_INFO_EVENT(info);
-    if (GST_EVENT_TYPE(ev) == GST_EVENT_SEGMENT) gst_event_copy_segment(ev, &s->video_segment);
-    if (GST_EVENT_TYPE(ev) == GST_EVENT_CAPS) {
-      GstCaps *caps;
-      gst_event_parse_caps(ev, &caps);
-      gchar *str = gst_caps_to_string(caps);
-      r.video_caps = str;
-      g_free(str);
-      const GstStructure *st = gst_caps_get_structure(caps, 0);
+  const GstStructure *st = nullptr;
+  if (stream_event(info, &s->video_segment, &r.video_caps, &st)) {
+    if (st) {
       const char *mode = gst_structure_get_string(st, "multiview-mode");
       r.multiview_mode = mode ? mode : "";
       guint flags = 0, mask = 0;
@@ -103,18 +114,8 @@ GstPadProbeReturn audio_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
   auto *s = static_cast<ReadState *>(data);
   std::lock_guard<std::mutex> l(s->lock);
   ReadBack &r = *s->r;
-  if (info->type & GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM) {
-    GstEvent *ev = GST_PAD_PROBE_INFO_EVENT(info);
-    if (GST_EVENT_TYPE(ev) == GST_EVENT_SEGMENT) gst_event_copy_segment(ev, &s->audio_segment);
-    if (GST_EVENT_TYPE(ev) == GST_EVENT_CAPS) {
-      GstCaps *caps;
-      gst_event_parse_caps(ev, &caps);
-      gchar *str = gst_caps_to_string(caps);
-      r.audio_caps = str;
-      g_free(str);
-    }
-    return GST_PAD_PROBE_OK;
-  }
+  const GstStructure *st = nullptr;
+  if (stream_event(info, &s->audio_segment, &r.audio_caps, &st)) return GST_PAD_PROBE_OK;
   GstBuffer *b = GST_PAD_PROBE_INFO_BUFFER(info);
   if (GST_BUFFER_FLAG_IS_SET(b, GST_BUFFER_FLAG_HEADER)) return GST_PAD_PROBE_OK;
   ++r.audio_buffers;

@@ -10,7 +10,6 @@ constexpr uint8_t kSoi = 0xD8, kSos = 0xDA, kApp0 = 0xE0, kApp1 = 0xE1, kApp2 = 
 constexpr char kExifId[] = "Exif\0";  // 6 bytes with the implicit NUL
 constexpr size_t kExifIdSize = 6;
 constexpr uint16_t kTagOrientation = 0x0112, kTagExifIfd = 0x8769, kTagPixelX = 0xA002, kTagPixelY = 0xA003;
-constexpr uint16_t kTypeShort = 3, kTypeLong = 4;
 
 // Marker segments before the scan: {marker, offset of payload, payload size}.
 struct Span {
@@ -94,8 +93,8 @@ class Tiff {
   void put_number(size_t entry, uint32_t v) {
     uint16_t type;
     if (!u16(entry + 2, &type)) return;
-    if (type == kTypeShort && v <= 0xFFFF) put16(entry + 8, static_cast<uint16_t>(v));
-    if (type == kTypeLong) put32(entry + 8, v);
+    if (type == kTiffShort && v <= 0xFFFF) put16(entry + 8, static_cast<uint16_t>(v));
+    if (type == kTiffLong) put32(entry + 8, v);
   }
 
  private:
@@ -105,27 +104,29 @@ class Tiff {
   bool ok_ = false, little_ = false;
 };
 
-void append16(Bytes *b, uint16_t v) {
-  b->push_back(v >> 8);
-  b->push_back(v & 0xFF);
-}
-void append32(Bytes *b, uint32_t v) {
-  append16(b, v >> 16);
-  append16(b, v & 0xFFFF);
-}
-void append_entry(Bytes *b, uint16_t tag, uint16_t type, uint32_t count, uint32_t value) {
-  append16(b, tag);
-  append16(b, type);
-  append32(b, count);
-  if (type == kTypeShort) {
-    append16(b, static_cast<uint16_t>(value));
-    append16(b, 0);
-  } else {
-    append32(b, value);
-  }
+}  // namespace
+
+void append_u16_be(Bytes *b, uint16_t v) {
+  b->push_back(static_cast<uint8_t>(v >> 8));
+  b->push_back(static_cast<uint8_t>(v & 0xFF));
 }
 
-}  // namespace
+void append_u32_be(Bytes *b, uint32_t v) {
+  append_u16_be(b, static_cast<uint16_t>(v >> 16));
+  append_u16_be(b, static_cast<uint16_t>(v & 0xFFFF));
+}
+
+void append_ifd_entry(Bytes *b, uint16_t tag, uint16_t type, uint32_t count, uint32_t value) {
+  append_u16_be(b, tag);
+  append_u16_be(b, type);
+  append_u32_be(b, count);
+  if (type == kTiffShort) {
+    append_u16_be(b, static_cast<uint16_t>(value));
+    append_u16_be(b, 0);
+  } else {
+    append_u32_be(b, value);
+  }
+}
 
 Bytes find_exif(const Bytes &jpeg) {
   std::vector<Span> spans;
@@ -167,15 +168,15 @@ Bytes minimal_exif(int width, int height) {
   // "Exif\0\0", big-endian TIFF header, IFD0 {Orientation, ExifIFD}, Exif
   // IFD {PixelXDimension, PixelYDimension}.
   Bytes b = {'E', 'x', 'i', 'f', 0, 0, 'M', 'M', 0, 42};
-  append32(&b, 8);  // IFD0
-  append16(&b, 2);
-  append_entry(&b, kTagOrientation, kTypeShort, 1, 1);
-  append_entry(&b, kTagExifIfd, kTypeLong, 1, 8 + 2 + 2 * 12 + 4);
-  append32(&b, 0);
-  append16(&b, 2);
-  append_entry(&b, kTagPixelX, kTypeLong, 1, static_cast<uint32_t>(width));
-  append_entry(&b, kTagPixelY, kTypeLong, 1, static_cast<uint32_t>(height));
-  append32(&b, 0);
+  append_u32_be(&b, 8);  // IFD0
+  append_u16_be(&b, 2);
+  append_ifd_entry(&b, kTagOrientation, kTiffShort, 1, 1);
+  append_ifd_entry(&b, kTagExifIfd, kTiffLong, 1, 8 + 2 + 2 * 12 + 4);
+  append_u32_be(&b, 0);
+  append_u16_be(&b, 2);
+  append_ifd_entry(&b, kTagPixelX, kTiffLong, 1, static_cast<uint32_t>(width));
+  append_ifd_entry(&b, kTagPixelY, kTiffLong, 1, static_cast<uint32_t>(height));
+  append_u32_be(&b, 0);
   return b;
 }
 
@@ -196,7 +197,7 @@ Bytes with_segments(const Bytes &jpeg, const std::vector<JpegSegment> &segments)
   for (const JpegSegment &s : segments) {
     out.push_back(0xFF);
     out.push_back(s.marker);
-    append16(&out, static_cast<uint16_t>(s.payload.size() + 2));
+    append_u16_be(&out, static_cast<uint16_t>(s.payload.size() + 2));
     out.insert(out.end(), s.payload.begin(), s.payload.end());
   }
   for (size_t k = first; k < spans.size(); ++k)

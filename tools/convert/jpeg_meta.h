@@ -32,6 +32,13 @@ Bytes exif_for_output(const Bytes &exif, int width, int height);
 // whose source had none where the format expects one (MPO).
 Bytes minimal_exif(int width, int height);
 
+// Big-endian writers for TIFF-style data (EXIF, MPF): a 12-byte IFD entry
+// holds tag, type, count and a value (a SHORT left-justified).
+void append_u16_be(Bytes *b, uint16_t v);
+void append_u32_be(Bytes *b, uint32_t v);
+void append_ifd_entry(Bytes *b, uint16_t tag, uint16_t type, uint32_t count, uint32_t value);
+constexpr uint16_t kTiffShort = 3, kTiffLong = 4, kTiffUndefined = 7;
+
 // `jpeg` with `segments` right after SOI. A JFIF APP0 is dropped when an
 // APP1 EXIF comes in (both want to be first), kept first otherwise; an
 // existing EXIF or MPF segment is replaced.

@@ -8,41 +8,26 @@ namespace {
 
 constexpr uint16_t kTagMpfVersion = 0xB000, kTagNumberOfImages = 0xB001, kTagMpEntry = 0xB002,
                    kTagIndividualNum = 0xB101, kTagBaseViewpoint = 0xB204;
-constexpr uint16_t kTypeLong = 4, kTypeUndefined = 7;
 constexpr size_t kIfdSize3 = 2 + 3 * 12 + 4;  // an IFD of three entries
 constexpr size_t kEntrySize = 16;              // one MP entry
 
-// Big-endian ("MM") MP data, offsets from the MP header's first byte.
-void put16(Bytes *b, uint16_t v) {
-  b->push_back(v >> 8);
-  b->push_back(v & 0xFF);
-}
-void put32(Bytes *b, uint32_t v) {
-  put16(b, v >> 16);
-  put16(b, v & 0xFFFF);
-}
-void entry(Bytes *b, uint16_t tag, uint16_t type, uint32_t count, uint32_t value) {
-  put16(b, tag);
-  put16(b, type);
-  put32(b, count);
-  put32(b, value);
-}
+// MP data is written big-endian ("MM"), offsets from the MP header's first byte.
 void version_entry(Bytes *b) {
-  put16(b, kTagMpfVersion);
-  put16(b, kTypeUndefined);
-  put32(b, 4);
-  b->insert(b->end(), {'0', '1', '0', '0'});
+  append_u16_be(b, kTagMpfVersion);
+  append_u16_be(b, kTiffUndefined);
+  append_u32_be(b, 4);
+  for (const char c : {'0', '1', '0', '0'}) b->push_back(static_cast<uint8_t>(c));
 }
 void attribute_ifd(Bytes *b, uint32_t individual_num) {
-  put16(b, 3);
+  append_u16_be(b, 3);
   version_entry(b);
-  entry(b, kTagIndividualNum, kTypeLong, 1, individual_num);
-  entry(b, kTagBaseViewpoint, kTypeLong, 1, 1);  // the left view is the base viewpoint
-  put32(b, 0);
+  append_ifd_entry(b, kTagIndividualNum, kTiffLong, 1, individual_num);
+  append_ifd_entry(b, kTagBaseViewpoint, kTiffLong, 1, 1);  // the left view is the base viewpoint
+  append_u32_be(b, 0);
 }
 Bytes mpf_header() {
   Bytes b = {'M', 'P', 'F', 0, 'M', 'M', 0, 42};
-  put32(&b, 8);  // first IFD right after the header
+  append_u32_be(&b, 8);  // first IFD right after the header
   return b;
 }
 
@@ -51,19 +36,19 @@ Bytes mpf_header() {
 Bytes first_app2(uint32_t size1, uint32_t size2, uint32_t offset2) {
   Bytes b = mpf_header();
   const uint32_t entries_at = 8 + kIfdSize3, attributes_at = entries_at + 2 * kEntrySize;
-  put16(&b, 3);
+  append_u16_be(&b, 3);
   version_entry(&b);
-  entry(&b, kTagNumberOfImages, kTypeLong, 1, 2);
-  entry(&b, kTagMpEntry, kTypeUndefined, 2 * kEntrySize, entries_at);
-  put32(&b, attributes_at);  // next IFD: this image's attributes
-  put32(&b, kMpFlagRepresentative | kMpTypeDisparity);
-  put32(&b, size1);
-  put32(&b, 0);  // the first image's offset is 0 by definition
-  put32(&b, 0);  // no dependent images
-  put32(&b, kMpTypeDisparity);
-  put32(&b, size2);
-  put32(&b, offset2);
-  put32(&b, 0);
+  append_ifd_entry(&b, kTagNumberOfImages, kTiffLong, 1, 2);
+  append_ifd_entry(&b, kTagMpEntry, kTiffUndefined, 2 * kEntrySize, entries_at);
+  append_u32_be(&b, attributes_at);  // next IFD: this image's attributes
+  append_u32_be(&b, kMpFlagRepresentative | kMpTypeDisparity);
+  append_u32_be(&b, size1);
+  append_u32_be(&b, 0);  // the first image's offset is 0 by definition
+  append_u32_be(&b, 0);  // no dependent images
+  append_u32_be(&b, kMpTypeDisparity);
+  append_u32_be(&b, size2);
+  append_u32_be(&b, offset2);
+  append_u32_be(&b, 0);
   attribute_ifd(&b, 1);
   return b;
 }
