@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # Installs what pseudo3d needs on Debian 12 (run as root, or with sudo):
 # build tools, GStreamer 1.22 with base/good/bad/ugly plugins and libgstcuda,
-# OpenCV, GoogleTest, and opencv-doc (the Middlebury Aloe pair and vtest.avi
-# used by the tests). The CUDA toolkit (nvcc) is optional: with it the GPU
-# path is built too.
+# OpenCV, GoogleTest, opencv-doc (the Middlebury Aloe pair and vtest.avi
+# used by the tests) and ffmpeg (ffprobe reads the converter's files back in
+# the tests, as ffmpeg-based players do). The CUDA toolkit (nvcc) is
+# optional: with it the GPU path is built too.
 set -euo pipefail
 packages=(
   meson ninja-build pkg-config g++ git
   libglib2.0-dev libgstreamer1.0-dev libgstreamer-plugins-base1.0-dev libgstreamer-plugins-bad1.0-dev
   gstreamer1.0-tools gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-plugins-bad
   gstreamer1.0-plugins-ugly gstreamer1.0-libav
-  libopencv-dev libgtest-dev opencv-doc python3-matplotlib python3-numpy
+  libopencv-dev libgtest-dev opencv-doc python3-matplotlib python3-numpy ffmpeg
 )
 missing=()
 for p in "${packages[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
