@@ -176,8 +176,7 @@ bool convert_photo(const Options &o, std::string *error) {
   }
   if (!out.commit(error) || (!o.depth_out.empty() && !depth_out.commit(error))) return false;
   if (!o.quiet) {
-    const std::string what = o.kind == OutputKind::Mpo   ? "two views of " + std::to_string(packed.width / 2) + "x" +
-                                                              std::to_string(packed.height)
+    const std::string what = o.kind == OutputKind::Mpo   ? "left and right view"
                              : o.kind == OutputKind::Jps ? "cross-eyed side-by-side"
                                                          : layout;
     std::fprintf(stderr, "pseudo3d-convert: wrote %s (%s, %dx%d, 3D on the %s)%s%s\n", o.output.c_str(), what.c_str(),

@@ -48,15 +48,17 @@ std::string Progress::line() const {
   const bool known = GST_CLOCK_TIME_IS_VALID(total_) && total_ > 0;
   const double total = known ? total_ / 1e9 : 0;
   // Time left from the average speed so far (media seconds per second).
-  const double speed = secs > 0.5 ? pos / secs : 0;
+  const double speed = secs >= 1 ? pos / secs : 0;
   const double left = known && pos >= total ? 0 : known && speed > 0 ? (total - pos) / speed : NAN;
+  // Rates over less than a second say little: shown from then on.
+  char rate[32] = "-- frames/s";
+  if (secs >= 1 || finished_) std::snprintf(rate, sizeof rate, "%.1f frames/s", fps);
   char buf[160];
   if (known)
-    std::snprintf(buf, sizeof buf, "%5.1f %%  %s of %s  %.1f frames/s  time left %s",
-                  std::min(100.0, 100.0 * pos / total), format_clock(pos).c_str(), format_clock(total).c_str(), fps,
-                  format_clock(left).c_str());
+    std::snprintf(buf, sizeof buf, "%5.1f %%  %s of %s  %s  time left %s", std::min(100.0, 100.0 * pos / total),
+                  format_clock(pos).c_str(), format_clock(total).c_str(), rate, format_clock(left).c_str());
   else
-    std::snprintf(buf, sizeof buf, "%s  %.1f frames/s", format_clock(pos).c_str(), fps);
+    std::snprintf(buf, sizeof buf, "%s  %s", format_clock(pos).c_str(), rate);
   return buf;
 }
 
@@ -89,6 +91,7 @@ void Progress::abandon() {
 void Progress::finish() {
   if (!enabled_) return;
   if (GST_CLOCK_TIME_IS_VALID(total_)) position_.store(total_);  // the piece is done
+  finished_ = true;
   if (tty_) {
     std::fprintf(out_, "\r%s\033[K\n", line().c_str());
     set_terminal_line_open(false);

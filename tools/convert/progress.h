@@ -44,6 +44,7 @@ class Progress {
   int64_t last_print_us_ = 0;
   int last_decile_ = 0;
   bool printed_ = false;
+  bool finished_ = false;
 };
 
 // "1:02:03" / "2:03" (hours only when needed).
