@@ -70,8 +70,7 @@ bool render(const Options &o, Processing processing, const Image &in, const std:
     e[i] = gst_element_factory_make(factories[i], nullptr);
     if (!e[i]) {
       *error = std::string("GStreamer element ") + factories[i] + " is missing";
-      for (int k = 0; k < i; ++k) gst_object_unref(gst_object_ref_sink(e[k]));
-      gst_object_unref(pipeline);
+      gst_object_unref(pipeline);  // holds the ones made so far
       return false;
     }
     gst_bin_add(GST_BIN(pipeline), e[i]);

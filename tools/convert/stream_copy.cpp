@@ -113,14 +113,13 @@ GstPadProbeReturn unmarkup_probe(GstPad *, GstPadProbeInfo *info, gpointer strip
 // Adds the elements to `bin`, links them in order from `pad` to a new
 // request pad of `mux`, and starts them.
 bool link_chain(GstElement *bin, GstPad *pad, GstElement **chain, int n, GstElement *mux, const char *mux_pad) {
-  for (int i = 0; i < n; ++i) {
-    if (!chain[i]) {
+  for (int i = 0; i < n; ++i)
+    if (!chain[i]) {  // a missing plugin: nothing was added yet
       for (int j = 0; j < n; ++j)
         if (chain[j]) gst_object_unref(gst_object_ref_sink(chain[j]));
       return false;
     }
-    gst_bin_add(GST_BIN(bin), chain[i]);
-  }
+  for (int i = 0; i < n; ++i) gst_bin_add(GST_BIN(bin), chain[i]);
   for (int i = 0; i + 1 < n; ++i)
     if (!gst_element_link(chain[i], chain[i + 1])) return false;
   GstPad *sink = gst_element_get_static_pad(chain[0], "sink");
