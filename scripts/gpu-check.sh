@@ -4,10 +4,12 @@
 #   scripts/gpu-check.sh prepare        (here, no GPU needed) builds build-gpu/
 #       for sm_90, bundles GStreamer + the project's binaries + test data into
 #       .gpu/payload.tar.gz with ../shared/gpu/make-gst-runtime.
-#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|pipelines|all]]   (on the GPU machine, from the repo
+#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|pipelines|convert|all]]   (on the GPU machine, from the repo
 #       root, with .gpu carried) unpacks, runs the GPU suites, compute-sanitizer
 #       memcheck and racecheck on the kernel suite (large sizes filtered out:
-#       the sanitizer is ~100x slower), pseudo3d-bench, and prints a table.
+#       the sanitizer is ~100x slower), pseudo3d-bench, and prints a table;
+#       "convert" runs scripts/bench-convert.sh (pseudo3d-convert --benchmark
+#       on a 4K H.264 clip: convert-to-fakesink against decode-only).
 #       Full logs and results land in OUTDIR (default gpu-results/).
 #
 # With the device tool:  run(command="scripts/gpu-check.sh run $OUT", carry=[".gpu"])
@@ -22,7 +24,8 @@ prepare() {
   [ -f build-gpu/build.ninja ] || meson setup build-gpu -Dbuildtype=release -Dgpu_arch=90 -Dcuda=enabled >/dev/null
   ninja -C build-gpu
   rm -rf .gpu && mkdir -p .gpu/payload/bin .gpu/payload/data
-  local bins=(build-gpu/tests/gpu/test_gpu build-gpu/tests/gpu/test_gpu_elements build-gpu/tools/pseudo3d-bench)
+  local bins=(build-gpu/tests/gpu/test_gpu build-gpu/tests/gpu/test_gpu_elements build-gpu/tools/pseudo3d-bench
+              build-gpu/tools/pseudo3d-convert)
   "$top/../shared/gpu/make-gst-runtime" .gpu/payload/gstrt build-gpu/gst/libgstpseudo3d.so "${bins[@]}" >/dev/null
   cp "${bins[@]}" build-gpu/gst/libgstpseudo3d.so .gpu/payload/bin/
   strip --strip-unneeded .gpu/payload/bin/* 2>/dev/null || true
@@ -54,7 +57,11 @@ run() {
   if [ "$what" = pipelines ]; then
     "$top/scripts/bench-pipelines.sh" "$out" >"$out/pipelines.txt" 2>&1; rc[pipelines]=$?
   fi
-  if [ "$what" != tests ] && [ "$what" != pipelines ]; then
+  if [ "$what" = convert ]; then
+    P3D_CONVERT=$p/bin/pseudo3d-convert P3D_BENCH_WORK=$work/convert \
+      "$top/scripts/bench-convert.sh" "$out" >"$out/convert.txt" 2>&1; rc[convert]=$?
+  fi
+  if [ "$what" != tests ] && [ "$what" != pipelines ] && [ "$what" != convert ]; then
   compute-sanitizer --tool memcheck --leak-check full --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
     >"$out/memcheck.log" 2>&1; rc[memcheck]=$?
   compute-sanitizer --tool racecheck --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
@@ -70,6 +77,7 @@ run() {
     grep -hE 'ERROR SUMMARY|RACECHECK SUMMARY' "$out"/memcheck*.log "$out"/racecheck.log 2>/dev/null
     [ -f "$out/bench.txt" ] && { echo "== benchmark"; cat "$out/bench.txt"; }
     [ -f "$out/pipelines.txt" ] && { echo "== pipelines"; cat "$out/pipelines.txt"; }
+    [ -f "$out/convert.txt" ] && { echo "== pseudo3d-convert"; cat "$out/convert.txt"; }
   } | tee "$out/summary.txt"
   local fail=0
   for k in "${!rc[@]}"; do [ "${rc[$k]}" -ne 0 ] && fail=1; done

@@ -7,7 +7,7 @@
 #   aloe-input.jpg             the 2D input
 #   aloe-depth.png             its estimated depth (pseudo3d-depthmap, white = near)
 #   aloe-anaglyph.jpg          red-cyan Dubois anaglyph (pipelines/image-to-anaglyph.sh)
-#   aloe-sbs-half.jpg          half side-by-side (pipelines/image-to-sbs.sh)
+#   aloe-sbs-half.jpg          half side-by-side (pipelines/image-to-sbs.sh layout=side-by-side-half)
 #   aloe-right-comparison.jpg  left view, ground-truth depth, right view synthesized
 #                              by the elements, real right view; only when the Aloe
 #                              test has left build/test-output/aloe-right-background-RGBA.png
@@ -56,7 +56,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
 pipelines/image-to-anaglyph.sh data/aloeL.jpg "$tmp/anaglyph.png"
-pipelines/image-to-sbs.sh data/aloeL.jpg "$tmp/sbs-half.png"
+pipelines/image-to-sbs.sh data/aloeL.jpg "$tmp/sbs-half.png" layout=side-by-side-half
 build/tools/pseudo3d-depthmap data/aloeL.jpg "$tmp/depth.png"
 synth=build/test-output/aloe-right-background-RGBA.png
 mkdir -p "$img"

@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
 # From a fresh Debian 12 checkout to 3D files you can open: installs the
 # packages (setup-debian.sh asks for sudo itself when not root), fetches the
-# sample data, builds into build/, then converts the samples into out/:
-#   aloe-anaglyph.png  red-cyan anaglyph of data/aloeL.jpg
-#   aloe-sbs-half.png  half side-by-side of data/aloeL.jpg
-#   aloe-depth.png     the estimated depth map of data/aloeL.jpg (white = near)
-#   vtest-sbs.mp4      data/vtest.avi as half side-by-side H.264 with frame packing
+# sample data, builds into build/, then converts the samples into out/ with
+# pseudo3d-convert:
+#   vtest-sbs.mp4      data/vtest-audio.mkv (a street scene with a ticking
+#                      sound track) as half side-by-side H.264 for a 3D TV,
+#                      audio copied, 3D layout signalled in the stream
+#   aloe-sbs.jpg       data/aloeL.jpg as a side-by-side photo (EXIF kept)
+#   aloe-depth.png     the depth map it was rendered from (16-bit, white = near)
+#   aloe.mpo           the same pair as an MPO for 3D TVs, cameras and viewers
+#   aloe-anaglyph.png  a red-cyan anaglyph of the photo
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 cd "$top"
@@ -15,14 +19,15 @@ scripts/get-test-data.sh
 scripts/build.sh
 
 mkdir -p out
+convert=build/tools/pseudo3d-convert
 echo "converting the samples into out/ ..."
-pipelines/image-to-anaglyph.sh data/aloeL.jpg out/aloe-anaglyph.png
-pipelines/image-to-sbs.sh data/aloeL.jpg out/aloe-sbs-half.png
-build/tools/pseudo3d-depthmap data/aloeL.jpg out/aloe-depth.png
-pipelines/video-to-sbs.sh data/vtest.avi out/vtest-sbs.mp4
+"$convert" data/vtest-audio.mkv out/vtest-sbs.mp4 --force
+"$convert" data/aloeL.jpg out/aloe-sbs.jpg --depth-out out/aloe-depth.png --force
+"$convert" data/aloeL.jpg out/aloe.mpo --force
+"$convert" data/aloeL.jpg out/aloe-anaglyph.png --layout anaglyph --force
 
 echo "3D files written:"
-for f in aloe-anaglyph.png aloe-sbs-half.png aloe-depth.png vtest-sbs.mp4; do
+for f in vtest-sbs.mp4 aloe-sbs.jpg aloe-depth.png aloe.mpo aloe-anaglyph.png; do
   [ -s "out/$f" ] || { echo "quickstart: out/$f is missing or empty" >&2; exit 1; }
   echo "  $top/out/$f"
 done

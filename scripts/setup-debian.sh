@@ -2,9 +2,10 @@
 # Installs what pseudo3d needs on Debian 12 (run as root, or with sudo):
 # build tools, GStreamer 1.22 with base/good/bad/ugly plugins and libgstcuda,
 # OpenCV, GoogleTest, opencv-doc (the Middlebury Aloe pair and vtest.avi
-# used by the tests), ffmpeg and mkvtoolnix (the tests read Matroska files
-# back with ffprobe and mkvinfo). The CUDA toolkit (nvcc) is optional: with
-# it the GPU path is built too.
+# used by the tests), ffmpeg and mkvtoolnix (the tests read the files the
+# project writes back with ffprobe and mkvinfo, as ffmpeg-based players and
+# Matroska tools do). The CUDA toolkit (nvcc) is optional: with it the GPU
+# path is built too.
 set -euo pipefail
 packages=(
   meson ninja-build pkg-config g++ git

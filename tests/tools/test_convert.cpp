@@ -1,0 +1,449 @@
+// pseudo3d-convert end to end: small generated clips with audio converted to
+// MP4 and MKV in several layouts and read back (GStreamer in process,
+// ffprobe where installed), the failure cases (missing input, existing
+// output, unknown extension/option, an undecodable file, Ctrl-C), and the
+// photo outputs (EXIF-rotated JPEG, MPO, JPS, depth map).
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+#include <glib/gstdio.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "convert_helpers.h"
+#include "element_helpers.h"
+
+using namespace p3d::test;
+
+namespace {
+
+constexpr double kFrame = 1.0 / 25;  // the clips' frame duration: the A/V tolerance
+constexpr unsigned kRightFirst = 0x1, kHalf = 0x4000;  // GstVideoMultiviewFlags
+
+int line_count(const std::string &s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+std::string slurp(const std::string &path) {
+  std::ifstream f(path);
+  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+// The clips and the conversions every video test reads, made once.
+struct Fixture {
+  std::string dir, aac_mp4, vorbis_mkv, long_mkv;
+  std::string sbs_mp4, tb_mkv, ana_mp4;
+  ToolRun sbs_run, tb_run, ana_run;
+  std::string setup_error;
+};
+Fixture *g_fx = nullptr;
+
+// 2 s at 160x120, 25 frames/s, with 2 s of 48 kHz stereo audio.
+std::string clip_launch(const std::string &path, const std::string &audio_encoder, const std::string &mux,
+                        int seconds = 2, int width = 160, int height = 120) {
+  return "videotestsrc num-buffers=" + std::to_string(25 * seconds) + " pattern=ball ! video/x-raw,width=" +
+         std::to_string(width) + ",height=" + std::to_string(height) +
+         ",framerate=25/1 ! x264enc speed-preset=ultrafast ! h264parse ! " + mux + " name=m ! filesink location=" +
+         path + " audiotestsrc num-buffers=" + std::to_string(50 * seconds) +
+         " samplesperbuffer=960 ! audio/x-raw,rate=48000,channels=2 ! " + audio_encoder + " ! m.";
+}
+
+class Convert : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (g_fx) return;
+    g_fx = new Fixture;
+    Fixture &f = *g_fx;
+    f.dir = output_dir() + "/convert";
+    g_mkdir_with_parents(f.dir.c_str(), 0755);
+    f.aac_mp4 = f.dir + "/clip-aac.mp4";
+    f.vorbis_mkv = f.dir + "/clip-vorbis.mkv";
+    f.long_mkv = f.dir + "/clip-long.mkv";
+    f.setup_error = make_clip(clip_launch(f.aac_mp4, "avenc_aac ! aacparse", "mp4mux"));
+    if (f.setup_error.empty()) f.setup_error = make_clip(clip_launch(f.vorbis_mkv, "vorbisenc", "matroskamux"));
+    if (f.setup_error.empty())
+      f.setup_error = make_clip(clip_launch(f.long_mkv, "vorbisenc", "matroskamux", 20, 640, 480));
+    if (!f.setup_error.empty()) return;
+    f.sbs_mp4 = f.dir + "/sbs-half.mp4";
+    f.tb_mkv = f.dir + "/tb-right-first.mkv";
+    f.ana_mp4 = f.dir + "/anaglyph.mp4";
+    for (const std::string &p : {f.sbs_mp4, f.tb_mkv, f.ana_mp4}) g_remove(p.c_str());
+    // Default options (side-by-side-half, H.264 crf 20, audio copied).
+    f.sbs_run = run_convert({f.aac_mp4, f.sbs_mp4});
+    f.tb_run = run_convert({f.vorbis_mkv, f.tb_mkv, "--layout", "top-bottom", "--swap-eyes", "--preset", "veryfast"});
+    // MP4 takes no Vorbis: re-encoded (AAC).
+    f.ana_run = run_convert({f.vorbis_mkv, f.ana_mp4, "--layout", "anaglyph", "--crf", "18", "--quiet"});
+  }
+  void SetUp() override { ASSERT_EQ("", g_fx->setup_error) << "could not make the test clips"; }
+  const Fixture &fx() const { return *g_fx; }
+};
+
+void expect_same_timing(const ReadBack &in, const ReadBack &out) {
+  EXPECT_EQ(out.video_frames, in.video_frames);
+  EXPECT_NEAR(out.video_end - out.video_start, in.video_end - in.video_start, kFrame);
+  ASSERT_GT(out.audio_buffers, 0) << "no audio in the output";
+  EXPECT_NEAR(out.audio_end - out.audio_start, in.audio_end - in.audio_start, kFrame);
+  // A/V sync: both streams start together, as in the input.
+  EXPECT_NEAR(out.audio_start - out.video_start, in.audio_start - in.video_start, kFrame);
+}
+
+}  // namespace
+
+TEST_F(Convert, Mp4SideBySideHalfCopiesAudioAndSignalsStereo) {
+  const ToolRun &r = fx().sbs_run;
+  ASSERT_EQ(r.status, 0) << r.err;
+  const ReadBack in = read_back(fx().aac_mp4), out = read_back(fx().sbs_mp4);
+  ASSERT_EQ(out.error, "");
+  EXPECT_EQ(out.multiview_mode, "side-by-side") << out.video_caps;
+  EXPECT_EQ(out.multiview_flags & (kHalf | kRightFirst), kHalf) << out.video_caps;
+  EXPECT_NE(out.video_caps.find("pixel-aspect-ratio=(fraction)1/1"), std::string::npos) << out.video_caps;
+  EXPECT_EQ(out.width, 160);
+  EXPECT_EQ(out.height, 120);
+  expect_same_timing(in, out);
+  EXPECT_EQ(out.audio_caps.rfind("audio/mpeg", 0), 0u) << out.audio_caps;
+  // Copied, not re-encoded: the very same AAC packets.
+  EXPECT_EQ(out.audio_buffers, in.audio_buffers);
+  EXPECT_EQ(out.audio_checksum, in.audio_checksum);
+  // Progress (plain lines: stderr is no terminal here) and the summary.
+  EXPECT_NE(r.err.find("100.0 %"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frames/s"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("wrote " + fx().sbs_mp4), std::string::npos) << r.err;
+  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
+}
+
+TEST_F(Convert, MkvTopBottomRightFirstCopiesVorbis) {
+  const ToolRun &r = fx().tb_run;
+  ASSERT_EQ(r.status, 0) << r.err;
+  const ReadBack in = read_back(fx().vorbis_mkv), out = read_back(fx().tb_mkv);
+  ASSERT_EQ(out.error, "");
+  EXPECT_EQ(out.multiview_mode, "top-bottom") << out.video_caps;
+  EXPECT_EQ(out.multiview_flags & (kHalf | kRightFirst), kRightFirst) << out.video_caps;
+  EXPECT_EQ(out.width, 160);
+  EXPECT_EQ(out.height, 240);
+  expect_same_timing(in, out);
+  EXPECT_EQ(out.audio_caps.rfind("audio/x-vorbis", 0), 0u) << out.audio_caps;
+  EXPECT_EQ(out.audio_checksum, in.audio_checksum);
+}
+
+TEST_F(Convert, Mp4AnaglyphIs444AndReencodesVorbisToAac) {
+  const ToolRun &r = fx().ana_run;
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "") << "--quiet prints nothing";
+  const ReadBack in = read_back(fx().vorbis_mkv), out = read_back(fx().ana_mp4);
+  ASSERT_EQ(out.error, "");
+  EXPECT_TRUE(out.multiview_mode.empty() || out.multiview_mode == "mono") << out.video_caps;
+  EXPECT_NE(out.video_caps.find("chroma-format=(string)4:4:4"), std::string::npos) << out.video_caps;
+  EXPECT_EQ(out.width, 160);
+  EXPECT_EQ(out.height, 120);
+  EXPECT_EQ(out.video_frames, in.video_frames);
+  EXPECT_NE(out.audio_caps.find("mpegversion=(int)4"), std::string::npos) << out.audio_caps;
+  // AAC adds its encoder delay at most: within one frame.
+  EXPECT_NEAR(out.audio_end - out.audio_start, in.audio_end - in.audio_start, kFrame);
+}
+
+TEST_F(Convert, FfprobeReadsLayoutEyeOrderAndAudio) {
+  if (ffprobe_path().empty()) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
+  ASSERT_EQ(fx().sbs_run.status, 0);
+  ASSERT_EQ(fx().tb_run.status, 0);
+  ASSERT_EQ(fx().ana_run.status, 0);
+  const std::string v = "width,height,sample_aspect_ratio,pix_fmt,duration";
+  const std::string sbs = ffprobe_stream(fx().sbs_mp4, "v:0", v);
+  EXPECT_EQ(ffprobe_value(sbs, "width"), "160");
+  EXPECT_EQ(ffprobe_value(sbs, "sample_aspect_ratio"), "1:1");
+  EXPECT_EQ(ffmpeg_stereo3d(fx().sbs_mp4), "side by side");
+  const std::string sbs_audio = ffprobe_stream(fx().sbs_mp4, "a:0", "codec_name,duration");
+  EXPECT_EQ(ffprobe_value(sbs_audio, "codec_name"), "aac");
+  EXPECT_NEAR(std::stod(ffprobe_value(sbs_audio, "duration")), std::stod(ffprobe_value(sbs, "duration")), kFrame);
+
+  const std::string tb = ffprobe_stream(fx().tb_mkv, "v:0", v);
+  EXPECT_EQ(ffprobe_value(tb, "height"), "240");
+  EXPECT_EQ(ffprobe_value(tb, "sample_aspect_ratio"), "1:1");
+  EXPECT_EQ(ffmpeg_stereo3d(fx().tb_mkv), "top and bottom (inverted)");
+  EXPECT_EQ(ffprobe_value(ffprobe_stream(fx().tb_mkv, "a:0", "codec_name"), "codec_name"), "vorbis");
+
+  EXPECT_EQ(ffprobe_value(ffprobe_stream(fx().ana_mp4, "v:0", v), "pix_fmt"), "yuv444p");
+  EXPECT_EQ(ffmpeg_stereo3d(fx().ana_mp4), "");
+  EXPECT_EQ(ffprobe_value(ffprobe_stream(fx().ana_mp4, "a:0", "codec_name"), "codec_name"), "aac");
+}
+
+TEST_F(Convert, StartAndDurationConvertAPiece) {
+  const std::string out = fx().dir + "/piece.mkv";
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({fx().aac_mp4, out, "--start", "0.5", "--duration", "1", "--layout", "row-interleaved"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const ReadBack rb = read_back(out);
+  EXPECT_EQ(rb.multiview_mode, "row-interleaved") << rb.video_caps;
+  // Frames overlapping [0.5 s, 1.5 s): 0.48 ... 1.48.
+  EXPECT_GE(rb.video_frames, 25);
+  EXPECT_LE(rb.video_frames, 26);
+  EXPECT_NEAR(rb.video_end - rb.video_start, 1.0, 2 * kFrame);
+  ASSERT_GT(rb.audio_buffers, 0);
+  EXPECT_NEAR(rb.audio_end - rb.audio_start, 1.0, 2 * kFrame);
+  EXPECT_NEAR(rb.audio_start, rb.video_start, kFrame);
+}
+
+TEST_F(Convert, MissingInputIsOneLineAndNoOutput) {
+  const std::string out = fx().dir + "/never.mp4";
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({fx().dir + "/no-such-film.mp4", out});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("no-such-film.mp4"), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+}
+
+TEST_F(Convert, ExistingOutputNeedsForce) {
+  const std::string out = fx().dir + "/exists.mp4";
+  { std::ofstream(out) << "keep me"; }
+  const ToolRun r = run_convert({fx().aac_mp4, out});
+  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("exists.mp4"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(out), "keep me");
+  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
+  const ToolRun forced = run_convert({fx().aac_mp4, out, "--force", "--quiet"});
+  ASSERT_EQ(forced.status, 0) << forced.err;
+  EXPECT_EQ(read_back(out).video_frames, 50);
+}
+
+TEST_F(Convert, UsageErrorsAreOneLine) {
+  for (const std::vector<std::string> &args :
+       {std::vector<std::string>{fx().aac_mp4, fx().dir + "/x.avi"}, {fx().aac_mp4, fx().dir + "/x.mp4", "--bogus"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--layout", "sideways"}, {fx().aac_mp4}}) {
+    const ToolRun r = run_convert(args);
+    EXPECT_EQ(r.status, 2) << args.back();
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+  }
+  const ToolRun ext = run_convert({fx().aac_mp4, fx().dir + "/x.avi"});
+  EXPECT_NE(ext.err.find("x.avi"), std::string::npos) << ext.err;
+  EXPECT_FALSE(g_file_test((fx().dir + "/x.mp4").c_str(), G_FILE_TEST_EXISTS));
+}
+
+TEST_F(Convert, UndecodableInputFailsCleanly) {
+  const std::string bad = fx().dir + "/not-a-film.mp4", out = fx().dir + "/from-bad.mkv";
+  { std::ofstream(bad) << "this is no video\n"; }
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({bad, out});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("not-a-film.mp4"), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
+}
+
+// Ctrl-C in the middle: the input comes through a FIFO that stops after
+// half the file, so the conversion is certainly running when SIGINT comes.
+TEST_F(Convert, InterruptLeavesNoOutput) {
+  const std::string dir = fx().dir + "/interrupt", fifo = dir + "/input.mkv", out = dir + "/out.mkv";
+  g_mkdir_with_parents(dir.c_str(), 0755);
+  g_remove(out.c_str());
+  g_remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const std::vector<uint8_t> bytes = read_bytes(fx().long_mkv);
+  std::signal(SIGPIPE, SIG_IGN);  // the writer outlives the reader
+  const std::string program = convert_program();
+  const char *argv[] = {program.c_str(), fifo.c_str(), out.c_str(), nullptr};
+  GPid pid;
+  gint err_fd = -1;
+  ASSERT_TRUE(g_spawn_async_with_pipes(nullptr, const_cast<gchar **>(argv), nullptr, G_SPAWN_DO_NOT_REAP_CHILD, nullptr,
+                                       nullptr, &pid, nullptr, nullptr, &err_fd, nullptr));
+  std::mutex err_lock;
+  std::string err;
+  std::thread reader([&]() {
+    char buf[512];
+    ssize_t n;
+    while ((n = read(err_fd, buf, sizeof buf)) > 0) {
+      std::lock_guard<std::mutex> l(err_lock);
+      err.append(buf, static_cast<size_t>(n));
+    }
+  });
+  std::thread writer([&]() {
+    const int fd = open(fifo.c_str(), O_WRONLY);
+    if (fd < 0) return;
+    for (size_t at = 0, half = bytes.size() / 2; at < half;) {
+      const ssize_t n = write(fd, bytes.data() + at, half - at);
+      if (n <= 0) break;
+      at += static_cast<size_t>(n);
+    }
+    // Keep the FIFO open: the reader waits for more, mid-stream.
+    for (int i = 0; i < 300 && kill(pid, 0) == 0; ++i) g_usleep(100000);
+    close(fd);
+  });
+  // A progress line: frames are being converted and muxed.
+  bool running = false;
+  for (int i = 0; i < 300 && !running; ++i) {
+    {
+      std::lock_guard<std::mutex> l(err_lock);
+      running = err.find("frames/s") != std::string::npos;
+    }
+    if (!running) g_usleep(100000);
+  }
+  EXPECT_TRUE(running) << "no progress line";
+  EXPECT_EQ(files_containing(dir, ".p3d-").size(), 1u) << "the temporary output is there while converting";
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  writer.join();
+  reader.join();
+  close(err_fd);
+  g_spawn_close_pid(pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT);
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+  EXPECT_TRUE(files_containing(dir, ".p3d-").empty());
+  g_remove(fifo.c_str());
+}
+
+TEST_F(Convert, BenchmarkModeWritesBothRates) {
+  const std::string jsonl = fx().dir + "/bench.jsonl";
+  g_remove(jsonl.c_str());
+  const ToolRun r = run_convert({"--benchmark", fx().aac_mp4, "--benchmark-out", jsonl, "--benchmark-runs", "1"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string lines = slurp(jsonl);
+  EXPECT_NE(lines.find("\"mode\": \"decode-only\""), std::string::npos) << lines;
+  EXPECT_NE(lines.find("\"mode\": \"convert-fakesink\""), std::string::npos) << lines;
+  EXPECT_NE(lines.find("\"frames\": 50"), std::string::npos) << lines;
+  EXPECT_NE(lines.find("\"ratio\""), std::string::npos) << lines;
+  EXPECT_NE(r.out.find("% of decoding"), std::string::npos) << r.out;
+}
+
+// ---- photos ----
+
+namespace {
+
+// A landscape-stored photo that EXIF orientation 6 turns upright (portrait,
+// 120x160): blocky texture for the depth regions, and a red square at the
+// upright top-left corner (the stored bottom-left).
+std::string make_rotated_jpeg(const std::string &dir) {
+  cv::Mat stored(120, 160, CV_8UC3);
+  cv::RNG rng(7);
+  for (int y = 0; y < stored.rows; y += 8)
+    for (int x = 0; x < stored.cols; x += 8)
+      stored(cv::Rect(x, y, 8, 8)).setTo(cv::Scalar(rng.uniform(60, 200), rng.uniform(60, 200), rng.uniform(60, 200)));
+  stored(cv::Rect(0, 120 - 32, 32, 32)).setTo(cv::Scalar(0, 0, 255));
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", stored, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95});
+  const std::vector<uint8_t> with_exif = add_exif(jpeg, 6, "P3DTEST");
+  const std::string path = dir + "/portrait-exif6.jpg";
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char *>(with_exif.data()),
+                                              static_cast<std::streamsize>(with_exif.size()));
+  return path;
+}
+
+}  // namespace
+
+TEST_F(Convert, PhotoJpegAppliesExifOrientationAndKeepsExif) {
+  const std::string in = make_rotated_jpeg(fx().dir), out = fx().dir + "/photo-sbs.jpg",
+                    depth = fx().dir + "/photo-depth.png";
+  g_remove(out.c_str());
+  g_remove(depth.c_str());
+  const ToolRun r = run_convert({in, out, "--depth-out", depth});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<uint8_t> bytes = read_bytes(out);
+  EXPECT_EQ(jpeg_exif_orientation(bytes), 1) << "the pixels are upright now";
+  EXPECT_TRUE(jpeg_exif_contains(bytes, "P3DTEST")) << "the photo's EXIF is kept";
+  // Full side-by-side of the upright 120x160 picture; the same with and
+  // without honouring the orientation tag (it says 1).
+  const cv::Mat sbs = cv::imread(out, cv::IMREAD_COLOR), raw = cv::imread(out, cv::IMREAD_COLOR | cv::IMREAD_IGNORE_ORIENTATION);
+  ASSERT_FALSE(sbs.empty());
+  EXPECT_EQ(sbs.cols, 240);
+  EXPECT_EQ(sbs.rows, 160);
+  EXPECT_EQ(raw.size(), sbs.size());
+  const cv::Scalar corner = cv::mean(sbs(cv::Rect(6, 6, 14, 14)));  // BGR, left view's top-left
+  EXPECT_GT(corner[2], 150) << corner;
+  EXPECT_LT(corner[1], 110) << corner;
+  // The depth used: upright, 16-bit, far at the top and near at the bottom
+  // (top-bottom hypothesis) rather than across.
+  const cv::Mat d = cv::imread(depth, cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(d.empty());
+  EXPECT_EQ(d.type(), CV_16UC1);
+  EXPECT_EQ(d.cols, 120);
+  EXPECT_EQ(d.rows, 160);
+  const double top = cv::mean(d.rowRange(0, 40))[0], bottom = cv::mean(d.rowRange(120, 160))[0];
+  const double left = cv::mean(d.colRange(0, 30))[0], right = cv::mean(d.colRange(90, 120))[0];
+  EXPECT_GT(bottom - top, 0.3 * 65535) << "top " << top << " bottom " << bottom;
+  EXPECT_LT(std::abs(left - right), (bottom - top) / 3) << "left " << left << " right " << right;
+}
+
+TEST_F(Convert, PhotoMpoHoldsTwoDisparityImages) {
+  const std::string in = make_rotated_jpeg(fx().dir), out = fx().dir + "/photo.mpo";
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({in, out, "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<uint8_t> file = read_bytes(out);
+  const MpoIndex idx = parse_mpo(file);
+  ASSERT_TRUE(idx.found) << idx.error;
+  EXPECT_EQ(idx.number_of_images, 2u);
+  ASSERT_EQ(idx.entries.size(), 2u);
+  const uint32_t kDisparity = 0x020002, kRepresentative = 1u << 29;
+  EXPECT_EQ(idx.entries[0].attribute & 0xFFFFFF, kDisparity);
+  EXPECT_TRUE(idx.entries[0].attribute & kRepresentative);
+  EXPECT_EQ(idx.entries[1].attribute & 0xFFFFFF, kDisparity);
+  EXPECT_EQ(idx.entries[0].offset, 0u);
+  EXPECT_EQ(idx.entries[0].size, idx.entries[1].file_offset);
+  ASSERT_EQ(idx.entries[1].file_offset + idx.entries[1].size, file.size());
+  std::vector<cv::Mat> views;
+  for (const MpoEntry &e : idx.entries) {
+    const std::vector<uint8_t> jpeg(file.begin() + e.file_offset, file.begin() + e.file_offset + e.size);
+    ASSERT_GE(jpeg.size(), 4u);
+    EXPECT_EQ(jpeg[0], 0xFF);
+    EXPECT_EQ(jpeg[1], 0xD8);
+    EXPECT_EQ(jpeg[jpeg.size() - 2], 0xFF);
+    EXPECT_EQ(jpeg[jpeg.size() - 1], 0xD9);
+    views.push_back(cv::imdecode(jpeg, cv::IMREAD_COLOR));
+    ASSERT_FALSE(views.back().empty());
+    EXPECT_EQ(views.back().cols, 120);
+    EXPECT_EQ(views.back().rows, 160);
+  }
+  EXPECT_GT(cv::norm(views[0], views[1], cv::NORM_L1) / views[0].total(), 1.0) << "two different views";
+  // The second image carries its own MPF attributes.
+  const std::vector<uint8_t> second(file.begin() + idx.entries[1].file_offset, file.end());
+  EXPECT_NE(std::string(second.begin(), second.begin() + std::min<size_t>(second.size(), 400)).find("MPF"),
+            std::string::npos);
+}
+
+TEST_F(Convert, PhotoJpsIsTheCrossEyedPair) {
+  const std::string in = make_rotated_jpeg(fx().dir), jps = fx().dir + "/photo.jps", mpo = fx().dir + "/photo-pair.mpo";
+  g_remove(jps.c_str());
+  g_remove(mpo.c_str());
+  ASSERT_EQ(run_convert({in, jps, "--quiet"}).status, 0);
+  ASSERT_EQ(run_convert({in, mpo, "--quiet"}).status, 0);
+  const cv::Mat pair = cv::imread(jps, cv::IMREAD_COLOR);
+  ASSERT_EQ(pair.cols, 240);
+  ASSERT_EQ(pair.rows, 160);
+  const std::vector<uint8_t> file = read_bytes(mpo);
+  const MpoIndex idx = parse_mpo(file);
+  ASSERT_EQ(idx.entries.size(), 2u);
+  auto view = [&](int i) {
+    const MpoEntry &e = idx.entries[i];
+    return cv::imdecode(std::vector<uint8_t>(file.begin() + e.file_offset, file.begin() + e.file_offset + e.size),
+                        cv::IMREAD_COLOR);
+  };
+  const cv::Mat left = view(0), right = view(1);
+  const cv::Mat jps_left_half = pair.colRange(0, 120), jps_right_half = pair.colRange(120, 240);
+  // Right view on the left half, left view on the right half.
+  EXPECT_GT(cv::PSNR(jps_left_half, right), 30);
+  EXPECT_GT(cv::PSNR(jps_right_half, left), 30);
+  EXPECT_GT(cv::PSNR(jps_left_half, right), cv::PSNR(jps_left_half, left) + 1);
+}
+
+TEST_F(Convert, PhotoPngIsThePackedPicture) {
+  const std::string in = make_rotated_jpeg(fx().dir), out = fx().dir + "/photo-tb.png";
+  g_remove(out.c_str());
+  ASSERT_EQ(run_convert({in, out, "--layout", "top-bottom-half", "--quiet"}).status, 0);
+  const cv::Mat m = cv::imread(out, cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(m.cols, 120);
+  EXPECT_EQ(m.rows, 160);
+}

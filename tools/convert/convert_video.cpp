@@ -1,0 +1,207 @@
+#include "convert_video.h"
+
+#include <gst/pbutils/pbutils.h>
+
+#include <atomic>
+#include <cstdio>
+#include <mutex>
+#include <vector>
+
+#include "encoder.h"
+#include "gpu.h"
+#include "gst_run.h"
+#include "media_source.h"
+#include "mkv_stereo_hook.h"
+#include "output_file.h"
+#include "progress.h"
+#include "stage_settings.h"
+#include "stream_copy.h"
+#include "video_chain.h"
+
+namespace p3d::convert {
+
+namespace {
+
+const char *muxer_for(OutputKind k) {
+  return k == OutputKind::Mkv ? "matroskamux" : k == OutputKind::Mov ? "qtmux" : "mp4mux";
+}
+
+std::string codec_name(const GstCaps *caps) {
+  gchar *d = gst_pb_utils_get_codec_description(caps);
+  std::string s = d ? d : gst_structure_get_name(gst_caps_get_structure(caps, 0));
+  g_free(d);
+  return s;
+}
+
+struct Job {
+  explicit Job(const Options &opts) : o(opts), progress(!opts.quiet) {}
+  ~Job() {
+    if (pipeline) gst_object_unref(pipeline);
+  }
+
+  const Options &o;
+  Processing processing = Processing::Cpu;
+  std::string layout;
+  EncoderChoice encoder;
+  GstElement *pipeline = nullptr, *mux = nullptr;
+  MediaSource source;
+  VideoChain chain;
+  Progress progress;
+  std::atomic<bool> video_linked{false};
+  std::mutex lock;  // streams, notes: written by streaming threads
+  std::vector<std::string> streams, notes;
+
+  void note(const std::string &s) {
+    std::lock_guard<std::mutex> l(lock);
+    notes.push_back(s);
+  }
+  void stream(const std::string &s) {
+    std::lock_guard<std::mutex> l(lock);
+    streams.push_back(s);
+  }
+
+  // Streaming thread: one decodebin pad.
+  void pad_added(GstPad *pad, GstCaps *caps) {
+    const std::string name = gst_structure_get_name(gst_caps_get_structure(caps, 0));
+    if (name.rfind("video/", 0) == 0) {
+      if (video_linked.exchange(true)) {
+        note("an extra video stream (" + codec_name(caps) + ") is left out");
+        link_to_fakesink(pipeline, pad);
+        return;
+      }
+      source.gate_pad(pad, false);
+      if (!chain.attach(pad, caps)) post_error(pipeline, "could not link the decoded video to the 3D conversion");
+      return;
+    }
+    const StreamRoute route = route_stream(caps, o.kind);
+    if (route.action == StreamAction::Drop) {
+      note(route.why + ": that stream is left out");
+      link_to_fakesink(pipeline, pad);
+      return;
+    }
+    source.gate_pad(pad, route.action == StreamAction::Copy);
+    std::string error;
+    GstPad *head = link_stream_branch(pipeline, pad, caps, route, o.kind, mux, &error);
+    if (!head) {
+      post_error(pipeline, error);
+      return;
+    }
+    gst_object_unref(head);
+    const bool audio = name.rfind("audio/", 0) == 0;
+    stream(std::string(audio ? "audio " : "subtitles ") +
+           (route.action == StreamAction::Encode ? "re-encoded from " : "copied, ") + codec_name(caps));
+  }
+
+  // Main thread, once every stream is linked.
+  bool ready(std::string *error) {
+    if (!video_linked) {
+      *error = "no video stream";
+      return false;
+    }
+    progress.set_total(source.total_time(chain.sink_pad()));
+    if (source.has_piece() && !source.seek_to_piece(chain.sink_pad())) {
+      *error = "cannot seek for --start/--duration (the file is not seekable)";
+      return false;
+    }
+    if (!o.quiet) print_plan();
+    return true;
+  }
+
+  void print_plan() {
+    const int crf = o.crf >= 0 ? o.crf : default_crf(o.codec);
+    std::string line = "pseudo3d-convert: " + o.input + " -> " + o.output + ": " + layout + ", " + encoder.factory +
+                       " crf " + std::to_string(crf) + " preset " + (o.preset.empty() ? "medium" : o.preset) +
+                       ", 3D on the " + (processing == Processing::Gpu ? "GPU" : "CPU") + " (decoder " +
+                       source.video_decoder() + (chain.on_gpu_memory() ? ", CUDA memory" : "") + ")";
+    std::lock_guard<std::mutex> l(lock);
+    for (const std::string &s : streams) line += "; " + s;
+    std::fprintf(stderr, "%s\n", line.c_str());
+    for (const std::string &n : notes) std::fprintf(stderr, "pseudo3d-convert: note: %s\n", n.c_str());
+    if (is_stereo_layout(layout) && !encoder.writes_stereo_sei)
+      std::fprintf(stderr,
+                   "pseudo3d-convert: note: %s writes no frame-packing SEI, so the 3D layout is signalled %s\n",
+                   encoder.factory.c_str(),
+                   o.kind == OutputKind::Mkv ? "in the Matroska container only" : "nowhere (use .mkv or --codec h264)");
+  }
+
+  // encoder ! parser ! pseudo3dsignal ! queue ! mux ! filesink.
+  bool build(const std::string &temp_path, std::string *error) {
+    pipeline = gst_pipeline_new("pseudo3d-convert");
+    mux = gst_element_factory_make(muxer_for(o.kind), "mux");
+    GstElement *sink = gst_element_factory_make("filesink", "sink");
+    GstElement *enc = make_encoder(encoder, o);
+    GstElement *parse = gst_element_factory_make(encoder.parser.c_str(), nullptr);
+    GstElement *signal = gst_element_factory_make("pseudo3dsignal", nullptr);
+    GstElement *q = make_frame_queue(8);
+    GstElement *all[] = {mux, sink, enc, parse, signal, q};
+    const char *names[] = {muxer_for(o.kind), "filesink", encoder.factory.c_str(), encoder.parser.c_str(),
+                           "pseudo3dsignal", "queue"};
+    for (size_t i = 0; i < G_N_ELEMENTS(all); ++i)
+      if (!all[i]) {
+        for (GstElement *e : all)
+          if (e) gst_object_unref(gst_object_ref_sink(e));
+        mux = nullptr;
+        *error = std::string("GStreamer element ") + names[i] + " is missing";
+        return false;
+      }
+    g_object_set(sink, "location", temp_path.c_str(), NULL);
+    gst_bin_add_many(GST_BIN(pipeline), mux, sink, enc, parse, signal, q, NULL);
+    if (!chain.build(pipeline, o, processing, encoder.raw_format, error)) return false;
+    GstPad *mux_video = gst_element_request_pad_simple(mux, "video_%u");
+    GstPad *q_src = gst_element_get_static_pad(q, "src");
+    const bool linked = gst_element_link_many(chain.tail(), enc, parse, signal, q, NULL) && mux_video &&
+                        gst_pad_link(q_src, mux_video) == GST_PAD_LINK_OK && gst_element_link(mux, sink);
+    gst_object_unref(q_src);
+    if (mux_video) gst_object_unref(mux_video);
+    if (!linked) {
+      *error = "could not link " + encoder.factory + " to " + muxer_for(o.kind);
+      return false;
+    }
+    source.set_piece(o.start, o.duration);
+    chain.count_frames(&progress, source.piece_start());
+    MediaSource::Hooks hooks;
+    hooks.keep_encoded = [this](const GstCaps *caps) { return keep_encoded(caps, o.kind); };
+    hooks.video_caps = [this]() { return chain.accepted_caps(); };
+    hooks.pad_added = [this](GstPad *pad, GstCaps *caps) { pad_added(pad, caps); };
+    hooks.no_more_pads = [this]() { post_ready(pipeline); };
+    return source.build(pipeline, o.input, hooks, error);
+  }
+};
+
+}  // namespace
+
+bool convert_video(const Options &o, std::string *error) {
+  Job job(o);
+  if (!resolve_processing(o.processing, &job.processing, error)) return false;
+  if (job.processing == Processing::Gpu) prefer_gpu_decoders();
+  job.layout = effective_layout(o);
+  if (!choose_encoder(o, job.processing, job.layout, &job.encoder, error)) return false;
+  OutputFile out;
+  if (!out.open(o.output, o.force, error)) return false;
+  if (!job.build(out.temp_path(), error)) return false;
+
+  const LoopResult r = run_main_loop(
+      job.pipeline, [&job](std::string *e) { return job.ready(e); }, [&job]() { job.progress.tick(); });
+  if (!r.ok) {
+    job.progress.abandon();
+    if (!r.missing_plugin.empty() && !job.video_linked)
+      *error = o.input + ": no GStreamer decoder for " + r.missing_plugin + " is installed";
+    else
+      *error = (r.from_filesink ? o.output : o.input) + ": " + r.error;
+    return false;
+  }
+  if (o.kind == OutputKind::Mkv &&
+      !set_mkv_container_stereo_mode(out.temp_path(), job.layout, right_view_first(o), error))
+    return false;
+  if (!out.commit(error)) return false;
+  job.progress.finish();
+  if (!o.quiet) {
+    const double secs = job.progress.seconds();
+    std::fprintf(stderr, "pseudo3d-convert: wrote %s: %llu frames in %s (%.1f frames/s)\n", o.output.c_str(),
+                 static_cast<unsigned long long>(job.progress.frames()), format_clock(secs).c_str(),
+                 secs > 0 ? job.progress.frames() / secs : 0.0);
+  }
+  return true;
+}
+
+}  // namespace p3d::convert

@@ -1,0 +1,127 @@
+#include "encoder.h"
+
+#include <cstring>
+
+namespace p3d::convert {
+
+namespace {
+
+// x264/x265 preset names, fastest first; NVENC's presets are mapped from them.
+const char *const kPresets[] = {"ultrafast", "superfast", "veryfast", "faster", "fast",
+                                "medium",    "slow",      "slower",   "veryslow", "placebo"};
+
+bool have(const char *factory) {
+  GstElementFactory *f = gst_element_factory_find(factory);
+  if (f) gst_object_unref(f);
+  return f != nullptr;
+}
+
+bool known_preset(const std::string &p) {
+  for (const char *n : kPresets)
+    if (p == n) return true;
+  return false;
+}
+
+// Whether the encoder's sink template lists a raw format.
+bool sink_accepts_format(const char *factory, const char *format) {
+  GstElementFactory *f = gst_element_factory_find(factory);
+  if (!f) return false;
+  bool found = false;
+  for (const GList *l = gst_element_factory_get_static_pad_templates(f); l && !found; l = l->next) {
+    auto *t = static_cast<GstStaticPadTemplate *>(l->data);
+    if (t->direction != GST_PAD_SINK) continue;
+    GstCaps *caps = gst_static_caps_get(&t->static_caps);
+    GstCaps *want = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, format, NULL);
+    found = gst_caps_can_intersect(caps, want);
+    gst_caps_unref(want);
+    gst_caps_unref(caps);
+  }
+  gst_object_unref(f);
+  return found;
+}
+
+// Sets an enum or numeric property given as text, if the element has it
+// and the text is a valid value (NVENC's properties differ between
+// GStreamer releases).
+void set_if_valid(GstElement *e, const char *property, const char *value) {
+  GParamSpec *p = g_object_class_find_property(G_OBJECT_GET_CLASS(e), property);
+  if (!p) return;
+  GValue v = G_VALUE_INIT;
+  g_value_init(&v, p->value_type);
+  if (gst_value_deserialize(&v, value) && !g_param_value_validate(p, &v)) g_object_set_property(G_OBJECT(e), property, &v);
+  g_value_unset(&v);
+}
+
+// NVENC presets of 1.22's nvh264enc/nvh265enc for the x264 names.
+const char *nvenc_preset(const std::string &p) {
+  if (p == "ultrafast" || p == "superfast" || p == "veryfast" || p == "faster") return "hp";
+  if (p == "slow" || p == "slower" || p == "veryslow" || p == "placebo") return "hq";
+  return "default";
+}
+
+}  // namespace
+
+int default_crf(Codec codec) { return codec == Codec::H264 ? 20 : 24; }
+
+bool is_stereo_layout(const std::string &layout) {
+  return layout != "anaglyph" && layout != "left" && layout != "right";
+}
+
+bool choose_encoder(const Options &o, Processing processing, const std::string &layout, EncoderChoice *c,
+                    std::string *error) {
+  if (!o.preset.empty() && !known_preset(o.preset)) {
+    *error = "invalid value '" + o.preset + "' for --preset (ultrafast, superfast, veryfast, faster, fast, medium, "
+             "slow, slower, veryslow, placebo)";
+    return false;
+  }
+  const bool h264 = o.codec == Codec::H264;
+  const char *sw = h264 ? "x264enc" : "x265enc";
+  const char *hw = h264 ? "nvh264enc" : "nvh265enc";
+  // NVENC writes no frame-packing SEI. For H.264 stereo in MP4 that SEI is
+  // the only signalling players read (mp4mux's own box is wrong, see
+  // pseudo3dsignal), so x264 is kept there; Matroska gets its StereoMode
+  // after muxing instead (mkv_stereo_hook.h).
+  const bool mp4_family = o.kind == OutputKind::Mp4 || o.kind == OutputKind::Mov;
+  const bool sei_needed = h264 && is_stereo_layout(layout) && mp4_family;
+  const bool use_hw = processing == Processing::Gpu && have(hw) && !(sei_needed && have(sw));
+  if (use_hw) {
+    c->factory = hw;
+  } else if (have(sw)) {
+    c->factory = sw;
+  } else {
+    *error = std::string("no ") + (h264 ? "H.264" : "H.265") + " encoder installed (" + sw + " from " +
+             (h264 ? "gstreamer1.0-plugins-ugly" : "gstreamer1.0-plugins-bad") + ")";
+    return false;
+  }
+  c->parser = h264 ? "h264parse" : "h265parse";
+  c->writes_stereo_sei = c->factory == "x264enc";
+  // Anaglyph colours sit in the chroma: 4:4:4 keeps them from bleeding
+  // (x264 High 4:4:4, x265 Main 4:4:4). Packed stereo stays 4:2:0 for players.
+  c->raw_format = layout == "anaglyph" && sink_accepts_format(c->factory.c_str(), "Y444") ? "Y444" : "I420";
+  return true;
+}
+
+GstElement *make_encoder(const EncoderChoice &c, const Options &o) {
+  GstElement *e = gst_element_factory_make(c.factory.c_str(), "encoder");
+  if (!e) return nullptr;
+  const int crf = o.crf >= 0 ? o.crf : default_crf(o.codec);
+  const std::string preset = o.preset.empty() ? "medium" : o.preset;
+  if (c.factory == "x264enc") {
+    // pass=qual is x264's CRF (constant rate factor) with quantizer as the factor.
+    gst_util_set_object_arg(G_OBJECT(e), "pass", "qual");
+    g_object_set(e, "quantizer", static_cast<guint>(crf), "threads", 0u, NULL);
+    gst_util_set_object_arg(G_OBJECT(e), "speed-preset", preset.c_str());
+    gst_util_set_object_arg(G_OBJECT(e), "frame-packing", "auto");
+  } else if (c.factory == "x265enc") {
+    const std::string opts = "crf=" + std::to_string(crf);
+    g_object_set(e, "option-string", opts.c_str(), NULL);  // x265 uses every core by default
+    gst_util_set_object_arg(G_OBJECT(e), "speed-preset", preset.c_str());
+  } else {  // NVENC: variable bitrate with a constant-quality target
+    set_if_valid(e, "rc-mode", "vbr-hq");
+    set_if_valid(e, "const-quality", std::to_string(crf).c_str());
+    set_if_valid(e, "preset", nvenc_preset(preset));
+  }
+  return e;
+}
+
+}  // namespace p3d::convert

@@ -1,0 +1,40 @@
+// The video encoder: which one (x264/x265 on the CPU, NVENC when the GPU
+// path runs and the machine has it), the raw format it is fed, and the
+// quality flags mapped onto its properties.
+#pragma once
+
+#include <gst/gst.h>
+
+#include <string>
+
+#include "options.h"
+
+namespace p3d::convert {
+
+struct EncoderChoice {
+  std::string factory;     // x264enc, x265enc, nvh264enc, nvh265enc
+  std::string parser;      // h264parse, h265parse
+  std::string raw_format;  // what the encoder is fed: I420, or Y444 for anaglyphs
+  // Whether the encoder writes the frame-packing SEI that carries the stereo
+  // layout in the stream (only x264 does; pseudo3dsignal sets its eye order).
+  bool writes_stereo_sei = false;
+};
+
+// Picks the encoder for the codec, the processing in use and the layout.
+// False with *error when no encoder for the codec is installed or --preset
+// names none of its presets.
+bool choose_encoder(const Options &o, Processing processing, const std::string &layout, EncoderChoice *choice,
+                    std::string *error);
+
+// The encoder element with quality (--crf: constant-quality mode), speed
+// (--preset) and threads (all cores) set.
+GstElement *make_encoder(const EncoderChoice &choice, const Options &o);
+
+// Default constant quality per codec: about the same visual quality.
+int default_crf(Codec codec);
+
+// Whether a layout packs two views into the frame (the rest are 2D
+// pictures: an anaglyph or one view).
+bool is_stereo_layout(const std::string &layout);
+
+}  // namespace p3d::convert

@@ -1,0 +1,41 @@
+// Small helpers for running GStreamer pipelines from the converter.
+#pragma once
+
+#include <gst/gst.h>
+
+#include <functional>
+#include <string>
+
+namespace p3d::convert {
+
+// The error message of an ERROR bus message as one line: the message, plus
+// the flow reason ("not-negotiated"...) GStreamer keeps in the debug text.
+std::string error_text(GstMessage *msg);
+
+// Posts an error on `element`'s bus from any thread.
+void post_error(GstElement *element, const std::string &text);
+
+// Sets the pipeline to PLAYING and waits for EOS or an error (no main loop:
+// for short pipelines). Returns false with *error.
+bool run_until_eos(GstElement *pipeline, std::string *error);
+
+// How a main-loop run ended.
+struct LoopResult {
+  bool ok = false;
+  std::string error;           // the first error, one line
+  bool from_filesink = false;  // the error concerns the output file
+  std::string missing_plugin;  // decodebin's description of a missing decoder
+};
+
+// The application message a streaming thread posts when every input stream
+// is linked (decodebin's no-more-pads); run_main_loop() then calls on_ready.
+void post_ready(GstElement *pipeline);
+
+// Runs `pipeline` in a GLib main loop until EOS or the first error.
+// `on_ready` (main thread, may fail the run with *error) follows
+// post_ready(); `tick` runs four times a second. The pipeline is left in
+// NULL, so the files it wrote are closed.
+LoopResult run_main_loop(GstElement *pipeline, const std::function<bool(std::string *)> &on_ready,
+                         const std::function<void()> &tick);
+
+}  // namespace p3d::convert

@@ -1,0 +1,172 @@
+#include "image_io.h"
+
+#include <gst/app/gstappsink.h>
+#include <gst/app/gstappsrc.h>
+#include <gst/video/video.h>
+
+#include <cstring>
+
+#include "gst_run.h"
+
+namespace p3d::convert {
+
+namespace {
+
+// videoflip's video-direction for EXIF orientations 1..8.
+const char *flip_for_orientation(int o) {
+  static const char *const kDirections[] = {"identity", "identity", "horiz", "180", "vert",
+                                            "ul-lr",    "90r",      "ur-ll", "90l"};
+  return o >= 1 && o <= 8 ? kDirections[o] : "identity";
+}
+
+// gst_parse_launch with the named elements looked up; null on failure.
+GstElement *launch(const std::string &description, std::string *error) {
+  GError *err = nullptr;
+  GstElement *p = gst_parse_launch(description.c_str(), &err);
+  if (err) {
+    *error = std::string("GStreamer: ") + err->message;
+    g_clear_error(&err);
+    if (p) gst_object_unref(p);
+    return nullptr;
+  }
+  return p;
+}
+
+GstElement *by_name(GstElement *pipeline, const char *name) {
+  GstElement *e = gst_bin_get_by_name(GST_BIN(pipeline), name);
+  if (e) gst_object_unref(e);  // the pipeline keeps it alive
+  return e;
+}
+
+}  // namespace
+
+Image Image::crop_columns(int x0, int w) const {
+  Image out;
+  out.width = w;
+  out.height = height;
+  out.format = format;
+  const int bpp = bytes_per_pixel();
+  out.data.resize(static_cast<size_t>(w) * height * bpp);
+  for (int y = 0; y < height; ++y)
+    std::memcpy(&out.data[static_cast<size_t>(y) * w * bpp], &data[(static_cast<size_t>(y) * width + x0) * bpp],
+                static_cast<size_t>(w) * bpp);
+  return out;
+}
+
+GstBuffer *image_to_buffer(const Image &image, GstCaps **caps) {
+  GstVideoInfo info;
+  gst_video_info_set_format(&info, gst_video_format_from_string(image.format.c_str()), image.width, image.height);
+  GST_VIDEO_INFO_FPS_N(&info) = 0;  // a still picture
+  GST_VIDEO_INFO_FPS_D(&info) = 1;
+  *caps = gst_video_info_to_caps(&info);
+  GstBuffer *buf = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+  GstVideoFrame frame;
+  gst_video_frame_map(&frame, &info, buf, GST_MAP_WRITE);
+  const size_t row = static_cast<size_t>(image.width) * image.bytes_per_pixel();
+  for (int y = 0; y < image.height; ++y)
+    std::memcpy(static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0),
+                &image.data[y * row], row);
+  gst_video_frame_unmap(&frame);
+  GST_BUFFER_PTS(buf) = 0;
+  return buf;
+}
+
+bool image_from_sample(GstSample *sample, Image *out) {
+  GstVideoInfo info;
+  if (!gst_video_info_from_caps(&info, gst_sample_get_caps(sample))) return false;
+  const GstVideoFormat f = GST_VIDEO_INFO_FORMAT(&info);
+  if (f != GST_VIDEO_FORMAT_RGBA && f != GST_VIDEO_FORMAT_GRAY16_BE) return false;
+  GstVideoFrame frame;
+  if (!gst_video_frame_map(&frame, &info, gst_sample_get_buffer(sample), GST_MAP_READ)) return false;
+  out->width = GST_VIDEO_INFO_WIDTH(&info);
+  out->height = GST_VIDEO_INFO_HEIGHT(&info);
+  out->format = gst_video_format_to_string(f);
+  const size_t row = static_cast<size_t>(out->width) * out->bytes_per_pixel();
+  out->data.resize(row * out->height);
+  for (int y = 0; y < out->height; ++y)
+    std::memcpy(&out->data[y * row],
+                static_cast<const uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0),
+                row);
+  gst_video_frame_unmap(&frame);
+  return true;
+}
+
+GstSample *run_for_one_sample(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *appsink,
+                              std::string *error) {
+  GstBus *bus = gst_element_get_bus(pipeline);
+  GstSample *sample = nullptr;
+  if (gst_element_set_state(pipeline, GST_STATE_PLAYING) != GST_STATE_CHANGE_FAILURE) {
+    if (appsrc) {
+      gst_app_src_push_buffer(GST_APP_SRC(appsrc), buffer);
+      buffer = nullptr;
+      gst_app_src_end_of_stream(GST_APP_SRC(appsrc));
+    }
+    // Poll both ends: appsink blocks on nothing if an element fails.
+    while (!sample) {
+      sample = gst_app_sink_try_pull_sample(GST_APP_SINK(appsink), 100 * GST_MSECOND);
+      if (sample) break;
+      GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
+      if (msg) {
+        *error = error_text(msg);
+        gst_message_unref(msg);
+        break;
+      }
+      if (gst_app_sink_is_eos(GST_APP_SINK(appsink))) {
+        *error = "no picture came out";
+        break;
+      }
+    }
+  } else {
+    GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
+    *error = msg ? error_text(msg) : "the pipeline did not start";
+    if (msg) gst_message_unref(msg);
+  }
+  if (buffer) gst_buffer_unref(buffer);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  return sample;
+}
+
+bool read_image(const std::string &path, int exif_orientation, Image *out, std::string *error) {
+  GstElement *p = launch(std::string("filesrc name=src ! decodebin ! videoconvert ! videoflip video-direction=") +
+                             flip_for_orientation(exif_orientation) +
+                             " ! videoconvert ! video/x-raw,format=RGBA ! appsink name=sink sync=false",
+                         error);
+  if (!p) return false;
+  g_object_set(by_name(p, "src"), "location", path.c_str(), NULL);
+  GstSample *s = run_for_one_sample(p, nullptr, nullptr, by_name(p, "sink"), error);
+  const bool ok = s && image_from_sample(s, out);
+  if (s && !ok) *error = "could not read the decoded picture";
+  if (s) gst_sample_unref(s);
+  gst_object_unref(p);
+  return ok;
+}
+
+bool encode_image(const Image &image, const std::string &codec, bool full_chroma, std::vector<uint8_t> *bytes,
+                  std::string *error) {
+  std::string tail;
+  if (codec == "jpeg")
+    tail = std::string("videoconvert ! video/x-raw,format=") + (full_chroma ? "Y444" : "I420") + " ! jpegenc quality=95";
+  else if (image.format == "GRAY16_BE")
+    tail = "pngenc";
+  else
+    tail = "videoconvert ! video/x-raw,format=RGB ! pngenc";
+  GstElement *p = launch("appsrc name=src format=time ! " + tail + " ! appsink name=sink sync=false", error);
+  if (!p) return false;
+  GstCaps *caps = nullptr;
+  GstBuffer *buf = image_to_buffer(image, &caps);
+  GstElement *src = by_name(p, "src");
+  g_object_set(src, "caps", caps, NULL);
+  gst_caps_unref(caps);
+  GstSample *s = run_for_one_sample(p, src, buf, by_name(p, "sink"), error);
+  if (s) {
+    GstBuffer *b = gst_sample_get_buffer(s);
+    bytes->resize(gst_buffer_get_size(b));
+    gst_buffer_extract(b, 0, bytes->data(), bytes->size());
+    gst_sample_unref(s);
+  }
+  gst_object_unref(p);
+  return s != nullptr;
+}
+
+}  // namespace p3d::convert

@@ -1,0 +1,163 @@
+#include "media_source.h"
+
+#include <gst/pbutils/pbutils.h>
+
+#include <algorithm>
+
+namespace p3d::convert {
+
+namespace {
+
+struct Gate {
+  bool open = false;
+  bool encoded = false;
+  GstSegment segment;
+};
+
+GstPadProbeReturn gate_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
+  auto *g = static_cast<Gate *>(data);
+  if (info->type & GST_PAD_PROBE_TYPE_EVENT_BOTH) {
+    GstEvent *ev = GST_PAD_PROBE_INFO_EVENT(info);
+    if (GST_EVENT_TYPE(ev) == GST_EVENT_FLUSH_STOP) g->open = true;
+    if (GST_EVENT_TYPE(ev) == GST_EVENT_SEGMENT) gst_event_copy_segment(ev, &g->segment);
+    return GST_PAD_PROBE_OK;
+  }
+  if (!g->open) return GST_PAD_PROBE_DROP;
+  if (g->encoded && (info->type & GST_PAD_PROBE_TYPE_BUFFER) && g->segment.format == GST_FORMAT_TIME) {
+    // Packets cannot be cut: one that starts before the piece would start
+    // the stream early (out of sync) in the output, so it goes.
+    const GstClockTime pts = GST_BUFFER_PTS(GST_PAD_PROBE_INFO_BUFFER(info));
+    if (GST_CLOCK_TIME_IS_VALID(pts) &&
+        (pts < g->segment.start || (GST_CLOCK_TIME_IS_VALID(g->segment.stop) && pts >= g->segment.stop)))
+      return GST_PAD_PROBE_DROP;
+  }
+  return GST_PAD_PROBE_OK;
+}
+
+bool is_video_decoder(GstElement *e) {
+  GstElementFactory *f = gst_element_get_factory(e);
+  return f && gst_element_factory_list_is_type(f, GST_ELEMENT_FACTORY_TYPE_DECODER | GST_ELEMENT_FACTORY_TYPE_MEDIA_VIDEO);
+}
+
+}  // namespace
+
+bool MediaSource::build(GstElement *pipeline, const std::string &input, Hooks hooks, std::string *error) {
+  hooks_ = std::move(hooks);
+  GstElement *src = gst_element_factory_make("filesrc", "source");
+  GstElement *dec = gst_element_factory_make("decodebin", "decoder");
+  if (!src || !dec) {
+    if (src) gst_object_unref(gst_object_ref_sink(src));
+    if (dec) gst_object_unref(gst_object_ref_sink(dec));
+    *error = "GStreamer's filesrc or decodebin is missing (gstreamer1.0-plugins-base)";
+    return false;
+  }
+  g_object_set(src, "location", input.c_str(), NULL);
+  gst_bin_add_many(GST_BIN(pipeline), src, dec, NULL);
+  gst_element_link(src, dec);
+  g_signal_connect(dec, "autoplug-continue", G_CALLBACK(on_autoplug_continue), this);
+  g_signal_connect(dec, "autoplug-query", G_CALLBACK(on_autoplug_query), this);
+  g_signal_connect(dec, "pad-added", G_CALLBACK(on_pad_added), this);
+  g_signal_connect(dec, "no-more-pads", G_CALLBACK(on_no_more_pads), this);
+  g_signal_connect(dec, "element-added", G_CALLBACK(on_element_added), this);
+  return true;
+}
+
+void MediaSource::set_piece(GstClockTime start, GstClockTime duration) {
+  start_ = start;
+  duration_ = duration;
+}
+
+void MediaSource::gate_pad(GstPad *pad, bool encoded) {
+  if (!has_piece()) return;
+  auto *g = new Gate;
+  g->encoded = encoded;
+  gst_segment_init(&g->segment, GST_FORMAT_UNDEFINED);
+  gst_pad_add_probe(pad,
+                    static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_BUFFER | GST_PAD_PROBE_TYPE_BUFFER_LIST |
+                                                 GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM | GST_PAD_PROBE_TYPE_EVENT_FLUSH),
+                    gate_probe, g, [](gpointer p) { delete static_cast<Gate *>(p); });
+}
+
+bool MediaSource::seek_to_piece(GstPad *pad) {
+  const GstClockTime start = piece_start();
+  const bool bounded = GST_CLOCK_TIME_IS_VALID(duration_);
+  GstEvent *seek = gst_event_new_seek(1.0, GST_FORMAT_TIME,
+                                      static_cast<GstSeekFlags>(GST_SEEK_FLAG_FLUSH | GST_SEEK_FLAG_ACCURATE),
+                                      GST_SEEK_TYPE_SET, static_cast<gint64>(start),
+                                      bounded ? GST_SEEK_TYPE_SET : GST_SEEK_TYPE_NONE,
+                                      bounded ? static_cast<gint64>(start + duration_) : -1);
+  return gst_pad_push_event(pad, seek);
+}
+
+GstClockTime MediaSource::total_time(GstPad *pad) const {
+  gint64 dur = -1;
+  const bool known = gst_pad_peer_query_duration(pad, GST_FORMAT_TIME, &dur) && dur > 0;
+  GstClockTime end = known ? static_cast<GstClockTime>(dur) : GST_CLOCK_TIME_NONE;
+  if (GST_CLOCK_TIME_IS_VALID(duration_)) {
+    const GstClockTime stop = piece_start() + duration_;
+    end = known ? std::min(end, stop) : stop;
+  }
+  if (!GST_CLOCK_TIME_IS_VALID(end) || end <= piece_start()) return GST_CLOCK_TIME_NONE;
+  return end - piece_start();
+}
+
+std::string MediaSource::video_decoder() const {
+  std::lock_guard<std::mutex> l(lock_);
+  return video_decoder_;
+}
+
+std::string MediaSource::missing_plugin(GstMessage *msg) {
+  if (!gst_is_missing_plugin_message(msg)) return "";
+  gchar *d = gst_missing_plugin_message_get_description(msg);
+  std::string s = d ? d : "";
+  g_free(d);
+  return s;
+}
+
+gboolean MediaSource::on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self) {
+  auto *s = static_cast<MediaSource *>(self);
+  return !(s->hooks_.keep_encoded && s->hooks_.keep_encoded(caps));
+}
+
+// decodebin's pads are linked only once every stream is found, but decoders
+// choose their output (system or CUDA memory, format) from their first
+// frame: answer their caps queries with what the video chain takes, as
+// playbin does for its sinks.
+gboolean MediaSource::on_autoplug_query(GstElement *, GstPad *, GstElement *element, GstQuery *query, gpointer self) {
+  auto *s = static_cast<MediaSource *>(self);
+  if (GST_QUERY_TYPE(query) != GST_QUERY_CAPS || !s->hooks_.video_caps || !is_video_decoder(element)) return FALSE;
+  GstCaps *filter = nullptr;
+  gst_query_parse_caps(query, &filter);
+  GstCaps *caps = s->hooks_.video_caps();
+  if (filter) {
+    GstCaps *both = gst_caps_intersect_full(filter, caps, GST_CAPS_INTERSECT_FIRST);
+    gst_caps_unref(caps);
+    caps = both;
+  }
+  gst_query_set_caps_result(query, caps);
+  gst_caps_unref(caps);
+  return TRUE;
+}
+
+void MediaSource::on_pad_added(GstElement *, GstPad *pad, gpointer self) {
+  auto *s = static_cast<MediaSource *>(self);
+  GstCaps *caps = gst_pad_get_current_caps(pad);
+  if (!caps) caps = gst_pad_query_caps(pad, nullptr);
+  if (s->hooks_.pad_added) s->hooks_.pad_added(pad, caps);
+  gst_caps_unref(caps);
+}
+
+void MediaSource::on_no_more_pads(GstElement *, gpointer self) {
+  auto *s = static_cast<MediaSource *>(self);
+  if (s->hooks_.no_more_pads) s->hooks_.no_more_pads();
+}
+
+void MediaSource::on_element_added(GstBin *, GstElement *element, gpointer self) {
+  auto *s = static_cast<MediaSource *>(self);
+  if (!is_video_decoder(element)) return;
+  // decodebin tries the next decoder when one fails: the last one is in use.
+  std::lock_guard<std::mutex> l(s->lock_);
+  s->video_decoder_ = GST_OBJECT_NAME(gst_element_get_factory(element));
+}
+
+}  // namespace p3d::convert

@@ -1,0 +1,289 @@
+#include "options.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "config.h"
+
+namespace p3d::convert {
+
+namespace {
+
+struct ExtensionKind {
+  const char *ext;
+  OutputKind kind;
+};
+const ExtensionKind kExtensions[] = {
+    {".mp4", OutputKind::Mp4}, {".m4v", OutputKind::Mp4}, {".mov", OutputKind::Mov},  {".mkv", OutputKind::Mkv},
+    {".jpg", OutputKind::Jpeg}, {".jpeg", OutputKind::Jpeg}, {".png", OutputKind::Png}, {".mpo", OutputKind::Mpo},
+    {".jps", OutputKind::Jps},
+};
+
+// Options that set a plugin property of the same name, and whether they
+// take a value (swap-eyes is a flag).
+struct StageOption {
+  const char *name;
+  bool takes_value;
+};
+const StageOption kStageOptions[] = {
+    {"layout", true},        {"glasses", true},     {"anaglyph-method", true}, {"swap-eyes", false},
+    {"max-disparity", true}, {"convergence", true}, {"hypothesis", true},
+};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+bool parse_int(const std::string &s, int lo, int hi, int *v) {
+  char *end = nullptr;
+  const long x = std::strtol(s.c_str(), &end, 10);
+  if (s.empty() || *end != '\0' || x < lo || x > hi) return false;
+  *v = static_cast<int>(x);
+  return true;
+}
+
+bool ends_with(const std::string &s, const char *suffix) {
+  const size_t n = std::strlen(suffix);
+  return s.size() >= n && lower(s.substr(s.size() - n)) == suffix;
+}
+
+}  // namespace
+
+bool is_photo(OutputKind k) {
+  return k == OutputKind::Jpeg || k == OutputKind::Png || k == OutputKind::Mpo || k == OutputKind::Jps;
+}
+
+bool output_kind_of(const std::string &path, OutputKind *kind) {
+  for (const ExtensionKind &e : kExtensions)
+    if (ends_with(path, e.ext)) {
+      *kind = e.kind;
+      return true;
+    }
+  return false;
+}
+
+std::string Options::stage_value(const std::string &name, const std::string &fallback) const {
+  std::string v = fallback;
+  for (const auto &kv : stage_values)
+    if (kv.first == name) v = kv.second;  // the last one given wins
+  return v;
+}
+
+bool Options::has_stage_value(const std::string &name) const {
+  return std::any_of(stage_values.begin(), stage_values.end(), [&](const auto &kv) { return kv.first == name; });
+}
+
+bool parse_time(const std::string &s, GstClockTime *t) {
+  // Up to three ':'-separated fields, the last one may have a fraction.
+  double total = 0;
+  size_t pos = 0;
+  int fields = 0;
+  while (true) {
+    const size_t colon = s.find(':', pos);
+    const std::string part = s.substr(pos, colon == std::string::npos ? std::string::npos : colon - pos);
+    char *end = nullptr;
+    const double v = std::strtod(part.c_str(), &end);
+    const bool last = colon == std::string::npos;
+    if (part.empty() || *end != '\0' || !std::isfinite(v) || v < 0 || (!last && part.find('.') != std::string::npos))
+      return false;
+    total = total * 60 + v;
+    if (++fields > 3) return false;
+    if (last) break;
+    pos = colon + 1;
+  }
+  *t = static_cast<GstClockTime>(std::llround(total * GST_SECOND));
+  return true;
+}
+
+void print_usage(FILE *f) {
+  std::fprintf(
+      f,
+      "usage: pseudo3d-convert INPUT OUTPUT [options]\n"
+      "       pseudo3d-convert --benchmark INPUT [--benchmark-out FILE.jsonl] [options]\n"
+      "Converts a 2D video or photo into stereo 3D. OUTPUT's extension picks the result:\n"
+      "  .mp4 .m4v .mov .mkv  video (H.264/H.265), audio and subtitles kept, 3D layout signalled\n"
+      "  .jpg .png            the packed stereo picture (EXIF orientation applied, EXIF kept in JPEG)\n"
+      "  .mpo                 two-image MPO (left, right) for 3D cameras, TVs and viewers\n"
+      "  .jps                 cross-eyed side-by-side JPEG (right view on the left)\n"
+      "3D options (the plugin's properties; see docs/elements.md):\n"
+      "  --layout L            anaglyph, side-by-side, side-by-side-half, top-bottom, top-bottom-half,\n"
+      "                        row-interleaved, column-interleaved, checkerboard, left, right\n"
+      "                        (default: side-by-side-half for video, side-by-side for photos)\n"
+      "  --glasses G           red-cyan, green-magenta, amber-blue (anaglyph)\n"
+      "  --anaglyph-method M   dubois, color, half-color, gray\n"
+      "  --swap-eyes           right view first\n"
+      "  --max-disparity P     parallax in percent of the width (default 3)\n"
+      "  --convergence C       depth on the screen plane, 0 (far) to 1 (near) (default 0.5)\n"
+      "  --hypothesis H        top-bottom, left-right, center-near, flat\n"
+      "Video options:\n"
+      "  --codec h264|h265     (default h264)\n"
+      "  --crf N               constant quality, lower is better (default 20 for H.264, 24 for H.265)\n"
+      "  --preset P            ultrafast ... veryslow (default: medium)\n"
+      "  --start T --duration T   convert a piece only (seconds or [HH:]MM:SS[.frac])\n"
+      "General:\n"
+      "  --processing auto|cpu|gpu   where the 3D conversion runs (default auto: GPU when usable)\n"
+      "  --depth-out FILE.png  photos: also write the depth map used (16-bit grey, white = near)\n"
+      "  --force               overwrite OUTPUT if it exists\n"
+      "  --quiet               no progress\n"
+      "  --benchmark           time decoding alone against decoding and converting (encoder\n"
+      "                        replaced by fakesink); --benchmark-out FILE appends JSON lines,\n"
+      "                        --benchmark-runs N (default 2) repeats both\n"
+      "  --help, --version\n");
+}
+
+ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
+  std::vector<std::string> positional;
+  bool video_option_given = false;
+  std::string video_option;
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i], value;
+    bool has_inline_value = false;
+    if (arg.rfind("--", 0) == 0) {
+      const size_t eq = arg.find('=');
+      if (eq != std::string::npos) {
+        value = arg.substr(eq + 1);
+        arg = arg.substr(0, eq);
+        has_inline_value = true;
+      }
+    }
+    // The option's value: inline (--opt=v) or the next argument.
+    auto take_value = [&](std::string *v) {
+      if (has_inline_value) {
+        *v = value;
+        return true;
+      }
+      if (i + 1 >= argc) {
+        *error = "option " + arg + " needs a value";
+        return false;
+      }
+      *v = argv[++i];
+      return true;
+    };
+    if (arg == "-h" || arg == "--help") {
+      print_usage(stdout);
+      return ParseResult::ExitOk;
+    }
+    if (arg == "--version") {
+      std::printf("pseudo3d-convert %s\n", VERSION);
+      return ParseResult::ExitOk;
+    }
+    if (arg.rfind("--", 0) == 0) {
+      const std::string name = arg.substr(2);
+      const StageOption *stage = nullptr;
+      for (const StageOption &s : kStageOptions)
+        if (name == s.name) stage = &s;
+      std::string v;
+      if (stage) {
+        if (!stage->takes_value) {
+          if (has_inline_value) {
+            *error = "option " + arg + " takes no value";
+            return ParseResult::ExitUsage;
+          }
+          v = "true";
+        } else if (!take_value(&v)) {
+          return ParseResult::ExitUsage;
+        }
+        o->stage_values.emplace_back(name, v);
+        continue;
+      }
+      if (name == "quiet" || name == "force" || name == "benchmark") {
+        if (has_inline_value) {
+          *error = "option " + arg + " takes no value";
+          return ParseResult::ExitUsage;
+        }
+        (name == "quiet" ? o->quiet : name == "force" ? o->force : o->benchmark) = true;
+        continue;
+      }
+      if (name != "codec" && name != "crf" && name != "preset" && name != "start" && name != "duration" &&
+          name != "processing" && name != "depth-out" && name != "benchmark-out" && name != "benchmark-runs") {
+        *error = "unknown option '" + arg + "' (see --help)";
+        return ParseResult::ExitUsage;
+      }
+      if (!take_value(&v)) return ParseResult::ExitUsage;
+      bool ok = true;
+      if (name == "codec") {
+        ok = v == "h264" || v == "h265";
+        o->codec = v == "h265" ? Codec::H265 : Codec::H264;
+      } else if (name == "crf") {
+        ok = parse_int(v, 0, 51, &o->crf);
+      } else if (name == "preset") {
+        o->preset = v;  // checked against the encoder's presets (encoder.h)
+      } else if (name == "start") {
+        ok = parse_time(v, &o->start);
+      } else if (name == "duration") {
+        ok = parse_time(v, &o->duration) && o->duration > 0;
+      } else if (name == "processing") {
+        ok = v == "auto" || v == "cpu" || v == "gpu";
+        o->processing = v == "cpu" ? Processing::Cpu : v == "gpu" ? Processing::Gpu : Processing::Auto;
+      } else if (name == "depth-out") {
+        ok = ends_with(v, ".png");
+        o->depth_out = v;
+      } else if (name == "benchmark-out") {
+        o->benchmark_out = v;
+      } else if (name == "benchmark-runs") {
+        ok = parse_int(v, 1, 100, &o->benchmark_runs);
+      }
+      if (!ok) {
+        *error = "invalid value '" + v + "' for " + arg;
+        return ParseResult::ExitUsage;
+      }
+      if (name == "codec" || name == "crf" || name == "preset" || name == "start" || name == "duration") {
+        video_option_given = true;
+        video_option = arg;
+      }
+      continue;
+    }
+    if (arg == "-q") {
+      o->quiet = true;
+      continue;
+    }
+    if (arg == "-f") {
+      o->force = true;
+      continue;
+    }
+    if (arg.size() > 1 && arg[0] == '-') {
+      *error = "unknown option '" + arg + "' (see --help)";
+      return ParseResult::ExitUsage;
+    }
+    positional.push_back(arg);
+  }
+
+  const size_t wanted = o->benchmark ? 1 : 2;
+  if (positional.size() != wanted) {
+    *error = o->benchmark ? "--benchmark takes one INPUT (see --help)" : "expected INPUT and OUTPUT (see --help)";
+    return ParseResult::ExitUsage;
+  }
+  o->input = positional[0];
+  if (o->benchmark) return ParseResult::Run;
+  o->output = positional[1];
+  if (!output_kind_of(o->output, &o->kind)) {
+    const size_t dot = o->output.find_last_of("./");
+    const std::string ext = dot != std::string::npos && o->output[dot] == '.' ? o->output.substr(dot) : "";
+    *error = o->output + ": unknown output type '" + ext + "' (use .mp4, .m4v, .mov, .mkv, .jpg, .png, .mpo or .jps)";
+    return ParseResult::ExitUsage;
+  }
+  if (is_photo(o->kind) && video_option_given) {
+    *error = video_option + " applies to video outputs, not to " + o->output;
+    return ParseResult::ExitUsage;
+  }
+  if (!is_photo(o->kind) && !o->depth_out.empty()) {
+    *error = "--depth-out applies to photo outputs, not to " + o->output;
+    return ParseResult::ExitUsage;
+  }
+  if ((o->kind == OutputKind::Mpo || o->kind == OutputKind::Jps) && o->has_stage_value("layout")) {
+    *error = "--layout does not apply to " + o->output + " (MPO holds two views, JPS is always side by side)";
+    return ParseResult::ExitUsage;
+  }
+  if (o->crf > 50 && o->codec == Codec::H264) {
+    *error = "invalid value '" + std::to_string(o->crf) + "' for --crf (0 to 50 for H.264)";
+    return ParseResult::ExitUsage;
+  }
+  return ParseResult::Run;
+}
+
+}  // namespace p3d::convert

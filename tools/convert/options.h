@@ -1,0 +1,62 @@
+// Command line of pseudo3d-convert: what the user asked for, checked for
+// form only (names, numbers, file kinds). Values of the plugin's own
+// properties (layout, hypothesis...) are checked against the plugin in
+// stage_settings.h once GStreamer is up.
+#pragma once
+
+#include <gst/gst.h>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace p3d::convert {
+
+// What OUTPUT's extension asks for.
+enum class OutputKind { Mp4, Mov, Mkv, Jpeg, Png, Mpo, Jps };
+
+bool is_photo(OutputKind k);
+// The kind for a file name by its extension (case-insensitive); false when
+// the extension is not one the converter writes.
+bool output_kind_of(const std::string &path, OutputKind *kind);
+
+enum class Processing { Auto, Cpu, Gpu };
+enum class Codec { H264, H265 };
+
+struct Options {
+  std::string input, output;
+  // Plugin properties given on the command line, by property name (the
+  // option without its dashes), in command-line order: layout, glasses,
+  // anaglyph-method, swap-eyes, max-disparity, convergence, hypothesis.
+  std::vector<std::pair<std::string, std::string>> stage_values;
+  Codec codec = Codec::H264;
+  int crf = -1;         // -1: the codec's default (encoder.h)
+  std::string preset;   // empty: the encoder's default
+  GstClockTime start = GST_CLOCK_TIME_NONE;
+  GstClockTime duration = GST_CLOCK_TIME_NONE;
+  Processing processing = Processing::Auto;
+  bool quiet = false;
+  bool force = false;
+  std::string depth_out;  // photos: 16-bit grey PNG of the depth used
+  // --benchmark INPUT: decode-only against convert-to-fakesink (benchmark.h).
+  bool benchmark = false;
+  std::string benchmark_out;
+  int benchmark_runs = 2;
+  OutputKind kind = OutputKind::Mp4;
+
+  // The value given for a plugin property, or `fallback`.
+  std::string stage_value(const std::string &name, const std::string &fallback) const;
+  bool has_stage_value(const std::string &name) const;
+};
+
+// Outcome of parsing: run, print help/version and leave with 0, or leave
+// with the usage-error status after printing `error` (one line).
+enum class ParseResult { Run, ExitOk, ExitUsage };
+
+ParseResult parse_args(int argc, char **argv, Options *o, std::string *error);
+void print_usage(FILE *f);
+
+// "90", "1:30", "01:02:03.5" -> nanoseconds; false if malformed.
+bool parse_time(const std::string &s, GstClockTime *t);
+
+}  // namespace p3d::convert

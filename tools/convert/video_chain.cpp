@@ -1,0 +1,129 @@
+#include "video_chain.h"
+
+#include "progress.h"
+#include "stage_settings.h"
+
+namespace p3d::convert {
+
+namespace {
+
+struct FrameCounter {
+  Progress *progress;
+  GstClockTime start;
+  GstSegment segment;
+};
+
+GstPadProbeReturn count_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
+  auto *c = static_cast<FrameCounter *>(data);
+  if (info->type & GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM) {
+    GstEvent *ev = GST_PAD_PROBE_INFO_EVENT(info);
+    if (GST_EVENT_TYPE(ev) == GST_EVENT_SEGMENT) gst_event_copy_segment(ev, &c->segment);
+    return GST_PAD_PROBE_OK;
+  }
+  const GstClockTime pts = GST_BUFFER_PTS(GST_PAD_PROBE_INFO_BUFFER(info));
+  GstClockTime pos = GST_CLOCK_TIME_NONE;
+  if (GST_CLOCK_TIME_IS_VALID(pts) && c->segment.format == GST_FORMAT_TIME) {
+    const guint64 st = gst_segment_to_stream_time(&c->segment, GST_FORMAT_TIME, pts);
+    if (st != GST_CLOCK_TIME_NONE) pos = st > c->start ? st - c->start : 0;
+  }
+  c->progress->frame(pos);
+  return GST_PAD_PROBE_OK;
+}
+
+GstElement *make(const char *factory, std::string *missing) {
+  GstElement *e = gst_element_factory_make(factory, nullptr);
+  if (!e && missing->empty()) *missing = factory;
+  return e;
+}
+
+}  // namespace
+
+GstElement *make_frame_queue(guint frames) {
+  GstElement *q = gst_element_factory_make("queue", nullptr);
+  if (q)
+    g_object_set(q, "max-size-buffers", frames, "max-size-bytes", 0u, "max-size-time", G_GUINT64_CONSTANT(0), NULL);
+  return q;
+}
+
+VideoChain::~VideoChain() {
+  if (head_sink_) gst_object_unref(head_sink_);
+}
+
+bool VideoChain::build(GstElement *bin, const Options &o, Processing processing, const std::string &raw_format,
+                       std::string *error) {
+  bin_ = bin;
+  processing_ = processing;
+  std::string missing;
+  head_ = make_frame_queue(8);
+  convert_ = make("pseudo3dconvert", &missing);
+  // System memory after the 3D stages: the CPU encoders and videoconvert
+  // take nothing else (pseudo3dconvert downloads once when on the GPU).
+  GstElement *to_system = make("capsfilter", &missing);
+  GstElement *q2 = make_frame_queue(4);
+  GstElement *vconv = make("videoconvert", &missing);
+  tail_ = make("capsfilter", &missing);
+  GstElement *all[] = {head_, convert_, to_system, q2, vconv, tail_};
+  if (!missing.empty() || !head_ || !q2) {
+    for (GstElement *e : all)
+      if (e) gst_object_unref(gst_object_ref_sink(e));
+    *error = "GStreamer element " + (missing.empty() ? std::string("queue") : missing) + " is missing";
+    return false;
+  }
+  apply_to_bin(o, convert_);
+  gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing == Processing::Gpu ? "gpu" : "cpu");
+  GstCaps *sys = gst_caps_from_string("video/x-raw");
+  g_object_set(to_system, "caps", sys, NULL);
+  gst_caps_unref(sys);
+  g_object_set(vconv, "n-threads", 0u, NULL);  // 0 = one per core
+  GstCaps *fmt = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL);
+  g_object_set(tail_, "caps", fmt, NULL);
+  gst_caps_unref(fmt);
+  for (GstElement *e : all) gst_bin_add(GST_BIN(bin), e);
+  if (!gst_element_link_many(convert_, to_system, q2, vconv, tail_, NULL)) {
+    *error = "could not link the 3D conversion to the encoder's format";
+    return false;
+  }
+  head_sink_ = gst_element_get_static_pad(head_, "sink");
+  return true;
+}
+
+GstCaps *video_caps_for(Processing processing) {
+  // CUDA memory only where the GPU path runs, in the formats the stages
+  // take; system memory in any format (a videoconvert goes in front).
+  if (processing == Processing::Gpu)
+    return gst_caps_from_string("video/x-raw(memory:CUDAMemory), format=(string){ NV12, I420, RGBA, BGRA, RGBx, BGRx }; "
+                                "video/x-raw");
+  return gst_caps_from_string("video/x-raw");
+}
+
+GstCaps *VideoChain::accepted_caps() const { return video_caps_for(processing_); }
+
+bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
+  GstCapsFeatures *features = gst_caps_get_features(caps, 0);
+  cuda_input_ = features && gst_caps_features_contains(features, "memory:CUDAMemory");
+  if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
+  if (cuda_input_) return gst_element_link(head_, convert_);
+  // System memory: videoconvert passes the formats the stages take through
+  // untouched and converts the rest (10-bit, 4:2:2...).
+  GstElement *vconv = gst_element_factory_make("videoconvert", nullptr);
+  if (!vconv) return false;
+  g_object_set(vconv, "n-threads", 0u, NULL);
+  gst_bin_add(GST_BIN(bin_), vconv);
+  gst_element_sync_state_with_parent(vconv);
+  return gst_element_link_many(head_, vconv, convert_, NULL);
+}
+
+void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start) {
+  auto *c = new FrameCounter{progress, start, {}};
+  gst_segment_init(&c->segment, GST_FORMAT_UNDEFINED);
+  gst_pad_add_probe(pad, static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_BUFFER | GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM),
+                    count_probe, c, [](gpointer p) { delete static_cast<FrameCounter *>(p); });
+}
+
+void VideoChain::count_frames(Progress *progress, GstClockTime start) {
+  GstPad *src = gst_element_get_static_pad(tail_, "src");
+  count_frames_at(src, progress, start);
+  gst_object_unref(src);
+}
+
+}  // namespace p3d::convert

@@ -1,0 +1,60 @@
+// The video branch between decodebin and the encoder:
+//   queue ! [videoconvert] ! pseudo3dconvert ! video/x-raw ! queue !
+//   videoconvert ! video/x-raw,format=F ! (encoder, or fakesink to benchmark)
+// On the GPU path NVDEC's CUDA memory goes straight into pseudo3dconvert,
+// which keeps every stage on the device and downloads once; the formats the
+// stages do not take get a videoconvert in front. The queues let decoding,
+// the 3D stages and the encoder run in parallel threads. The frame counter
+// for the progress sits on the encoder's input.
+#pragma once
+
+#include <gst/gst.h>
+
+#include <string>
+
+#include "options.h"
+
+namespace p3d::convert {
+
+class Progress;
+
+class VideoChain {
+ public:
+  // Adds the elements to `bin`, unlinked to decodebin. `raw_format`: what
+  // the encoder takes (I420, Y444).
+  bool build(GstElement *bin, const Options &o, Processing processing, const std::string &raw_format,
+             std::string *error);
+  // Links decodebin's video pad (streaming thread).
+  bool attach(GstPad *decoded, const GstCaps *caps);
+  // What the chain takes, for decoders' caps queries (new ref).
+  GstCaps *accepted_caps() const;
+  // Counts frames reaching the encoder into `progress`, with their position
+  // in the piece that starts at `start` (media time).
+  void count_frames(Progress *progress, GstClockTime start);
+
+  GstPad *sink_pad() const { return head_sink_; }  // the first queue's sink pad
+  GstElement *tail() const { return tail_; }       // links to the encoder
+  GstElement *converter() const { return convert_; }
+  bool on_gpu_memory() const { return cuda_input_; }  // decoded frames arrive in CUDA memory
+
+  ~VideoChain();
+
+ private:
+  GstElement *bin_ = nullptr, *head_ = nullptr, *convert_ = nullptr, *tail_ = nullptr;
+  GstPad *head_sink_ = nullptr;
+  Processing processing_ = Processing::Cpu;
+  bool cuda_input_ = false;
+};
+
+// What the video chain takes from decoders for a processing: CUDA memory
+// (NVDEC's output) first on the GPU path, system memory in any format.
+GstCaps *video_caps_for(Processing processing);
+
+// A bounded queue (frames): keeps the threads apart without holding much video.
+GstElement *make_frame_queue(guint frames);
+
+// Counts the buffers passing `pad` into `progress`, with their media time
+// from `start` (the segment's stream time, so a seek's piece counts from 0).
+void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start);
+
+}  // namespace p3d::convert
