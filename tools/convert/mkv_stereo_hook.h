@@ -1,4 +1,5 @@
-// The point where a finished Matroska file gets its container stereo mode.
+// The point where a finished Matroska file gets its container stereo mode
+// (tools/support/mkv_stereo.h, in place).
 #pragma once
 
 #include <string>
@@ -11,14 +12,11 @@ namespace p3d::convert {
 // pseudo3dsignal kept the muxer from writing its own, wrong StereoMode; this
 // adds a correct StereoMode for players that read only the container.
 //
-// The lead wires p3d::mkv_set_stereo_mode (tools/support/mkv_stereo.h) in
-// here:
-//   return p3d::mkv_set_stereo_mode(path, mkv_layout(layout), right_first, error);
-// with layout -> p3d::MkvStereoLayout: side-by-side, side-by-side-half ->
-// SideBySide; top-bottom, top-bottom-half -> TopBottom; row-interleaved ->
-// RowInterleaved; column-interleaved -> ColumnInterleaved; checkerboard ->
-// Checkerboard; anaglyph, left, right -> Mono.
-// Until then it leaves the file as it is and succeeds.
+// The layout maps onto Matroska's StereoMode: the side-by-side and
+// top-bottom layouts (full or half: Matroska does not say) to theirs,
+// interleaved and checkerboard to theirs, anaglyph and single views to mono.
+// Returns false with *error when the file cannot be edited (it stays as it
+// was, valid; the SEI still carries the layout).
 bool set_mkv_container_stereo_mode(const std::string &path, const std::string &layout, bool right_first,
                                    std::string *error);
 
