@@ -26,6 +26,25 @@ YuvToRgb yuv_to_rgb_params(double kr, double kb, bool full_range) {
   return m;
 }
 
+RgbToYuv rgb_to_yuv_params(double kr, double kb, bool full_range) {
+  RgbToYuv m;
+  m.kr = static_cast<float>(kr);
+  m.kb = static_cast<float>(kb);
+  m.kg = static_cast<float>(1.0 - kr - kb);
+  m.cb = static_cast<float>(1.0 / (2.0 * (1.0 - kb)));
+  m.cr = static_cast<float>(1.0 / (2.0 * (1.0 - kr)));
+  if (full_range) {
+    m.y_offset = 0.f;
+    m.y_scale = 1.f;
+    m.c_scale = 1.f;
+  } else {
+    m.y_offset = 16.f;
+    m.y_scale = static_cast<float>(219.0 / 255.0);
+    m.c_scale = static_cast<float>(224.0 / 255.0);
+  }
+  return m;
+}
+
 int frame_plane_count(PixelFormat f) {
   switch (f) {
     case PixelFormat::NV12: return 2;

@@ -45,6 +45,19 @@ struct YuvToRgb {
 
 YuvToRgb yuv_to_rgb_params(double kr, double kb, bool full_range);
 
+// R'G'B' -> Y'CbCr for 8-bit output (the inverse of YuvToRgb), built by
+// rgb_to_yuv_params() (colour.cpp) from the output caps' colorimetry:
+//   Yl = kr R + kg G + kb B,  Cb = (B - Yl) * cb,  Cr = (R - Yl) * cr     (0..255 units)
+//   Y = to_u8(y_offset + Yl * y_scale),  U = to_u8(128 + Cb * c_scale),  V likewise
+// Defaults: BT.709, limited range (what GStreamer picks for HD YUV).
+struct RgbToYuv {
+  float kr = 0.2126f, kg = 0.7152f, kb = 0.0722f;
+  float cb = 0.538909f, cr = 0.635075f;  // 1 / (2 (1 - kb)), 1 / (2 (1 - kr))
+  float y_offset = 16.f, y_scale = 219.f / 255.f, c_scale = 224.f / 255.f;
+};
+
+RgbToYuv rgb_to_yuv_params(double kr, double kb, bool full_range);
+
 // Luma weights of the guide image and of depth read from grey pictures
 // (BT.601; only used on R'G'B' values, so it is colorimetry independent).
 P3D_HD float rgb_luma(float r, float g, float b) { return 0.299f * r + 0.587f * g + 0.114f * b; }
@@ -99,6 +112,41 @@ P3D_HD void store_rgba(const FrameView &f, int x, int y, Rgba c) {
   p[1] = c.g;
   p[2] = bgr ? c.r : c.b;
   p[3] = c.a;  // RGBx/BGRx: the padding byte gets c.a (255 for any converted pixel): defined, never garbage
+}
+
+// Writes the 2x2 block of a 4:2:0 frame (NV12 or I420) whose top-left
+// pixel is (2 bx, 2 by): px[] are its pixels in row order (top-left,
+// top-right, bottom-left, bottom-right); those outside the frame (the last
+// column or row of an odd size) are left out. Each pixel gets its own Y'; the
+// block's Cb/Cr are those of the mean R'G'B' of its pixels (chroma centred
+// on the block, as a 2x2 box filter puts it).
+P3D_HD void store_yuv420_block(const FrameView &f, int bx, int by, const Rgba px[4], const RgbToYuv &m) {
+  int n = 0, sr = 0, sg = 0, sb = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int x = 2 * bx + (k & 1), y = 2 * by + (k >> 1);
+    if (x >= f.width || y >= f.height) continue;
+    const float r = px[k].r, g = px[k].g, b = px[k].b;
+    const float yl = m.kr * r + m.kg * g + m.kb * b;
+    f.plane[0][static_cast<size_t>(y) * f.stride[0] + x] = to_u8(m.y_offset + yl * m.y_scale);
+    sr += px[k].r;
+    sg += px[k].g;
+    sb += px[k].b;
+    ++n;
+  }
+  if (n == 0) return;
+  const float fn = static_cast<float>(n);
+  const float r = static_cast<float>(sr) / fn, g = static_cast<float>(sg) / fn, b = static_cast<float>(sb) / fn;
+  const float yl = m.kr * r + m.kg * g + m.kb * b;
+  const uint8_t u = to_u8(128.f + (b - yl) * m.cb * m.c_scale);
+  const uint8_t v = to_u8(128.f + (r - yl) * m.cr * m.c_scale);
+  if (f.format == PixelFormat::NV12) {
+    uint8_t *c = f.plane[1] + static_cast<size_t>(by) * f.stride[1] + 2 * bx;
+    c[0] = u;
+    c[1] = v;
+  } else {
+    f.plane[1][static_cast<size_t>(by) * f.stride[1] + bx] = u;
+    f.plane[2][static_cast<size_t>(by) * f.stride[2] + bx] = v;
+  }
 }
 
 // The 8-bit guide value of pixel (x, y): the Y' plane for YUV formats, the

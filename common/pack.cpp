@@ -105,6 +105,17 @@ bool packed_rgb_valid(const FrameView &f) {
          f.stride[0] >= 4 * f.width;
 }
 
+// A 4:2:0 frame with every plane present and no stride shorter than its row.
+bool yuv420_valid(const FrameView &f) {
+  if (is_packed_rgb(f.format) || f.width <= 0 || f.height <= 0) return false;
+  for (int i = 0; i < frame_plane_count(f.format); ++i) {
+    int row = 0, rows = 0;
+    frame_plane_size(f.format, f.width, f.height, i, &row, &rows);
+    if (f.plane[i] == nullptr || f.stride[i] < row) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 AnaglyphMatrices anaglyph_matrices(AnaglyphGlasses g, AnaglyphMethod m) {
@@ -166,7 +177,8 @@ bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameV
   if (glasses < 0 || glasses > static_cast<int>(AnaglyphGlasses::AmberBlue)) return false;
   if (method < 0 || method > static_cast<int>(AnaglyphMethod::DuboisLinear)) return false;
   if (input < 0 || input > static_cast<int>(StereoInput::Checkerboard)) return false;
-  if (!packed_rgb_valid(in) || !packed_rgb_valid(out) || in.format != out.format) return false;
+  if (!packed_rgb_valid(in)) return false;
+  if (!(packed_rgb_valid(out) && in.format == out.format) && !yuv420_valid(out)) return false;
   int vw = 0, vh = 0, w = 0, h = 0;
   if (!input_view_size(params.input, in.width, in.height, &vw, &vh)) return false;
   pack_size(params.layout, vw, vh, &w, &h);
@@ -179,6 +191,14 @@ namespace {
 // (the per-pixel function inlines into it, as in the kernel).
 template <StereoInput I>
 void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out) {
+  if (!is_packed_rgb(out.format)) {  // 4:2:0: by 2x2 blocks
+    const int bw = (out.width + 1) / 2, bh = (out.height + 1) / 2;
+    cv::parallel_for_(cv::Range(0, bh), [&](const cv::Range &rows) {
+      for (int by = rows.start; by < rows.end; ++by)
+        for (int bx = 0; bx < bw; ++bx) pack_detail::pack_block_yuv<I>(params, am, in, out, bx, by);
+    });
+    return;
+  }
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y)
       for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_detail::pack_pixel_for<I>(params, am, in, x, y));

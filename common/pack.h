@@ -2,7 +2,11 @@
 // or any frame holding a pair as side-by-side, top-bottom, interleaved or
 // checkerboard, at full or half resolution, either eye first) and a display
 // or delivery format out. CPU reference; cuda/pack_gpu.h computes the same
-// function. Input and output are packed RGB frames of one format.
+// function. The input is a packed RGB frame; the output is packed RGB of the
+// input's format, or 4:2:0 Y'CbCr (NV12, I420) converted from the packed
+// pixels by store_yuv420_block() with PackParams::yuv, so that an encoder
+// takes the frame as it is (no CPU conversion, a third of the bytes to
+// download).
 //
 // Input. PackParams::input says how the input frame (Win x Hin) holds the
 // two views, input_right_first whether the right view comes first (left
@@ -111,6 +115,7 @@ struct PackParams {
   bool swap_eyes = false;
   StereoInput input = StereoInput::SideBySide;  // pseudo3dwarp's output
   bool input_right_first = false;
+  RgbToYuv yuv;  // NV12/I420 output: the output caps' colorimetry
 };
 
 // Row-major 3x3 matrices: out.r = m[0]*c.r + m[1]*c.g + m[2]*c.b, ...
@@ -146,13 +151,14 @@ P3D_HD int half_split(int n) { return (n + 1) / 2; }
 // (below) so the kernel calls the very same code.
 P3D_HD Rgba pack_pixel(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y);
 
-// Whether pack_cpu/pack_gpu accept these arguments: enums in range, in and
-// out packed RGB of one format, in holding views of input_view_size(), out
-// of pack_size()'s size for them, and no stride shorter than its row.
+// Whether pack_cpu/pack_gpu accept these arguments: enums in range, in
+// packed RGB, out packed RGB of in's format or NV12/I420, in holding views
+// of input_view_size(), out of pack_size()'s size for them, and no stride
+// shorter than its row.
 bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameView &out);
 
-// Whole frame. out must have pack_size()'s size and the input's format;
-// throws std::invalid_argument (writing nothing) when pack_args_valid() fails.
+// Whole frame. out must have pack_size()'s size and the input's format
+// (or NV12/I420); throws std::invalid_argument (writing nothing) when pack_args_valid() fails.
 void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out);
 
 // ---- per-pixel implementation ----------------------------------------------
@@ -353,6 +359,19 @@ P3D_HD Rgba pack_pixel_for(const PackParams &p, const AnaglyphMatrices &am, cons
     default:
       return anaglyph(am, view_pixel<I>(p, in, 0, X, Y), view_pixel<I>(p, in, 1, X, Y));
   }
+}
+
+// The 2x2 block (bx, by) of a 4:2:0 output frame for input arrangement I:
+// its pixels packed as pack_pixel_for gives them, then converted.
+template <StereoInput I>
+P3D_HD void pack_block_yuv(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
+                           int bx, int by) {
+  Rgba px[4];
+  for (int k = 0; k < 4; ++k) {
+    const int x = 2 * bx + (k & 1), y = 2 * by + (k >> 1);
+    px[k] = x < out.width && y < out.height ? pack_pixel_for<I>(p, am, in, x, y) : Rgba{0, 0, 0, 0};
+  }
+  store_yuv420_block(out, bx, by, px, p.yuv);
 }
 
 }  // namespace pack_detail

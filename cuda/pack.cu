@@ -53,6 +53,15 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
 }
 
+// 4:2:0 output: one thread per 2x2 block (its four pixels, one chroma pair).
+template <StereoInput I>
+__global__ void pack_kernel_yuv(const PackKernelParams kp) {
+  const int bx = blockIdx.x * blockDim.x + threadIdx.x;
+  const int by = blockIdx.y * blockDim.y + threadIdx.y;
+  if (2 * bx >= kp.out.width || 2 * by >= kp.out.height) return;
+  pack_detail::pack_block_yuv<I>(kp.p, kp.am, kp.in, kp.out, bx, by);
+}
+
 bool rows_16byte_aligned(const FrameView &f) {
   return reinterpret_cast<uintptr_t>(f.plane[0]) % 16 == 0 && f.stride[0] % 16 == 0;
 }
@@ -61,13 +70,18 @@ bool rows_16byte_aligned(const FrameView &f) {
 // vs 0.069 ms, anaglyph 0.052 vs 0.056 ms) except for SideBySideHalf, whose
 // thread would read 8 neighbouring input pixels byte by byte (0.058 vs 0.048 ms).
 bool use_vector_stores(const PackParams &p, const FrameView &out) {
-  return p.layout != PackLayout::SideBySideHalf && rows_16byte_aligned(out);
+  return p.layout != PackLayout::SideBySideHalf && is_packed_rgb(out.format) && rows_16byte_aligned(out);
 }
 
 template <StereoInput I>
 CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t stream) {
   const dim3 block(kBlockX, kBlockY);
-  if (vector_stores) {
+  if (!is_packed_rgb(kp.out.format)) {
+    const int bw = (kp.out.width + 1) / 2, bh = (kp.out.height + 1) / 2;
+    const dim3 grid((bw + kBlockX - 1) / kBlockX, (bh + kBlockY - 1) / kBlockY);
+    pack_kernel_yuv<I><<<grid, block, 0, stream>>>(kp);
+    P3D_CUDA_TRY_LAUNCH(pack_kernel_yuv);
+  } else if (vector_stores) {
     const int threads_x = (kp.out.width + kVec - 1) / kVec;
     const dim3 grid((threads_x + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
     pack_kernel_vec<I><<<grid, block, 0, stream>>>(kp);

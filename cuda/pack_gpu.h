@@ -6,7 +6,8 @@
 
 namespace p3d {
 
-// in, out: device memory, packed RGB of one format; out sized by pack_size().
+// in, out: device memory; in packed RGB, out packed RGB of in's format or
+// NV12/I420 (pack_args_valid()), sized by pack_size().
 // Asynchronous on `stream`; no allocation, no state. Returns
 // cudaErrorInvalidValue (launching nothing) when pack_args_valid() fails.
 // Bit-identical to pack_cpu(): both call pack_pixel().

@@ -226,7 +226,7 @@ GstCaps *gst_pseudo3d_caps_of(GstStructure *s) {
   return caps;
 }
 
-static void set_formats(GstStructure *s, const gchar *formats) {
+void gst_pseudo3d_set_formats(GstStructure *s, const gchar *formats) {
   // formats is "{ A, B }": parse it through a throwaway caps string.
   gchar *str = g_strdup_printf("x, format=(string)%s", formats);
   GstStructure *tmp = gst_structure_from_string(str, NULL);
@@ -252,7 +252,7 @@ static GstCaps *gst_pseudo3d_base_transform_caps(GstBaseTransform *trans, GstPad
                                                   : gst_pseudo3d_caps_of(gst_structure_copy(in));
     for (guint k = 0; k < gst_caps_get_size(variants); ++k) {
       GstStructure *s = gst_structure_copy(gst_caps_get_structure(variants, k));
-      if (formats) set_formats(s, formats);
+      if (formats) gst_pseudo3d_set_formats(s, formats);
       out = gst_caps_merge_structure_full(out, s, f ? gst_caps_features_copy(f) : nullptr);
     }
     gst_caps_unref(variants);

@@ -131,6 +131,9 @@ p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::
  * of a structure. */
 void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den);
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s); /* takes s */
+/* Sets the format field to `formats` ("{ A, B }" or one name) and drops the
+ * colorimetry and chroma-site, which belong to the old format family. */
+void gst_pseudo3d_set_formats(GstStructure *s, const gchar *formats);
 
 G_DEFINE_AUTOPTR_CLEANUP_FUNC(GstPseudo3DBase, gst_object_unref)
 

@@ -14,6 +14,13 @@
  * layout whose views are squeezed, the pixel-aspect-ratio of the input kept,
  * right-view-first exactly when swap-eyes puts the right view first.
  *
+ * The output is in the input's packed RGB format, or NV12/I420 when
+ * downstream asks for it (an encoder's caps): the pair is packed and
+ * converted in one pass (BT.709/BT.601 and the range from the output caps'
+ * colorimetry, chroma the mean of each 2x2 block), on the GPU when the
+ * frames are there, so no videoconvert and a third of the bytes to
+ * download.
+ *
  * Plain 2D input is refused: declare how the frame holds the pair with
  * input-layout (and input-right-first). An output in the input's own
  * arrangement and eye order passes buffers through.
@@ -26,8 +33,10 @@
  * |[
  * gst-launch-1.0 videotestsrc ! pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack layout=anaglyph glasses=red-cyan anaglyph-method=dubois ! videoconvert ! autovideosink
  * gst-launch-1.0 filesrc location=sbs-film.mkv ! decodebin ! videoconvert ! pseudo3dpack layout=top-bottom-half ! videoconvert ! autovideosink
+ * gst-launch-1.0 filesrc location=film.mp4 ! decodebin ! videoconvert ! pseudo3dconvert layout=side-by-side-half ! video/x-raw,format=I420 ! x264enc frame-packing=side-by-side ! mp4mux ! filesink location=film-3d.mp4
  * ]| The second line turns a film whose caps say side-by-side into half
- * top-bottom for a passive 3D TV.
+ * top-bottom for a passive 3D TV; the third packs straight into the
+ * encoder's I420.
  */
 #include "gstpseudo3dpack.h"
 
@@ -118,6 +127,20 @@ static GstStructure *transformed(const GstStructure *in, gboolean to_src, p3d::S
   return s;
 }
 
+// Whether a caps structure's format (a name or a list) names NV12 or I420.
+static bool names_yuv420(const GstStructure *s) {
+  const GValue *v = gst_structure_get_value(s, "format");
+  if (!v) return false;
+  auto is_yuv = [](const GValue *f) {
+    const char *name = G_VALUE_HOLDS_STRING(f) ? g_value_get_string(f) : nullptr;
+    return name && (g_str_equal(name, "NV12") || g_str_equal(name, "I420"));
+  };
+  if (!GST_VALUE_HOLDS_LIST(v)) return is_yuv(v);
+  for (guint i = 0; i < gst_value_list_get_size(v); ++i)
+    if (is_yuv(gst_value_list_get_value(v, i))) return true;
+  return false;
+}
+
 static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   GST_OBJECT_LOCK(self);
@@ -135,8 +158,27 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
       input = p3d::StereoInput::SideBySide;
     GstStructure *s = transformed(in, TRUE, input, g);
     p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
-    return gst_pseudo3d_caps_of(s);
+    // The input's own format first (kept unless downstream asks otherwise),
+    // then 4:2:0 for encoders, in a colorimetry stated rather than left to
+    // GStreamer's size-based default (BT.2020 from 2160 rows up, which the
+    // R'G'B' views, decoded from BT.709/601 video, are not); chroma-site
+    // jpeg: each chroma sample is the mean of its 2x2 block.
+    GstStructure *yuv = gst_structure_copy(s);
+    gst_pseudo3d_set_formats(yuv, P3D_YUV420_FORMATS);
+    GValue list = G_VALUE_INIT, item = G_VALUE_INIT;
+    gst_value_list_init(&list, 3);
+    g_value_init(&item, G_TYPE_STRING);
+    for (const char *c : {"bt709", "bt601", "bt2020"}) {
+      g_value_set_string(&item, c);
+      gst_value_list_append_value(&list, &item);
+    }
+    g_value_unset(&item);
+    gst_structure_take_value(yuv, "colorimetry", &list);
+    gst_structure_set(yuv, "chroma-site", G_TYPE_STRING, "jpeg", NULL);
+    return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), yuv);
   }
+  // Towards the sink, 4:2:0 output comes from any packed RGB input.
+  const bool from_yuv = names_yuv420(in);
 
   // Towards the sink: the input sizes that give this output. A declared
   // layout says nothing about the input's caps. From-caps lists first a
@@ -147,11 +189,13 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   // pseudo3dpack reads follow (either eye first).
   GstStructure *open = transformed(in, FALSE, declared ? input : p3d::StereoInput::SideBySide, g);
   gst_structure_remove_fields(open, "multiview-mode", "multiview-flags", "views", NULL);
+  if (from_yuv) gst_pseudo3d_set_formats(open, P3D_PACKED_FORMATS);
   GstCaps *caps = gst_pseudo3d_caps_of(open);
   if (declared) return caps;
   for (int a = 0; a <= static_cast<int>(p3d::StereoInput::Checkerboard); ++a) {
     const auto arrangement = static_cast<p3d::StereoInput>(a);
     GstStructure *s = transformed(in, FALSE, arrangement, g);
+    if (from_yuv) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
     p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),
                                    GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
     caps = gst_caps_merge_structure(caps, s);
@@ -169,6 +213,11 @@ static bool output_for(const p3d::PackParams &p, const GstVideoInfo *in, int *w,
   }
   p3d::pack_size(p.layout, vw, vh, w, h);
   return true;
+}
+
+// Output equal to the input: same arrangement, eye order and format.
+static bool passes_through(const p3d::PackParams &p, const GstVideoInfo *in, const GstVideoInfo *out) {
+  return p3d::pack_is_identity(p) && GST_VIDEO_INFO_FORMAT(in) == GST_VIDEO_INFO_FORMAT(out);
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
@@ -196,12 +245,13 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
                                          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
                                          GST_VIDEO_INFO_HEIGHT(out), why ? why : "the output size does not fit the layout");
   }
+  if (!GST_VIDEO_INFO_IS_RGB(out)) p.yuv = p3d::gst::rgb_to_yuv(out);
   GST_OBJECT_LOCK(self);
   p.glasses = self->params.glasses;
   p.method = self->params.method;
   self->active = p;
   GST_OBJECT_UNLOCK(self);
-  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), p3d::pack_is_identity(p));
+  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), passes_through(p, in, out));
   return TRUE;
 }
 
@@ -240,11 +290,12 @@ static gboolean frame_boundary(GstPseudo3DBase *base) {
   self->geometry->activate(want);
   p.glasses = self->params.glasses;
   p.method = self->params.method;
-  const bool was_identity = p3d::pack_is_identity(self->active);
+  p.yuv = self->active.yuv;
+  const bool was_identity = passes_through(self->active, in, out);
   self->active = p;
   GST_OBJECT_UNLOCK(self);
-  if (was_identity != p3d::pack_is_identity(p)) {
-    gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), p3d::pack_is_identity(p));
+  if (was_identity != passes_through(p, in, out)) {
+    gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), passes_through(p, in, out));
     gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));  // redo the allocation
   }
   return FALSE;
@@ -379,10 +430,13 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
                                         "Converts a stereo pair into anaglyph, side-by-side, top-bottom, "
                                         "interleaved or single-view output",
                                         "pseudo3d developers");
-  GstCaps *caps = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, 2 * p3d::kMaxFrameSide);
-  gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, caps));
-  gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, caps));
-  gst_caps_unref(caps);
+  // Packed RGB in; out the same format, or NV12/I420 for encoders.
+  GstCaps *sink = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, 2 * p3d::kMaxFrameSide);
+  GstCaps *src = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, 2 * p3d::kMaxFrameSide);
+  gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, sink));
+  gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, src));
+  gst_caps_unref(sink);
+  gst_caps_unref(src);
 
   base_class->transform_geometry = transform_geometry;
   base_class->set_info = set_info;

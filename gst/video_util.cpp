@@ -32,13 +32,29 @@ FrameView frame_view(const GstVideoFrame *frame) {
   return v;
 }
 
-YuvToRgb yuv_params(const GstVideoInfo *info) {
-  gdouble kr = 0.299, kb = 0.114;
-  if (!gst_video_color_matrix_get_Kr_Kb(info->colorimetry.matrix, &kr, &kb)) {
-    kr = 0.299;  // unknown or RGB matrix: BT.601, as most decoders assume for SD
-    kb = 0.114;
+namespace {
+
+// Kr/Kb of the info's matrix; unknown or RGB: BT.601, as most decoders
+// assume for SD.
+void matrix_kr_kb(const GstVideoInfo *info, gdouble *kr, gdouble *kb) {
+  if (!gst_video_color_matrix_get_Kr_Kb(info->colorimetry.matrix, kr, kb)) {
+    *kr = 0.299;
+    *kb = 0.114;
   }
+}
+
+}  // namespace
+
+YuvToRgb yuv_params(const GstVideoInfo *info) {
+  gdouble kr = 0, kb = 0;
+  matrix_kr_kb(info, &kr, &kb);
   return yuv_to_rgb_params(kr, kb, info->colorimetry.range == GST_VIDEO_COLOR_RANGE_0_255);
+}
+
+RgbToYuv rgb_to_yuv(const GstVideoInfo *info) {
+  gdouble kr = 0, kb = 0;
+  matrix_kr_kb(info, &kr, &kb);
+  return rgb_to_yuv_params(kr, kb, info->colorimetry.range == GST_VIDEO_COLOR_RANGE_0_255);
 }
 
 GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_fields) {

@@ -8,6 +8,7 @@
 
 #define P3D_ALL_FORMATS "{ NV12, I420, RGBA, BGRA, RGBx, BGRx }"
 #define P3D_PACKED_FORMATS "{ RGBA, BGRA, RGBx, BGRx }"
+#define P3D_YUV420_FORMATS "{ NV12, I420 }"
 
 namespace p3d::gst {
 
@@ -17,6 +18,8 @@ bool pixel_format_from_gst(GstVideoFormat f, PixelFormat *out);
 FrameView frame_view(const GstVideoFrame *frame);
 // Y'CbCr -> R'G'B' of the info's colorimetry (BT.601 if unknown).
 YuvToRgb yuv_params(const GstVideoInfo *info);
+// R'G'B' -> Y'CbCr of the info's colorimetry (BT.601 if unknown).
+RgbToYuv rgb_to_yuv(const GstVideoInfo *info);
 
 // Raw video of `formats` up to max_side pixels wide and high, in both memory
 // domains: CUDA memory first (preferred), then system memory.

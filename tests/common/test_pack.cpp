@@ -1,6 +1,7 @@
 // Stereo packing (common/pack.h): sizes, every layout on hand-made pairs with
 // known answers, the anaglyph matrices, format independence, and that
-// nothing is written outside the output rows.
+// nothing is written outside the output rows; 4:2:0 output against an
+// independent conversion and OpenCV's.
 #include <cmath>
 #include <functional>
 #include <random>
@@ -8,6 +9,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "pack.h"
 #include "stereo_frames.h"
@@ -648,6 +650,169 @@ TEST(PackFormats, RejectsMismatchedFrames) {
   bad = p;
   bad.method = static_cast<AnaglyphMethod>(-1);
   EXPECT_FALSE(pack_args_valid(bad, in.view(), ok.view()));
+}
+
+// ---- 4:2:0 output ---------------------------------------------------------
+
+// `in` packed by `p` into `format` (NV12 or I420) with every byte poisoned first.
+HostFrame pack_yuv(const PackParams &p, const HostFrame &in, PixelFormat format, uint8_t poison = kPoison) {
+  int vw = 0, vh = 0, w = 0, h = 0;
+  EXPECT_TRUE(input_view_size(p.input, in.width(), in.height(), &vw, &vh));
+  pack_size(p.layout, vw, vh, &w, &h);
+  HostFrame out(format, w, h, 5);
+  out.fill(poison);
+  pack_cpu(p, in.view(), out.view());
+  return out;
+}
+
+uint8_t y_at(const HostFrame &f, int x, int y) { return f.view().plane[0][static_cast<size_t>(y) * f.view().stride[0] + x]; }
+// Cb (c = 0) or Cr (c = 1) of chroma sample (bx, by).
+uint8_t c_at(const HostFrame &f, int bx, int by, int c) {
+  const FrameView v = f.view();
+  if (v.format == PixelFormat::NV12) return v.plane[1][static_cast<size_t>(by) * v.stride[1] + 2 * bx + c];
+  return v.plane[1 + c][static_cast<size_t>(by) * v.stride[1 + c] + bx];
+}
+
+// The conversion as its definition reads (pack.h, frame.h), in double, from
+// the packed R'G'B' frame `rgb`: the 4:2:0 output must be within one level
+// of it everywhere (float rounding), for every sample.
+::testing::AssertionResult matches_definition(const HostFrame &yuv, const HostFrame &rgb, double kr, double kb,
+                                              bool full) {
+  const double kg = 1 - kr - kb, ys = full ? 1 : 219.0 / 255, cs = full ? 1 : 224.0 / 255, yo = full ? 0 : 16;
+  auto u8 = [](double v) { return static_cast<int>(std::floor(std::min(255.0, std::max(0.0, v)) + 0.5)); };
+  for (int y = 0; y < rgb.height(); ++y)
+    for (int x = 0; x < rgb.width(); ++x) {
+      const Rgba c = at(rgb, x, y);
+      const int want = u8(yo + ys * (kr * c.r + kg * c.g + kb * c.b));
+      if (std::abs(want - y_at(yuv, x, y)) > 1)
+        return ::testing::AssertionFailure() << "Y at (" << x << "," << y << "): " << int(y_at(yuv, x, y)) << " want "
+                                             << want;
+    }
+  for (int by = 0; 2 * by < rgb.height(); ++by)
+    for (int bx = 0; 2 * bx < rgb.width(); ++bx) {
+      double r = 0, g = 0, b = 0;
+      int n = 0;
+      for (int y = 2 * by; y < std::min(2 * by + 2, rgb.height()); ++y)
+        for (int x = 2 * bx; x < std::min(2 * bx + 2, rgb.width()); ++x, ++n) {
+          const Rgba c = at(rgb, x, y);
+          r += c.r;
+          g += c.g;
+          b += c.b;
+        }
+      r /= n;
+      g /= n;
+      b /= n;
+      const double yl = kr * r + kg * g + kb * b;
+      const int want[2] = {u8(128 + cs * (b - yl) / (2 * (1 - kb))), u8(128 + cs * (r - yl) / (2 * (1 - kr)))};
+      for (int c = 0; c < 2; ++c)
+        if (std::abs(want[c] - c_at(yuv, bx, by, c)) > 1)
+          return ::testing::AssertionFailure() << (c ? "Cr" : "Cb") << " at block (" << bx << "," << by
+                                               << "): " << int(c_at(yuv, bx, by, c)) << " want " << want[c];
+    }
+  return ::testing::AssertionSuccess();
+}
+
+struct Matrix {
+  double kr, kb;
+  bool full;
+};
+constexpr Matrix kMatrices[] = {{0.2126, 0.0722, false}, {0.299, 0.114, true}, {0.2627, 0.0593, false}};
+
+// Every layout, anaglyph and input arrangement, odd and even sizes, three
+// colorimetries: the samples are the packed pixels converted as defined,
+// NV12 and I420 hold the same samples, and the poison is gone from every
+// sample (each one written).
+TEST(PackYuvOutput, EveryLayoutMatchesTheDefinition) {
+  const int sizes[][2] = {{1, 1}, {3, 2}, {33, 17}, {8, 6}};
+  for (const auto &sz : sizes)
+    for (const PackParams &base : every_params())
+      for (const Matrix &m : kMatrices) {
+        HostFrame in(PixelFormat::BGRx, 2 * sz[0], sz[1], 3);
+        in.fill_random(sz[0] * 131 + sz[1]);
+        if (base.input == StereoInput::TopBottom && sz[1] % 2) continue;
+        PackParams p = base;
+        p.yuv = rgb_to_yuv_params(m.kr, m.kb, m.full);
+        const HostFrame rgb = pack_input(p, in);
+        const HostFrame nv12 = pack_yuv(p, in, PixelFormat::NV12), i420 = pack_yuv(p, in, PixelFormat::I420);
+        const std::string what = "layout " + std::to_string(int(p.layout)) + " input " +
+                                 std::to_string(int(p.input)) + " " + std::to_string(sz[0]) + "x" +
+                                 std::to_string(sz[1]) + " kr " + std::to_string(m.kr);
+        ASSERT_TRUE(matches_definition(nv12, rgb, m.kr, m.kb, m.full)) << what;
+        const HostFrame again = pack_yuv(p, in, PixelFormat::I420, static_cast<uint8_t>(~kPoison));
+        for (int y = 0; y < rgb.height(); ++y)
+          for (int x = 0; x < rgb.width(); ++x) {
+            ASSERT_EQ(y_at(nv12, x, y), y_at(i420, x, y)) << what;
+            ASSERT_EQ(y_at(i420, x, y), y_at(again, x, y)) << what << ": a sample kept its poison";
+            if (x % 2 || y % 2) continue;
+            for (int c = 0; c < 2; ++c) {
+              ASSERT_EQ(c_at(nv12, x / 2, y / 2, c), c_at(i420, x / 2, y / 2, c)) << what;
+              ASSERT_EQ(c_at(i420, x / 2, y / 2, c), c_at(again, x / 2, y / 2, c)) << what << ": kept its poison";
+            }
+          }
+      }
+}
+
+// OpenCV's BGR -> I420 (BT.601, limited range) on a view of flat 2x2
+// blocks, where chroma siting cannot matter: within one level.
+TEST(PackYuvOutput, AgreesWithOpenCvOnFlatBlocks) {
+  cv::Mat blocks(12, 20, CV_8UC3);
+  cv::randu(blocks, 0, 256);
+  cv::Mat view;
+  cv::resize(blocks, view, cv::Size(40, 24), 0, 0, cv::INTER_NEAREST);
+  cv::Mat pair;
+  cv::hconcat(view, view, pair);
+  PackParams p = layout_params(PackLayout::Left);
+  p.yuv = rgb_to_yuv_params(0.299, 0.114, false);
+  const HostFrame ours = pack_yuv(p, HostFrame::from_bgr(pair, PixelFormat::RGBA), PixelFormat::I420);
+  cv::Mat cv_i420;
+  cv::cvtColor(view, cv_i420, cv::COLOR_BGR2YUV_I420);  // 36 rows: Y, then U, then V planes
+  int worst = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 40; ++x) worst = std::max(worst, std::abs(int(cv_i420.at<uint8_t>(y, x)) - y_at(ours, x, y)));
+  const uint8_t *u = cv_i420.ptr<uint8_t>(24), *v = u + 20 * 12;
+  for (int by = 0; by < 12; ++by)
+    for (int bx = 0; bx < 20; ++bx) {
+      worst = std::max(worst, std::abs(int(u[by * 20 + bx]) - c_at(ours, bx, by, 0)));
+      worst = std::max(worst, std::abs(int(v[by * 20 + bx]) - c_at(ours, bx, by, 1)));
+    }
+  EXPECT_LE(worst, 1);
+}
+
+// The plugin's own reader (load_rgba with the matching YuvToRgb) brings flat
+// blocks back within the 8-bit rounding of the two conversions.
+TEST(PackYuvOutput, ReadsBackThroughLoadRgba) {
+  HostFrame in(PixelFormat::RGBA, 2 * 16, 10);
+  HostFrame flat(PixelFormat::RGBA, 8, 5);
+  flat.fill_random(77);
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 32; ++x) store_rgba(in.view(), x, y, at(flat, (x % 16) / 2, y / 2));
+  for (const Matrix &m : kMatrices) {
+    PackParams p = layout_params(PackLayout::Right);
+    p.yuv = rgb_to_yuv_params(m.kr, m.kb, m.full);
+    const HostFrame yuv = pack_yuv(p, in, PixelFormat::NV12);
+    const YuvToRgb back = yuv_to_rgb_params(m.kr, m.kb, m.full);
+    for (int y = 0; y < 10; ++y)
+      for (int x = 0; x < 16; ++x) {
+        const Rgba want = at(flat, x / 2, y / 2), got = load_rgba(yuv.view(), x, y, back);
+        EXPECT_LE(std::abs(got.r - want.r), 3) << x << "," << y;
+        EXPECT_LE(std::abs(got.g - want.g), 3) << x << "," << y;
+        EXPECT_LE(std::abs(got.b - want.b), 3) << x << "," << y;
+      }
+  }
+}
+
+TEST(PackYuvOutput, RefusesYuvInputAndMissingPlanes) {
+  const PackParams p = layout_params(PackLayout::Left);
+  HostFrame in(PixelFormat::RGBA, 8, 4), out(PixelFormat::I420, 4, 4);
+  EXPECT_TRUE(pack_args_valid(p, in.view(), out.view()));
+  FrameView no_v = out.view();
+  no_v.plane[2] = nullptr;
+  EXPECT_FALSE(pack_args_valid(p, in.view(), no_v));
+  FrameView short_stride = out.view();
+  short_stride.stride[1] = 1;
+  EXPECT_FALSE(pack_args_valid(p, in.view(), short_stride));
+  HostFrame nv12_in(PixelFormat::NV12, 8, 4), nv12_out(PixelFormat::NV12, 4, 4);
+  EXPECT_THROW(pack_cpu(p, nv12_in.view(), nv12_out.view()), std::invalid_argument);
 }
 
 }  // namespace

@@ -33,6 +33,7 @@ int run_program(const std::vector<std::string> &argv, std::string *out, std::str
   if (err) *err = e ? e : "";
   g_free(o);
   g_free(e);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

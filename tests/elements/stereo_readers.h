@@ -11,7 +11,8 @@ namespace p3d::test {
 
 // True when `name` is found in PATH.
 bool have_program(const char *name);
-// Runs argv (no shell); returns the exit status, -1 if it could not run.
+// Runs argv (no shell; PATH searched); returns the exit status, 128 + the
+// signal that killed it, or -1 if it could not run (*err says why).
 int run_program(const std::vector<std::string> &argv, std::string *out, std::string *err = nullptr);
 
 // Caps after the demuxer (h264parse's sink) and after h264parse, where

@@ -2,7 +2,8 @@
 // every layout with and without swap-eyes (GStreamer's multiview
 // conventions), every input arrangement from the caps against a reference
 // reconstruction computed in the test, declared input layouts, 2D input
-// refused with a message that says what to do, and passthrough.
+// refused with a message that says what to do, passthrough, and 4:2:0
+// output for encoders (format, colorimetry and samples).
 #include <gst/check/gstharness.h>
 #include <gtest/gtest.h>
 
@@ -246,4 +247,91 @@ TEST(StereoInputs, SameArrangementPassesThrough) {
   EXPECT_NE(swapped.out, swapped.in);
   EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_FLAGS(&swapped.info) & GST_VIDEO_MULTIVIEW_FLAGS_RIGHT_VIEW_FIRST, 0u);
   release(swapped);
+}
+
+namespace {
+
+// Samples of every plane of a mapped output buffer that differ from `want`.
+long long yuv_diff(const Packed &p, const HostFrame &want) {
+  GstVideoInfo info = p.info;
+  GstVideoFrame vf;
+  if (!gst_video_frame_map(&vf, &info, p.out, GST_MAP_READ)) return -1;
+  long long n = 0;
+  for (int i = 0; i < frame_plane_count(want.format()); ++i) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(want.format(), want.width(), want.height(), i, &row_bytes, &rows);
+    for (int y = 0; y < rows; ++y) {
+      const auto *got = static_cast<const uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&vf, i)) +
+                        static_cast<size_t>(y) * GST_VIDEO_FRAME_PLANE_STRIDE(&vf, i);
+      const uint8_t *exp = want.view().plane[i] + static_cast<size_t>(y) * want.view().stride[i];
+      for (int x = 0; x < row_bytes; ++x) n += got[x] != exp[x];
+    }
+  }
+  gst_video_frame_unmap(&vf);
+  return n;
+}
+
+// The half side-by-side pair of `frame` (a full side-by-side pair) as the
+// test computes it: packed, then converted with the given matrix.
+HostFrame half_sbs_yuv(const HostFrame &frame, PixelFormat f, double kr, double kb, bool full) {
+  PackParams params;
+  params.layout = PackLayout::SideBySideHalf;
+  params.yuv = rgb_to_yuv_params(kr, kb, full);
+  HostFrame out(f, frame.width() / 2, frame.height());
+  pack_cpu(params, frame.view(), out.view());
+  return out;
+}
+
+}  // namespace
+
+// An encoder's 4:2:0 caps after pseudo3dpack: the pair is packed and
+// converted by the pack itself, in BT.709 limited range unless downstream
+// names another colorimetry, chroma-site jpeg, the multiview signal as for
+// RGB output; without such caps the output stays in the input's format.
+TEST(StereoYuvOutput, EncoderFormatsAreWrittenByThePack) {
+  HostFrame frame(PixelFormat::RGBA, 2 * 19, 11);
+  frame.fill_random(21);
+  const std::string in_caps = stereo_caps(38, 11, "side-by-side", 0);
+
+  Packed i420 = push_one("pseudo3dpack layout=side-by-side-half ! capsfilter caps=video/x-raw,format=I420", in_caps, frame);
+  ASSERT_NE(i420.out, nullptr);
+  EXPECT_EQ(GST_VIDEO_INFO_FORMAT(&i420.info), GST_VIDEO_FORMAT_I420);
+  gchar *colorimetry = gst_video_colorimetry_to_string(&i420.info.colorimetry);
+  EXPECT_STREQ(colorimetry, "bt709");
+  g_free(colorimetry);
+  EXPECT_EQ(i420.info.chroma_site, GST_VIDEO_CHROMA_SITE_JPEG);
+  EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_MODE(&i420.info), GST_VIDEO_MULTIVIEW_MODE_SIDE_BY_SIDE);
+  EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_FLAGS(&i420.info), GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
+  EXPECT_EQ(yuv_diff(i420, half_sbs_yuv(frame, PixelFormat::I420, 0.2126, 0.0722, false)), 0);
+  release(i420);
+
+  Packed nv12 = push_one("pseudo3dpack layout=side-by-side-half ! capsfilter caps=\"video/x-raw,format=NV12,colorimetry=bt601\"", in_caps,
+                         frame);
+  ASSERT_NE(nv12.out, nullptr);
+  EXPECT_EQ(GST_VIDEO_INFO_FORMAT(&nv12.info), GST_VIDEO_FORMAT_NV12);
+  EXPECT_EQ(yuv_diff(nv12, half_sbs_yuv(frame, PixelFormat::NV12, 0.299, 0.114, false)), 0);
+  release(nv12);
+
+  Packed rgb = push_one("pseudo3dpack layout=side-by-side-half", in_caps, frame);
+  ASSERT_NE(rgb.out, nullptr);
+  EXPECT_EQ(GST_VIDEO_INFO_FORMAT(&rgb.info), GST_VIDEO_FORMAT_RGBA);
+  release(rgb);
+}
+
+// The input's own arrangement into 4:2:0 is a conversion, not passthrough.
+TEST(StereoYuvOutput, SameArrangementInAnotherFormatIsConverted) {
+  HostFrame frame(PixelFormat::RGBA, 16, 8);
+  frame.fill_random(5);
+  Packed p = push_one("pseudo3dpack layout=side-by-side ! capsfilter caps=video/x-raw,format=I420",
+                      stereo_caps(16, 8, "side-by-side", 0), frame);
+  ASSERT_NE(p.out, nullptr);
+  EXPECT_NE(p.out, p.in);
+  EXPECT_EQ(GST_VIDEO_INFO_FORMAT(&p.info), GST_VIDEO_FORMAT_I420);
+  PackParams params;
+  params.layout = PackLayout::SideBySide;
+  params.yuv = rgb_to_yuv_params(0.2126, 0.0722, false);
+  HostFrame want(PixelFormat::I420, 16, 8);
+  pack_cpu(params, frame.view(), want.view());
+  EXPECT_EQ(yuv_diff(p, want), 0);
+  release(p);
 }

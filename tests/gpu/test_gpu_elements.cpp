@@ -297,9 +297,13 @@ std::string play(const std::string &launch, Setup &&setup) {
   return err;
 }
 
-// A change of memory domain drops the depth: after cudaupload or
-// cudadownload the warp says it needs pseudo3ddepth; a pseudo3ddepth placed
-// after them estimates afresh and the chain runs.
+// A change of memory domain never reaches the warp with a depth in the
+// wrong memory: after cudaupload the depth is gone and the warp says it
+// needs pseudo3ddepth. cudadownload in 1.22 goes passthrough when downstream
+// takes GstVideoMeta (the CUDA buffer handed on as system memory, metas and
+// all), so there the warp finds a device depth on a host frame and says so;
+// either way the error is one, clear, and names the fix. A pseudo3ddepth
+// placed after them estimates afresh and the chain runs.
 TEST(GpuDepthMeta, CudaUploadAndDownloadDropTheDepth) {
   const char *src = "videotestsrc num-buffers=3 ! video/x-raw,format=NV12,width=64,height=48 ! ";
   std::string err = play(std::string(src) + "pseudo3ddepth ! cudaupload ! video/x-raw(memory:CUDAMemory) ! "
@@ -309,7 +313,10 @@ TEST(GpuDepthMeta, CudaUploadAndDownloadDropTheDepth) {
   // through to the warp, which takes it: no change of domain, depth kept.)
   err = play(std::string(src) + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! cudadownload ! "
              "video/x-raw ! pseudo3dwarp ! fakesink", [](GstElement *) {});
-  EXPECT_NE(err.find("needs a depth map"), std::string::npos) << err;
+  EXPECT_TRUE(err.find("needs a depth map") != std::string::npos ||
+              err.find("depth map does not fit the frame") != std::string::npos)
+      << err;
+  EXPECT_NE(err.find("put pseudo3ddepth"), std::string::npos) << err;
   err = play(std::string(src) + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth ! cudadownload ! "
              "video/x-raw ! pseudo3ddepth ! pseudo3dwarp ! fakesink", [](GstElement *) {});
   EXPECT_EQ(err, "");

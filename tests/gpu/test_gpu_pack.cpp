@@ -1,4 +1,4 @@
-// pack_gpu against pack_cpu. Tolerance: none. Both run the same pack_pixel
+// pack_gpu against pack_cpu, packed RGB and 4:2:0 output. Tolerance: none. Both run the same pack_pixel
 // (common/pack.h): integer means for the half formats and one fixed float
 // evaluation order for the anaglyphs, compiled without contraction on both
 // sides (-ffp-contract=off / -fmad=false), so every byte must match,
@@ -331,6 +331,105 @@ TEST_F(GpuPack, EightK) {
   HostFrame in(PixelFormat::RGBA, 2 * 7680, 4320);
   in.fill_random(seed);
   expect_exact_all(in, large_params(), "7680x4320");
+}
+
+// ---- 4:2:0 output ----
+
+// Samples of every plane that differ between two frames of one format and
+// size; the first is described in *where.
+long long plane_diff(const HostFrame &a, const HostFrame &b, std::string *where) {
+  if (a.width() != b.width() || a.height() != b.height() || a.format() != b.format()) {
+    *where = "frame size or format differs";
+    return -1;
+  }
+  long long n = 0;
+  for (int i = 0; i < frame_plane_count(a.format()); ++i) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(a.format(), a.width(), a.height(), i, &row_bytes, &rows);
+    for (int y = 0; y < rows; ++y)
+      for (int x = 0; x < row_bytes; ++x) {
+        const uint8_t va = a.view().plane[i][static_cast<size_t>(y) * a.view().stride[i] + x];
+        const uint8_t vb = b.view().plane[i][static_cast<size_t>(y) * b.view().stride[i] + x];
+        if (va != vb && n++ == 0)
+          *where = "plane " + std::to_string(i) + " byte (" + std::to_string(x) + "," + std::to_string(y) +
+                   "): " + std::to_string(va) + " vs " + std::to_string(vb);
+      }
+  }
+  return n;
+}
+
+// `in` packed into `format` on both sides, the device output poisoned with
+// `poison` first (a skipped sample keeps it and differs from the CPU's).
+void expect_yuv_exact(const PackParams &p, const HostFrame &in, const test::DeviceFrame &din, PixelFormat format,
+                      uint8_t poison, cudaStream_t stream, const std::string &what) {
+  int w = 0, h = 0;
+  out_size(p, in, &w, &h);
+  HostFrame cpu(format, w, h, 6);
+  pack_cpu(p, in.view(), cpu.view());
+  HostFrame poisoned(format, w, h);
+  poisoned.fill(poison);
+  const test::DeviceFrame dout = test::DeviceFrame::upload(poisoned);
+  test::check_cuda(pack_gpu(p, din.view(), dout.view(), stream));
+  ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream)) << what;
+  std::string where;
+  EXPECT_EQ(plane_diff(dout.download(), cpu, &where), 0) << what << ": " << where;
+}
+
+// Every layout and anaglyph, NV12 and I420, three colorimetries, odd and
+// even sizes, two poisons: byte for byte the CPU's.
+TEST_F(GpuPack, YuvOutputEveryParams) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  const RgbToYuv matrices[] = {rgb_to_yuv_params(0.2126, 0.0722, false), rgb_to_yuv_params(0.299, 0.114, true),
+                               rgb_to_yuv_params(0.2627, 0.0593, false)};
+  const int sizes[][2] = {{1, 1}, {3, 2}, {33, 17}, {67, 31}};
+  for (const auto &sz : sizes) {
+    HostFrame in(PixelFormat::BGRA, 2 * sz[0], sz[1], 4);
+    in.fill_random(seed + sz[0]);
+    const test::DeviceFrame din = test::DeviceFrame::upload(in);
+    for (PackParams p : every_params())
+      for (const RgbToYuv &m : matrices)
+        for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420})
+          for (uint8_t poison : {uint8_t(0x00), uint8_t(0xFF)}) {
+            p.yuv = m;
+            expect_yuv_exact(p, in, din, f, poison, stream_, "yuv " + describe(p, f, sz[0], sz[1]));
+            if (HasFailure()) return;
+          }
+  }
+}
+
+// Every input arrangement into half side-by-side I420 (the converter's
+// default), on the Aloe pair and at 4K.
+TEST_F(GpuPack, YuvOutputInputArrangementsAndAloe) {
+  const cv::Mat l = test::load_data_image("aloeL.jpg"), r = test::load_data_image("aloeR.jpg");
+  ASSERT_FALSE(l.empty());
+  ASSERT_FALSE(r.empty());
+  cv::Mat pair;
+  cv::hconcat(l, r, pair);
+  const HostFrame aloe = HostFrame::from_bgr(pair, PixelFormat::RGBA, 20);
+  const test::DeviceFrame daloe = test::DeviceFrame::upload(aloe);
+  for (StereoInput input : test::kAllInputs) {
+    PackParams p;
+    p.layout = PackLayout::SideBySideHalf;
+    p.input = input;
+    int vw = 0, vh = 0;
+    if (!input_view_size(input, aloe.width(), aloe.height(), &vw, &vh)) continue;
+    expect_yuv_exact(p, aloe, daloe, PixelFormat::I420, 0x5A, stream_, "aloe input " + std::to_string(int(input)));
+  }
+}
+
+TEST_F(GpuPack, YuvOutputUltraHd) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  HostFrame in(PixelFormat::RGBA, 2 * 3840, 2160);
+  in.fill_random(seed);
+  const test::DeviceFrame din = test::DeviceFrame::upload(in);
+  for (PackLayout l : {PackLayout::SideBySideHalf, PackLayout::TopBottom, PackLayout::Anaglyph}) {
+    PackParams p;
+    p.layout = l;
+    for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420})
+      expect_yuv_exact(p, in, din, f, 0xA5, stream_, "3840x2160 yuv layout " + std::to_string(int(l)));
+  }
 }
 
 TEST_F(GpuPack, RejectsMismatchedFramesWithoutWriting) {

@@ -1,7 +1,6 @@
 #include "convert_helpers.h"
 
 #include <dirent.h>
-#include <sys/wait.h>
 
 #include <cstring>
 #include <fstream>
@@ -12,6 +11,7 @@
 #include <gst/gst.h>
 
 #include "element_helpers.h"
+#include "stereo_readers.h"
 
 namespace p3d::test {
 
@@ -21,25 +21,10 @@ std::string convert_program() {
 }
 
 ToolRun run_convert(const std::vector<std::string> &args) {
-  std::vector<gchar *> argv;
-  const std::string program = convert_program();
-  argv.push_back(const_cast<gchar *>(program.c_str()));
-  for (const std::string &a : args) argv.push_back(const_cast<gchar *>(a.c_str()));
-  argv.push_back(nullptr);
+  std::vector<std::string> argv{convert_program()};
+  argv.insert(argv.end(), args.begin(), args.end());
   ToolRun r;
-  gchar *out = nullptr, *err = nullptr;
-  gint wait_status = 0;
-  GError *error = nullptr;
-  if (!g_spawn_sync(nullptr, argv.data(), nullptr, G_SPAWN_DEFAULT, nullptr, nullptr, &out, &err, &wait_status, &error)) {
-    r.err = error->message;
-    g_error_free(error);
-    return r;
-  }
-  r.out = out ? out : "";
-  r.err = err ? err : "";
-  g_free(out);
-  g_free(err);
-  r.status = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status) : 128 + WTERMSIG(wait_status);
+  r.status = run_program(argv, &r.out, &r.err);
   return r;
 }
 
@@ -198,44 +183,12 @@ ReadBack read_back(const std::string &path) {
   return r;
 }
 
-std::string ffprobe_path() {
-  gchar *p = g_find_program_in_path("ffprobe");
-  std::string s = p ? p : "";
-  g_free(p);
-  return s;
-}
-
-namespace {
-std::string capture(const std::vector<std::string> &args, bool want_stderr) {
-  std::vector<gchar *> argv;
-  for (const std::string &a : args) argv.push_back(const_cast<gchar *>(a.c_str()));
-  argv.push_back(nullptr);
-  gchar *out = nullptr, *err = nullptr;
-  gint status = 0;
-  std::string s;
-  if (g_spawn_sync(nullptr, argv.data(), nullptr, G_SPAWN_SEARCH_PATH, nullptr, nullptr, &out, &err, &status, nullptr))
-    s = want_stderr ? (err ? err : "") : (out ? out : "");
-  g_free(out);
-  g_free(err);
-  return s;
-}
-}  // namespace
-
 std::string ffprobe_stream(const std::string &path, const std::string &selector, const std::string &entries) {
-  return capture({"ffprobe", "-v", "error", "-select_streams", selector, "-show_entries", "stream=" + entries, "-of",
-                  "default=nw=1", path},
-                 false);
-}
-
-std::string ffmpeg_stereo3d(const std::string &path) {
-  const std::string log =
-      capture({"ffmpeg", "-hide_banner", "-nostdin", "-i", path, "-frames:v", "1", "-vf", "showinfo", "-f", "null", "-"},
-              true);
-  const std::string key = "stereoscopic information: type - ";
-  const size_t at = log.find(key);
-  if (at == std::string::npos) return "";
-  const size_t start = at + key.size();
-  return log.substr(start, log.find('\n', start) - start);
+  std::string out;
+  run_program({"ffprobe", "-v", "error", "-select_streams", selector, "-show_entries", "stream=" + entries, "-of",
+               "default=nw=1", path},
+              &out);
+  return out;
 }
 
 std::string ffprobe_value(const std::string &text, const std::string &key) {

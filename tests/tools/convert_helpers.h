@@ -11,7 +11,7 @@
 namespace p3d::test {
 
 struct ToolRun {
-  int status = -1;  // exit status, or 128 + signal
+  int status = -1;  // exit status, 128 + signal, -1 when it did not start
   std::string out, err;
 };
 // Runs pseudo3d-convert with `args` and waits for it.
@@ -37,14 +37,9 @@ struct ReadBack {
 };
 ReadBack read_back(const std::string &path);
 
-// ffprobe/ffmpeg, when installed (empty path otherwise).
-std::string ffprobe_path();
 // "key=value" lines of `ffprobe -show_entries stream=...` for stream
 // `selector` ("v:0", "a:0").
 std::string ffprobe_stream(const std::string &path, const std::string &selector, const std::string &entries);
-// ffmpeg's frame-level stereo description of the first video frame
-// ("side by side", "top and bottom (inverted)"...), "" if none.
-std::string ffmpeg_stereo3d(const std::string &path);
 // The value of `key` in ffprobe's key=value output (first match).
 std::string ffprobe_value(const std::string &text, const std::string &key);
 

@@ -22,6 +22,7 @@
 
 #include "convert_helpers.h"
 #include "element_helpers.h"
+#include "stereo_readers.h"
 
 using namespace p3d::test;
 
@@ -34,6 +35,15 @@ int line_count(const std::string &s) {
   int n = 0;
   for (char c : s) n += c == '\n';
   return n;
+}
+
+// The stereo description ffmpeg gives the first frame, "" if none; every
+// source of it (the container's, the H.264 SEI's) must agree.
+std::string ffmpeg_stereo3d(const std::string &file) {
+  const std::vector<std::string> all = ffmpeg_frame_stereo(file);
+  for (const std::string &s : all)
+    if (s != all.front()) return "disagreeing: " + all.front() + " / " + s;
+  return all.empty() ? "" : all.front();
 }
 
 std::string slurp(const std::string &path) {
@@ -137,6 +147,27 @@ TEST_F(Convert, MkvTopBottomRightFirstCopiesVorbis) {
   EXPECT_EQ(out.audio_checksum, in.audio_checksum);
 }
 
+// The converter edits the finished Matroska file's StereoMode (the SEI alone
+// reaches only the players that parse H.264): every reader gets top-bottom,
+// right view first, from the container.
+TEST_F(Convert, MkvContainerStereoModeIsWritten) {
+  ASSERT_EQ(fx().tb_run.status, 0) << fx().tb_run.err;
+  const GstStereo gst = gst_parsed_stereo(fx().tb_mkv);
+  ASSERT_EQ(gst.error, "");
+  EXPECT_EQ(gst.demux_mode, "top-bottom") << "matroskademux read no StereoMode";
+  EXPECT_EQ(gst.demux_flags & kRightFirst, kRightFirst);
+  if (have_program("ffprobe")) {
+    const FfprobeVideo probe = ffprobe_video(fx().tb_mkv);
+    ASSERT_TRUE(probe.ok);
+    EXPECT_EQ(probe.stereo_mode, "bottom_top");
+  }
+  if (have_program("mkvinfo")) {
+    const auto track = mkvinfo_video(fx().tb_mkv);
+    ASSERT_TRUE(track.count("Stereo mode")) << "mkvinfo shows no StereoMode";
+    EXPECT_EQ(track.at("Stereo mode").rfind("2 ", 0), 0u) << track.at("Stereo mode");
+  }
+}
+
 TEST_F(Convert, Mp4AnaglyphIs444AndReencodesVorbisToAac) {
   const ToolRun &r = fx().ana_run;
   ASSERT_EQ(r.status, 0) << r.err;
@@ -154,7 +185,7 @@ TEST_F(Convert, Mp4AnaglyphIs444AndReencodesVorbisToAac) {
 }
 
 TEST_F(Convert, FfprobeReadsLayoutEyeOrderAndAudio) {
-  if (ffprobe_path().empty()) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
+  if (!have_program("ffprobe") || !have_program("ffmpeg")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
   ASSERT_EQ(fx().sbs_run.status, 0);
   ASSERT_EQ(fx().tb_run.status, 0);
   ASSERT_EQ(fx().ana_run.status, 0);

@@ -32,6 +32,13 @@ struct Measure {
   double fps() const { return seconds > 0 ? frames / seconds : 0; }
 };
 
+GstPadProbeReturn read_frame(GstPad *, GstPadProbeInfo *info, gpointer) {
+  GstBuffer *b = GST_PAD_PROBE_INFO_BUFFER(info);
+  GstMapInfo map;
+  if (gst_buffer_map(b, &map, GST_MAP_READ)) gst_buffer_unmap(b, &map);
+  return GST_PAD_PROBE_OK;
+}
+
 // One timed run; `convert` selects the full video chain.
 bool measure(const Options &o, Processing processing, const std::string &raw_format, bool convert, Measure *m,
              std::string *error) {
@@ -48,6 +55,11 @@ bool measure(const Options &o, Processing processing, const std::string &raw_for
   if (convert) {
     ok = chain.build(pipeline, o, processing, raw_format, error) && gst_element_link(chain.tail(), vsink);
     if (ok) chain.count_frames(&counter, source.piece_start());
+    // The encoder's stand-in reads every frame, as an encoder would: a
+    // frame still in device memory is downloaded here, inside the timing.
+    GstPad *sinkpad = gst_element_get_static_pad(vsink, "sink");
+    gst_pad_add_probe(sinkpad, GST_PAD_PROBE_TYPE_BUFFER, read_frame, nullptr, nullptr);
+    gst_object_unref(sinkpad);
   } else {
     queue = make_frame_queue(8);
     gst_bin_add(GST_BIN(pipeline), queue);

@@ -57,7 +57,8 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   head_ = make_frame_queue(8);
   convert_ = make("pseudo3dconvert", &missing);
   // System memory after the 3D stages: the CPU encoders and videoconvert
-  // take nothing else (pseudo3dconvert downloads once when on the GPU).
+  // take nothing else (pseudo3dconvert downloads once when on the GPU), in
+  // the encoder's format where pseudo3dpack can write it.
   GstElement *to_system = make("capsfilter", &missing);
   GstElement *q2 = make_frame_queue(4);
   GstElement *vconv = make("videoconvert", &missing);
@@ -71,7 +72,13 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   }
   apply_to_bin(o, convert_);
   gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing == Processing::Gpu ? "gpu" : "cpu");
-  GstCaps *sys = gst_caps_from_string("video/x-raw");
+  // pseudo3dpack writes I420/NV12 itself (on the GPU when the frames are
+  // there): a third of the bytes to download and no CPU conversion; the
+  // videoconvert after it then passes frames through. Other encoder
+  // formats (Y444 for anaglyphs) still go through videoconvert.
+  const bool packed_yuv = raw_format == "I420" || raw_format == "NV12";
+  GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL)
+                            : gst_caps_from_string("video/x-raw");
   g_object_set(to_system, "caps", sys, NULL);
   gst_caps_unref(sys);
   g_object_set(vconv, "n-threads", 0u, NULL);  // 0 = one per core
