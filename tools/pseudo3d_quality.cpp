@@ -397,6 +397,7 @@ const char *fill_name(HoleFill f) {
   switch (f) {
     case HoleFill::Background: return "background";
     case HoleFill::NeighborAverage: return "neighbor-average";
+    case HoleFill::BackgroundSmooth: return "background-smooth";
     default: return "none";
   }
 }
@@ -418,7 +419,7 @@ void measure_synthesis(Writer &w, const Aloe &a, int runs) {
   const std::vector<int> radii = {0, 2, 5, 10};  // 0: the GT depth as is
   std::vector<SynthCase> cases;
   for (const int radius : radii)
-    for (const HoleFill fill : {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None})
+    for (const HoleFill fill : {HoleFill::BackgroundSmooth, HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None})
       cases.push_back({radius, fill});
   HostFrame out(PixelFormat::BGRA, 2 * a.left.cols, a.left.rows);
   // The filter and the warp are timed apart (their sum is the case's time);

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -634,7 +635,7 @@ TEST(ExtremeWarp, DepthOnTheScreenPlaneCopiesTheSource) {
         for (float conv : {0.f, 0.5f, 1.f})
           for (StereoView v : kAllViews) {
             ++i;
-            const WarpParams p = warp_params(i % 2 ? 25.f : 1e9f, conv, v, kAllFills[i % 3]);
+            const WarpParams p = warp_params(i % 2 ? 25.f : 1e9f, conv, v, kAllFills[i % std::size(kAllFills)]);
             SCOPED_TRACE(::testing::Message() << test::format_name(f) << " " << pattern_name(pat) << " "
                                               << size_name(s) << " convergence " << conv << " view " << int(v)
                                               << " max_disparity " << p.max_disparity << " fill " << int(p.fill));
