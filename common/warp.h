@@ -312,6 +312,17 @@ P3D_HD bool smooth_is_ring(const uint8_t *up, const uint8_t *row, const uint8_t 
   return false;
 }
 
+// What the GPU keeps of a key for BackgroundSmooth: the depth bits
+// (key >> 32) of a covered pixel, or kSmoothHole for a hole (depth bits are
+// those of a float in [0, 1], never all ones). background_source() reads only
+// the depth of a key, so smooth_zbits_key() stands in for the full key.
+constexpr uint32_t kSmoothHole = 0xffffffffu;
+P3D_HD uint32_t smooth_zbits(unsigned long long key) {
+  return key == 0ull ? kSmoothHole : static_cast<uint32_t>(key >> 32);
+}
+P3D_HD bool smooth_zbits_hole(uint32_t z) { return z == kSmoothHole; }
+P3D_HD unsigned long long smooth_zbits_key(uint32_t z) { return (static_cast<unsigned long long>(z) << 32) | 1ull; }
+
 // Side of an anchor: the nearest clean pixel (neither hole nor ring) on that
 // side if there is one, else the nearest non-hole (-1: none).
 P3D_HD int smooth_side(int clean, int any) { return clean >= 0 ? clean : any; }
