@@ -217,10 +217,11 @@ void smooth_fill_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, con
           smooth_add(prefix[X - a + 1], column[base + X]);
         }
         const int b = X - 1;
-        for (int t = a; t <= b; ++t)
-          if (s.mask[base + t])
-            store_rgba(j.out, eye.col0 + t, y,
-                       smooth_mean(smooth_window(prefix[std::min(b, t + Rx) - a + 1], prefix[std::max(a, t - Rx) - a])));
+        for (int t = a; t <= b; ++t) {
+          if (!s.mask[base + t]) continue;
+          const SmoothSum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
+          store_rgba(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
+        }
       }
     }
   });

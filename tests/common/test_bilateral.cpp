@@ -300,39 +300,33 @@ BilateralParams separable(int radius, float sigma_space, float sigma_range) {
   return p;
 }
 
-// The two passes of common/bilateral.h written out in double with exp().
-cv::Mat separable_reference(const BilateralParams &p, const FrameView &guide, const cv::Mat &depth) {
-  const int r = p.radius;
-  auto weight = [&](int d, int g) {
-    const double ws = d == 0 ? 1.0 : std::exp(-double(d * d) / (2.0 * p.sigma_space * p.sigma_space));
-    const double wr = p.sigma_range > 0 ? std::exp(-double(g * g) / (2.0 * p.sigma_range * p.sigma_range))
-                                        : (g == 0 ? 1.0 : 0.0);
-    return ws * wr;
-  };
-  cv::Mat mid(depth.size(), CV_64FC1), out(depth.size(), CV_64FC1);
-  for (int y = 0; y < depth.rows; ++y)
-    for (int x = 0; x < depth.cols; ++x) {
-      const int gc = load_luma(guide, x, y);
+// One pass of the Separable mode written out in double with exp(): taps
+// along x (along_x) or y over `in` (CV_64FC1), weighted against the centre's guide.
+cv::Mat reference_pass(const BilateralParams &p, const FrameView &guide, const cv::Mat &in, bool along_x) {
+  const int r = p.radius, length = along_x ? in.cols : in.rows;
+  cv::Mat out(in.size(), CV_64FC1);
+  for (int y = 0; y < in.rows; ++y)
+    for (int x = 0; x < in.cols; ++x) {
+      const int gc = load_luma(guide, x, y), pos = along_x ? x : y;
       double sw = 0, swd = 0;
-      for (int qx = std::max(0, x - r); qx <= std::min(depth.cols - 1, x + r); ++qx) {
-        const double w = weight(qx - x, load_luma(guide, qx, y) - gc);
-        sw += w;
-        swd += w * depth.at<float>(y, qx);
-      }
-      mid.at<double>(y, x) = swd / sw;
-    }
-  for (int y = 0; y < depth.rows; ++y)
-    for (int x = 0; x < depth.cols; ++x) {
-      const int gc = load_luma(guide, x, y);
-      double sw = 0, swd = 0;
-      for (int qy = std::max(0, y - r); qy <= std::min(depth.rows - 1, y + r); ++qy) {
-        const double w = weight(qy - y, load_luma(guide, x, qy) - gc);
-        sw += w;
-        swd += w * mid.at<double>(qy, x);
+      for (int q = std::max(0, pos - r); q <= std::min(length - 1, pos + r); ++q) {
+        const int qx = along_x ? q : x, qy = along_x ? y : q, d = q - pos, g = load_luma(guide, qx, qy) - gc;
+        const double ws = d == 0 ? 1.0 : std::exp(-double(d * d) / (2.0 * p.sigma_space * p.sigma_space));
+        const double wr = p.sigma_range > 0 ? std::exp(-double(g * g) / (2.0 * p.sigma_range * p.sigma_range))
+                                            : (g == 0 ? 1.0 : 0.0);
+        sw += ws * wr;
+        swd += ws * wr * in.at<double>(qy, qx);
       }
       out.at<double>(y, x) = swd / sw;
     }
   return out;
+}
+
+// The two passes of common/bilateral.h: rows, then columns of the result.
+cv::Mat separable_reference(const BilateralParams &p, const FrameView &guide, const cv::Mat &depth) {
+  cv::Mat in;
+  depth.convertTo(in, CV_64FC1);
+  return reference_pass(p, guide, reference_pass(p, guide, in, true), false);
 }
 
 TEST(BilateralSeparable, MatchesTheTwoPassDefinition) {

@@ -431,17 +431,30 @@ HostFrame naive_neighbour_average(const HostFrame &none_render) {
   return out;
 }
 
-void expect_neighbour_average_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
+// A fill against its naive reference, which gets the fill=none rendering
+// (holes magenta), the parameters and the depth.
+using NaiveFill = std::function<HostFrame(const WarpParams &, const HostFrame &none_render, const cv::Mat &depth)>;
+void expect_fill_matches_naive(HoleFill fill, const NaiveFill &naive, const WarpParams &base, const HostFrame &src,
+                               const cv::Mat &depth) {
   WarpParams p = base;
   p.fill = HoleFill::None;
   const Rendered none = render(p, src, depth);
-  p.fill = HoleFill::NeighborAverage;
-  const Rendered avg = render(p, src, depth);
-  EXPECT_EQ(avg.holes, none.holes);
-  EXPECT_EQ(count_colour(avg.out, kHoleColour), 0);
-  const HostFrame want = naive_neighbour_average(none.out);
+  p.fill = fill;
+  const Rendered got = render(p, src, depth);
+  EXPECT_EQ(got.holes, none.holes);
+  EXPECT_GT(got.holes, 0);
+  EXPECT_EQ(count_colour(got.out, kHoleColour), 0);
+  const HostFrame want = naive(p, none.out, depth);
   for (int eye = 0; eye < 2; ++eye)
-    EXPECT_TRUE(view_is(avg.out, eye, [&](int x, int y) { return view_at(want, eye, x, y); }));
+    EXPECT_TRUE(view_is(got.out, eye, [&](int x, int y) { return view_at(want, eye, x, y); }));
+}
+
+void expect_neighbour_average_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
+  expect_fill_matches_naive(HoleFill::NeighborAverage,
+                            [](const WarpParams &, const HostFrame &none, const cv::Mat &) {
+                              return naive_neighbour_average(none);
+                            },
+                            base, src, depth);
 }
 
 TEST(WarpFill, NeighborAverageFillsAllHoles) {
@@ -562,16 +575,7 @@ HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &non
 }
 
 void expect_background_smooth_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
-  WarpParams p = base;
-  p.fill = HoleFill::None;
-  const Rendered none = render(p, src, depth);
-  p.fill = HoleFill::BackgroundSmooth;
-  const Rendered got = render(p, src, depth);
-  EXPECT_EQ(got.holes, none.holes);
-  EXPECT_GT(got.holes, 0);
-  const HostFrame want = naive_background_smooth(p, none.out, depth);
-  for (int eye = 0; eye < 2; ++eye)
-    EXPECT_TRUE(view_is(got.out, eye, [&](int x, int y) { return view_at(want, eye, x, y); }));
+  expect_fill_matches_naive(HoleFill::BackgroundSmooth, naive_background_smooth, base, src, depth);
 }
 
 TEST(WarpFill, BackgroundSmoothMatchesTheSpecification) {

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli_args.h"
 #include "quality.h"
 
 namespace p3d::quality {
@@ -29,19 +30,9 @@ void print_usage(std::ostream &os) {
         "Exit status: 0 ok, 1 missing data or I/O error, 64 bad usage.\n";
 }
 
-[[noreturn]] void usage_error(const std::string &msg) {
-  std::cerr << "pseudo3d-quality: " << msg << "\n";
-  print_usage(std::cerr);
-  std::exit(kExitUsage);
-}
-
-int parse_int(const std::string &opt, const std::string &v, int lo, int hi) {
-  char *end = nullptr;
-  const long n = std::strtol(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0' || n < lo || n > hi)
-    usage_error(opt + " wants an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" + v + "'");
-  return static_cast<int>(n);
-}
+const p3d::tools::Cli kCli("pseudo3d-quality", print_usage, kExitUsage);
+[[noreturn]] void usage_error(const std::string &msg) { kCli.fail(msg); }
+int parse_int(const std::string &opt, const std::string &v, int lo, int hi) { return kCli.integer(opt, v, lo, hi); }
 
 std::set<std::string> parse_parts(const std::string &v) {
   std::set<std::string> parts;
