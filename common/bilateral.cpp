@@ -49,6 +49,25 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
   const int w = depth_in.width, h = depth_in.height;
   auto guide_at = [&luma](int qx, int qy) { return luma.ptr<uint8_t>(qy)[qx]; };
   auto depth_at = [&depth_in](int qx, int qy) { return depth_in.row(qy)[qx]; };
+  if (p.mode == BilateralMode::Separable) {
+    cv::Mat mid(h, w, CV_32FC1);
+    auto mid_at = [&mid](int qx, int qy) { return mid.ptr<float>(qy)[qx]; };
+    cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+      for (int y = rows.start; y < rows.end; ++y) {
+        float *out = mid.ptr<float>(y);
+        for (int x = 0; x < w; ++x)
+          out[x] = bilateral_pass_pixel(x, y, 1, 0, w, p.radius, space.data(), range.data(), guide_at, depth_at);
+      }
+    });
+    cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+      for (int y = rows.start; y < rows.end; ++y) {
+        float *out = depth_out.row(y);
+        for (int x = 0; x < w; ++x)
+          out[x] = bilateral_pass_pixel(x, y, 0, 1, h, p.radius, space.data(), range.data(), guide_at, mid_at);
+      }
+    });
+    return;
+  }
   cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       float *out = depth_out.row(y);

@@ -21,9 +21,22 @@
 //   sigma_space <= 0 or NaN -> radius 0 (the identity, the sigma_space -> 0 limit);
 //   sigma_range < 0 or NaN -> 0 (exact guide match only);
 //   tiny sigmas whose square underflows act as their -> 0 limit and huge
-//   ones (up to +inf) as a plain box / range-blind average.
+//   ones (up to +inf) as a plain box / range-blind average;
+//   a mode other than Separable -> Exact.
 // Summation order (both sides, bit-identical results): dy outer from -r to r,
 // dx inner from -r to r, window clipped to the image.
+//
+// mode = Separable: an approximation (Pham & van Vliet 2005) in two 1-D
+// passes of 2r+1 taps each instead of (2r+1)^2, with the same weights:
+//   mid(p) = sum_dx w(p, p+(dx,0)) depth(p+(dx,0)) / sum_dx w(p, p+(dx,0)),
+//   out(p) = sum_dy w(p, p+(0,dy)) mid(p+(0,dy))  / sum_dy w(p, p+(0,dy)),
+// dx (dy) from -r to r clipped to the image, w as above (the centre's guide
+// against the tap's). Where depth and guide vary along one axis only it
+// equals the exact filter up to float rounding (the window factorises);
+// elsewhere a pixel reaches a diagonal neighbour only through an L-shaped
+// path, so single pixels at depth corners can differ from the exact filter by
+// tens of levels, the mean by tenths of a level (docs/quality.md). Its time
+// grows linearly with the radius, the exact window's quadratically.
 #pragma once
 
 #include "frame.h"
@@ -33,10 +46,13 @@ namespace p3d {
 constexpr int kMaxBilateralRadius = 16;
 constexpr int kBilateralRangeTableSize = 256;  // |guide difference| 0..255
 
+enum class BilateralMode : int { Exact = 0, Separable = 1 };
+
 struct BilateralParams {
   int radius = 5;             // 0..kMaxBilateralRadius
   float sigma_space = 3.f;    // pixels, > 0
   float sigma_range = 12.f;   // 8-bit guide levels, >= 0
+  BilateralMode mode = BilateralMode::Exact;
 };
 
 // The parameters the filter really runs with (see the header comment).
@@ -48,6 +64,7 @@ inline BilateralParams bilateral_sanitize(const BilateralParams &p) {
     s.sigma_space = 1.f;  // unused at radius 0; canonical so equal inputs compare equal
   }
   if (!(p.sigma_range > 0.f)) s.sigma_range = 0.f;
+  if (p.mode != BilateralMode::Separable) s.mode = BilateralMode::Exact;
   return s;
 }
 
@@ -114,8 +131,31 @@ P3D_HD float bilateral_pixel(int x, int y, int width, int height, int radius, co
   return sum_wd / sum_w;
 }
 
+// One pass of the Separable mode at (x, y): taps along x (step_x 1, step_y 0,
+// `length` = width) or along y (0, 1, `length` = height), clipped to
+// 0..length-1, in ascending order. `space` is the (2r+1)^2 table; the 1-D
+// weights are its centre row, space(d, 0) = space(0, d). guide(qx, qy) and
+// depth(qx, qy) as for bilateral_pixel.
+template <typename GuideFn, typename DepthFn>
+P3D_HD float bilateral_pass_pixel(int x, int y, int step_x, int step_y, int length, int radius, const float *space,
+                                  const float *range, const GuideFn &guide, const DepthFn &depth) {
+  const int centre = guide(x, y);
+  const int pos = step_x ? x : y;
+  const int d0 = pos - radius < 0 ? -pos : -radius;
+  const int d1 = pos + radius > length - 1 ? length - 1 - pos : radius;
+  const float *space_row = space + radius * (2 * radius + 1) + radius;  // index by d
+  float sum_w = 0.f, sum_wd = 0.f;
+  for (int d = d0; d <= d1; ++d) {
+    const int qx = x + d * step_x, qy = y + d * step_y;
+    const int g = static_cast<int>(guide(qx, qy)) - centre;
+    bilateral_accumulate(space_row[d], range[g < 0 ? -g : g], depth(qx, qy), sum_w, sum_wd);
+  }
+  return sum_wd / sum_w;
+}
+
 // depth_in and depth_out may alias (the CPU copies the input first; the GPU
-// filter refuses). guide has the depth map's size (checked: cv::Exception
+// filter refuses). params.mode picks the exact window or the separable
+// passes (the CPU holds the row pass in a scratch image). guide has the depth map's size (checked: cv::Exception
 // otherwise). Empty images are a no-op.
 void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                           ImageView<float> depth_out);

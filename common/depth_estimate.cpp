@@ -82,18 +82,22 @@ void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blo
 void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
                      int block_size, const DepthParams &params, std::vector<float> &block_depth) {
   const size_t n = static_cast<size_t>(blocks_x) * blocks_y;
-  std::vector<uint32_t> hq(n), count(n, 0);
+  std::vector<uint32_t> hq(n), count(n, 0), max(n, 0);
   std::vector<uint64_t> sum(n, 0);
   for (int j = 0; j < blocks_y; ++j)
     for (int i = 0; i < blocks_x; ++i) {
       const size_t k = static_cast<size_t>(j) * blocks_x + i;
+      const int r = labels[k];
       hq[k] = block_hypothesis_q(params.hypothesis, i, j, block_size, width, height);
-      sum[labels[k]] += hq[k];
-      ++count[labels[k]];
+      sum[r] += hq[k];
+      ++count[r];
+      max[r] = std::max(max[r], hq[k]);
     }
   block_depth.resize(n);
-  for (size_t k = 0; k < n; ++k)
-    block_depth[k] = block_depth_value(params.region_weight, sum[labels[k]], count[labels[k]], hq[k]);
+  for (size_t k = 0; k < n; ++k) {
+    const int r = labels[k];
+    block_depth[k] = block_depth_value(params, sum[r], count[r], max[r], hq[k]);
+  }
 }
 
 void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x, int block_size,

@@ -17,9 +17,15 @@
 //  3. Hypothesis. h(block) = hypothesis evaluated at the block's centre
 //     (cx = (bx*B + min(B, W - bx*B) / 2.0) / W, likewise cy), see
 //     hypothesis_depth(). It is quantised hq = (uint32)(h * 65535 + 0.5).
-//  4. Region depth. r = (float)(sum of hq over the region's blocks, uint64) /
-//     (float)(block count) / 65535. Block depth
-//     b = region_weight * r + (1 - region_weight) * h_q, with h_q = hq / 65535.
+//  4. Region depth, from three exact integer reductions over the region's
+//     blocks: S = sum of hq (uint64), N = block count, M = max of hq (the
+//     block the hypothesis puts nearest: for top-bottom the region's lowest
+//     block, where an object stands on the ground). region_depth():
+//       r_mean = (float)S / (float)N / 65535, r_near = (float)M / 65535,
+//       r = ground_contact * r_near + (1 - ground_contact) * r_mean.
+//     Block depth b = region_weight * r + (1 - region_weight) * h_q, with
+//     h_q = hq / 65535 (block_depth_value()). ground_contact 0 is the
+//     region mean alone, bit for bit the estimator before the cue.
 //  5. Temporal (when the estimator has state from an earlier frame):
 //     diff = mean over blocks and channels of |feature - reference feature|
 //     (the reference is the last frame whose depth was computed, not reused).
@@ -55,7 +61,8 @@ struct DepthParams {
   Hypothesis hypothesis = Hypothesis::TopBottom;
   int block_size = 4;              // pixels, 2..64
   float edge_threshold = 24.f;     // L1 of 8-bit channel means; 0 = every block its own region
-  float region_weight = 0.75f;     // 0..1: share of the region mean in a block's depth
+  float region_weight = 0.9f;      // 0..1: share of the region's depth in a block's depth
+  float ground_contact = 1.f;      // 0..1: share of the region's nearest block (vs its mean), step 4
   float temporal_smoothing = 0.5f; // 0..0.99: weight of the previous depth (0 = none)
   float static_threshold = 0.5f;   // mean |difference| (8-bit levels) under which depth is reused
   float cut_threshold = 30.f;      // mean |difference| at or over which the history is dropped
@@ -114,11 +121,19 @@ P3D_HD uint32_t block_hypothesis_q(Hypothesis h, int bx, int by, int block, int 
   return static_cast<uint32_t>(v * 65535.f + 0.5f);
 }
 
-// Step 4: a block's depth from its region's hq sum and block count and its own hq.
-P3D_HD float block_depth_value(float region_weight, uint64_t region_sum, uint32_t region_count, uint32_t hq) {
-  const float r = static_cast<float>(region_sum) / static_cast<float>(region_count) / 65535.f;
+// Step 4: a region's depth from its hq sum, block count and largest hq.
+P3D_HD float region_depth(float ground_contact, uint64_t region_sum, uint32_t region_count, uint32_t region_max) {
+  const float r_mean = static_cast<float>(region_sum) / static_cast<float>(region_count) / 65535.f;
+  const float r_near = static_cast<float>(region_max) / 65535.f;
+  return ground_contact * r_near + (1.f - ground_contact) * r_mean;
+}
+
+// Step 4: a block's depth from its region's statistics and its own hq.
+P3D_HD float block_depth_value(const DepthParams &p, uint64_t region_sum, uint32_t region_count, uint32_t region_max,
+                               uint32_t hq) {
+  const float r = region_depth(p.ground_contact, region_sum, region_count, region_max);
   const float h_q = static_cast<float>(hq) / 65535.f;
-  return region_weight * r + (1.f - region_weight) * h_q;
+  return p.region_weight * r + (1.f - p.region_weight) * h_q;
 }
 
 // Step 5, the mean |difference|. A float sum would depend on the summation

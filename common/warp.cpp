@@ -1,7 +1,8 @@
 // CPU reference of the DIBR warp (common/warp.h). Rows are independent for
 // the warp and the Background fill, so each row is scattered, resolved and
 // filled by one cv::parallel_for_ task with its own key array; the
-// NeighborAverage fill is an image-wide Jacobi iteration, run afterwards.
+// NeighborAverage fill is an image-wide Jacobi iteration, and BackgroundSmooth
+// a row pass (anchors) and a column pass (run means), run afterwards.
 #include "warp.h"
 
 #include <algorithm>
@@ -85,8 +86,16 @@ void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vec
   }
 }
 
-// Warps one eye row by row; mask (W x H) receives the holes when not null.
-long long warp_eye(const WarpJob &j, const Eye &eye, std::vector<uint8_t> *mask) {
+// What the image-wide fills keep of the warp: the hole mask (W x H, 1 =
+// hole) and, for BackgroundSmooth, every pixel's key.
+struct EyeScratch {
+  std::vector<uint8_t> mask;
+  std::vector<unsigned long long> keys;
+};
+
+// Warps one eye row by row; scratch (when not null) receives the holes and,
+// if its key array is sized, the keys.
+long long warp_eye(const WarpJob &j, const Eye &eye, EyeScratch *scratch) {
   std::atomic<long long> holes{0};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
     std::vector<unsigned long long> keys(j.width);
@@ -97,12 +106,136 @@ long long warp_eye(const WarpJob &j, const Eye &eye, std::vector<uint8_t> *mask)
       const long long h = resolve_row(j, eye, y, keys);
       local += h;
       if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, right);
-      if (mask)
-        for (int X = 0; X < j.width; ++X) (*mask)[static_cast<size_t>(y) * j.width + X] = keys[X] == 0;
+      if (!scratch) continue;
+      const size_t base = static_cast<size_t>(y) * j.width;
+      for (int X = 0; X < j.width; ++X) scratch->mask[base + X] = keys[X] == 0;
+      if (!scratch->keys.empty()) std::copy(keys.begin(), keys.end(), scratch->keys.begin() + base);
     }
     holes += local;
   });
   return holes.load();
+}
+
+// BackgroundSmooth, pass 1 (rows): the fill region F (holes and ring pixels)
+// and every F pixel's anchor. state: 0 = not in F, 1 = in F without an
+// anchor, 2 = in F with anchor[i].
+void smooth_anchor_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, std::vector<uint8_t> &state,
+                        std::vector<Rgba> &anchor) {
+  const YuvToRgb packed;
+  const int W = j.width, H = j.height;
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &rows) {
+    std::vector<uint8_t> ring(W);
+    std::vector<int> right_clean(W), right_any(W);
+    for (int y = rows.start; y < rows.end; ++y) {
+      const size_t base = static_cast<size_t>(y) * W;
+      const uint8_t *row = &s.mask[base];
+      const uint8_t *up = y > 0 ? row - W : nullptr, *down = y + 1 < H ? row + W : nullptr;
+      for (int X = 0; X < W; ++X) ring[X] = smooth_is_ring(up, row, down, X, W);
+      int clean = -1, any = -1;
+      for (int X = W - 1; X >= 0; --X) {  // nearest clean / non-hole pixel right of X
+        right_clean[X] = clean;
+        right_any[X] = any;
+        if (!row[X]) {
+          any = X;
+          if (!ring[X]) clean = X;
+        }
+      }
+      clean = -1;
+      any = -1;
+      for (int X = 0; X < W; ++X) {
+        const bool in_f = row[X] || ring[X];
+        state[base + X] = in_f ? 1 : 0;
+        if (in_f) {
+          const int xl = smooth_side(clean, any), xr = smooth_side(right_clean[X], right_any[X]);
+          const int pick = background_source(X, xl, xl >= 0 ? s.keys[base + xl] : 0ull, xr,
+                                             xr >= 0 ? s.keys[base + xr] : 0ull);
+          if (pick >= 0) {
+            state[base + X] = 2;
+            anchor[base + X] = load_rgba(j.out, eye.col0 + pick, y, packed);
+          }
+        }
+        if (!row[X]) {
+          any = X;
+          if (!ring[X]) clean = X;
+        }
+      }
+    }
+  });
+}
+
+// BackgroundSmooth, pass 2 (columns): V of every F pixel, the anchors of its
+// column's run of F within +-R rows, from prefix sums over each run. Columns
+// are independent; a task takes a range of them.
+void smooth_column_sums(const WarpJob &j, const std::vector<uint8_t> &state, const std::vector<Rgba> &anchor, int R,
+                        std::vector<SmoothSum> &column) {
+  const int W = j.width, H = j.height;
+  cv::parallel_for_(cv::Range(0, W), [&](const cv::Range &cols) {
+    std::vector<SmoothSum> prefix(static_cast<size_t>(H) + 1);
+    for (int X = cols.start; X < cols.end; ++X) {
+      int y = 0;
+      while (y < H) {
+        if (!state[static_cast<size_t>(y) * W + X]) {
+          ++y;
+          continue;
+        }
+        const int a = y;  // the run is rows a..b
+        prefix[0] = SmoothSum{0, 0, 0, 0, 0};
+        for (; y < H && state[static_cast<size_t>(y) * W + X]; ++y) {
+          SmoothSum next = prefix[y - a];
+          const size_t i = static_cast<size_t>(y) * W + X;
+          if (state[i] == 2) smooth_add(next, anchor[i]);
+          prefix[y - a + 1] = next;
+        }
+        const int b = y - 1;
+        for (int t = a; t <= b; ++t)
+          column[static_cast<size_t>(t) * W + X] =
+              smooth_window(prefix[std::min(b, t + R) - a + 1], prefix[std::max(a, t - R) - a]);
+      }
+    }
+  });
+}
+
+// BackgroundSmooth, pass 3 (rows): every hole becomes the mean of the column
+// sums over its row's run of F within +-Rx columns.
+void smooth_fill_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, const std::vector<uint8_t> &state,
+                      const std::vector<SmoothSum> &column, int Rx) {
+  const int W = j.width, H = j.height;
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &rows) {
+    std::vector<SmoothSum> prefix(static_cast<size_t>(W) + 1);
+    for (int y = rows.start; y < rows.end; ++y) {
+      const size_t base = static_cast<size_t>(y) * W;
+      int X = 0;
+      while (X < W) {
+        if (!state[base + X]) {
+          ++X;
+          continue;
+        }
+        const int a = X;  // the run is columns a..b
+        prefix[0] = SmoothSum{0, 0, 0, 0, 0};
+        for (; X < W && state[base + X]; ++X) {
+          prefix[X - a + 1] = prefix[X - a];
+          smooth_add(prefix[X - a + 1], column[base + X]);
+        }
+        const int b = X - 1;
+        for (int t = a; t <= b; ++t) {
+          if (!s.mask[base + t]) continue;
+          const SmoothSum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
+          store_rgba(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
+        }
+      }
+    }
+  });
+}
+
+void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &s) {
+  const size_t n = static_cast<size_t>(j.width) * j.height;
+  std::vector<uint8_t> state(n);
+  std::vector<Rgba> anchor(n);
+  std::vector<SmoothSum> column(n);
+  const int R = smooth_fill_radius(eye.shift, j.D);
+  smooth_anchor_rows(j, eye, s, state, anchor);
+  smooth_column_sums(j, state, anchor, R, column);
+  smooth_fill_rows(j, eye, s, state, column, smooth_fill_radius_x(R));
 }
 
 // NeighborAverage: Jacobi steps ping-ponging between two hole masks (reads
@@ -158,9 +291,14 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
       continue;
     }
     const bool average = j.params.fill == HoleFill::NeighborAverage;
-    std::vector<uint8_t> mask(average ? static_cast<size_t>(j.width) * j.height : 0);
-    const long long h = warp_eye(j, eye, average ? &mask : nullptr);
-    if (average && h > 0) neighbour_average_fill(j, eye, mask, h);
+    const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
+    EyeScratch scratch;
+    const size_t n = static_cast<size_t>(j.width) * j.height;
+    if (average || smooth) scratch.mask.resize(n);
+    if (smooth) scratch.keys.resize(n);
+    const long long h = warp_eye(j, eye, average || smooth ? &scratch : nullptr);
+    if (average && h > 0) neighbour_average_fill(j, eye, scratch.mask, h);
+    if (smooth && h > 0) background_smooth_fill(j, eye, scratch);
     holes += h;
   }
   return holes;

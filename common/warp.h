@@ -41,7 +41,35 @@
 //    D == 0 both views are the source, copied.
 //
 // Hole filling (only pixels with key 0 are touched):
-//  * Background (default): take the nearest non-hole pixel to the left (XL)
+//  * BackgroundSmooth (default): the background side of each row, averaged
+//    down the column. Per rendered view:
+//     - Ring: a non-hole pixel with a hole among its 8 neighbours (inside the
+//       view) is a ring pixel: the warp's boundary pixels mix the colours of
+//       both surfaces (bilinear sampling across the depth edge, the source's
+//       own anti-aliasing), so they are not copied into holes. Holes and ring
+//       pixels form the fill region F.
+//     - Anchor of every pixel X of F in row y: CL = the nearest pixel left of
+//       X that is neither hole nor ring, or, when the row has none left of X,
+//       the nearest non-hole left of X; CR likewise to the right (-1: none).
+//       The anchor is the colour (rendered view, before filling) of
+//       background_source(X, CL, key(CL), CR, key(CR)): the farther side, as
+//       for Background. No non-hole on either side: the pixel has no anchor.
+//     - Column sums: every pixel (X, y) of F gets V(X, y), the per-channel
+//       sums and the count of the anchors in its column's run of F: the
+//       pixels (X, y') with |y' - y| <= R such that every pixel from y to y'
+//       is in F. R = smooth_fill_radius(): 1 + floor(|s| D / 2) rows, where
+//       s is the eye's shift factor (holes are at most |s| D pixels wide, so
+//       the averaging grows with them).
+//     - Every hole (X, y) becomes the per-channel rounded mean
+//       (sum + n/2) / n of the sums V(X', y) over its row's run of F: the
+//       pixels (X', y) with |X' - X| <= Rx = R / 4 (integer division) such
+//       that every pixel from X to X' is in F; n is the total count.
+//       n = 0: kFillBlack. Integer sums (uint32, no overflow for the
+//       largest R): the result does not depend on the order of summation.
+//    Ring pixels keep their own colour. Compared with Background, one noisy
+//    pixel no longer streaks along a row, and the colour of a disocclusion is
+//    the local mean of the background next to it (docs/quality.md).
+//  * Background: take the nearest non-hole pixel to the left (XL)
 //    and to the right (XR) in the same row of the rendered view; copy the
 //    colour of the farther one (smaller key depth; equal depth: the nearer in
 //    distance, then XL). One side missing: the other. Neither: black.
@@ -53,7 +81,7 @@
 //    rest becomes black). Neighbours are read back from the output view
 //    (load_rgba of the packed output), never across into the other view.
 //  * None: holes are painted kHoleColour (magenta) so they can be seen.
-// "Black" is kFillBlack (alpha 255). Background and NeighborAverage colours
+// "Black" is kFillBlack (alpha 255). Fill colours
 // are read back from the rendered output (load_rgba), so an RGBx/BGRx output
 // carries alpha 255 into the fill, like the GPU.
 #pragma once
@@ -65,7 +93,7 @@
 namespace p3d {
 
 enum class StereoView : int { Both = 0, Left = 1, Right = 2 };
-enum class HoleFill : int { Background = 0, NeighborAverage = 1, None = 2 };
+enum class HoleFill : int { Background = 0, NeighborAverage = 1, None = 2, BackgroundSmooth = 3 };
 
 constexpr float kMaxStretch = 2.f;  // a gap wider than 1 + this many pixels is a disocclusion
 constexpr Rgba kHoleColour = {255, 0, 255, 255};
@@ -76,7 +104,7 @@ struct WarpParams {
   float max_disparity = 3.f;   // percent of frame width, 0..kMaxDisparityPercent
   float convergence = 0.5f;    // depth that lands on the screen plane, 0..1
   StereoView view = StereoView::Both;
-  HoleFill fill = HoleFill::Background;
+  HoleFill fill = HoleFill::BackgroundSmooth;
 };
 
 // Disparity scale D in pixels for a frame width.
@@ -260,6 +288,78 @@ P3D_HD bool neighbour_average(const FrameView &out, int col0, const uint8_t *mas
   c->b = static_cast<uint8_t>((b + n / 2) / n);
   c->a = static_cast<uint8_t>((a + n / 2) / n);
   return true;
+}
+
+// ---- BackgroundSmooth ------------------------------------------------------
+
+// Vertical half-window R of BackgroundSmooth for an eye with shift factor
+// `shift` and disparity scale D (both sanitised, so |shift| D <= 0.25 * 8192
+// and R <= 1025); the horizontal half-window is smooth_fill_radius_x(R).
+P3D_HD int smooth_fill_radius(float shift, float D) {
+  const float w = (shift < 0.f ? -shift : shift) * D;
+  return 1 + static_cast<int>(w * 0.5f);
+}
+P3D_HD int smooth_fill_radius_x(int R) { return R / 4; }
+
+// Whether pixel X of a row is a ring pixel: not a hole, with a hole among its
+// 8 neighbours. up/row/down are the hole masks (non-zero = hole) of rows
+// y-1, y, y+1 of a view `width` wide; up/down are null outside the view.
+P3D_HD bool smooth_is_ring(const uint8_t *up, const uint8_t *row, const uint8_t *down, int X, int width) {
+  if (row[X]) return false;
+  const int x0 = X > 0 ? X - 1 : 0, x1 = X + 1 < width ? X + 1 : width - 1;
+  for (int x = x0; x <= x1; ++x)
+    if ((up && up[x]) || row[x] || (down && down[x])) return true;
+  return false;
+}
+
+// What the GPU keeps of a key for BackgroundSmooth: the depth bits
+// (key >> 32) of a covered pixel, or kSmoothHole for a hole (depth bits are
+// those of a float in [0, 1], never all ones). background_source() reads only
+// the depth of a key, so smooth_zbits_key() stands in for the full key.
+constexpr uint32_t kSmoothHole = 0xffffffffu;
+P3D_HD uint32_t smooth_zbits(unsigned long long key) {
+  return key == 0ull ? kSmoothHole : static_cast<uint32_t>(key >> 32);
+}
+P3D_HD bool smooth_zbits_hole(uint32_t z) { return z == kSmoothHole; }
+P3D_HD unsigned long long smooth_zbits_key(uint32_t z) { return (static_cast<unsigned long long>(z) << 32) | 1ull; }
+
+// Side of an anchor: the nearest clean pixel (neither hole nor ring) on that
+// side if there is one, else the nearest non-hole (-1: none).
+P3D_HD int smooth_side(int clean, int any) { return clean >= 0 ? clean : any; }
+
+// Integer sums of anchors (per channel) and their count. At most
+// (2 Rx + 1)(2 R + 1) < 2^21 anchors of 255 each: no uint32 overflows.
+struct SmoothSum {
+  unsigned int r, g, b, a, n;
+};
+P3D_HD void smooth_add(SmoothSum &s, Rgba c) {
+  s.r += c.r;
+  s.g += c.g;
+  s.b += c.b;
+  s.a += c.a;
+  s.n += 1u;
+}
+P3D_HD void smooth_add(SmoothSum &s, const SmoothSum &o) {
+  s.r += o.r;
+  s.g += o.g;
+  s.b += o.b;
+  s.a += o.a;
+  s.n += o.n;
+}
+// The sums of prefix[hi] minus prefix[lo] (a window of prefix sums).
+P3D_HD SmoothSum smooth_window(const SmoothSum &hi, const SmoothSum &lo) {
+  return SmoothSum{hi.r - lo.r, hi.g - lo.g, hi.b - lo.b, hi.a - lo.a, hi.n - lo.n};
+}
+// The rounded mean of a sum; kFillBlack for an empty one.
+P3D_HD Rgba smooth_mean(const SmoothSum &s) {
+  if (s.n == 0u) return kFillBlack;
+  const unsigned int h = s.n / 2u;
+  Rgba c;
+  c.r = static_cast<uint8_t>((s.r + h) / s.n);
+  c.g = static_cast<uint8_t>((s.g + h) / s.n);
+  c.b = static_cast<uint8_t>((s.b + h) / s.n);
+  c.a = static_cast<uint8_t>((s.a + h) / s.n);
+  return c;
 }
 
 // Whether the frames fit together: src W x H (W, H > 0), depth W x H, out

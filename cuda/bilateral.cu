@@ -158,6 +158,21 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
     depth_out.row(y)[x] = bilateral_pixel(x, y, w, h, R, s_space, s_range_sym + kRangeMid, guide_at, depth_at);
 }
 
+// Separable mode: one 1-D pass (along x when step_x, else along y), a
+// thread per pixel, bilateral_pass_pixel() straight from global memory (the
+// CPU reference's own function on the same tables: bit-identical).
+__global__ void separable_pass_kernel(FrameView guide, ImageView<const float> in, ImageView<float> out,
+                                      const float *tables, int radius, int step_x) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= in.width || y >= in.height) return;
+  const float *range = tables + kRangeMid;  // range[|g|], the centre of the symmetric table
+  const float *space = tables + kRangeSym;
+  auto guide_at = [&guide](int qx, int qy) { return load_luma(guide, qx, qy); };
+  auto depth_at = [&in](int qx, int qy) { return in.row(qy)[qx]; };
+  out.row(y)[x] = bilateral_pass_pixel(x, y, step_x, 1 - step_x, step_x ? in.width : in.height, radius, space, range,
+                                       guide_at, depth_at);
+}
+
 using KernelFn = void (*)(FrameView, ImageView<const float>, ImageView<float>, const float *);
 struct KernelEntry {
   KernelFn fn;
@@ -206,6 +221,18 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
       s.sigma_range != uploaded_.sigma_range)
     P3D_CUDA_TRY_STATUS(upload_tables(s, stream));
 
+  if (s.mode == BilateralMode::Separable) {
+    const int w = depth_in.width, h = depth_in.height;
+    P3D_CUDA_TRY_STATUS(mid_.ensure_2d(sizeof(float) * static_cast<size_t>(w), static_cast<size_t>(h)));
+    const ImageView<float> mid{mid_.as<float>(), w, h, mid_.pitch()};
+    const dim3 block(kBlockX, kBlockY), grid((w + kBlockX - 1) / kBlockX, (h + kBlockY - 1) / kBlockY);
+    separable_pass_kernel<<<grid, block, 0, stream>>>(guide, depth_in, mid, tables_.as<const float>(), s.radius, 1);
+    P3D_CUDA_TRY_LAUNCH(separable_pass_kernel);
+    separable_pass_kernel<<<grid, block, 0, stream>>>(guide, as_const(mid), depth_out, tables_.as<const float>(),
+                                                      s.radius, 0);
+    P3D_CUDA_TRY_LAUNCH(separable_pass_kernel);
+    return {};
+  }
   const KernelEntry &k = kKernels[s.radius];
   const dim3 block(kBlockX, kBlockY);
   const dim3 grid((depth_in.width + kBlockX - 1) / kBlockX, (depth_in.height + kOutY - 1) / kOutY);

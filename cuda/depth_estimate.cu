@@ -128,9 +128,10 @@ __device__ void load_feature(const float *__restrict__ features, int k, float ou
 // Tile pass: components inside one 32x32 tile of blocks, in shared memory.
 // The local index ly*32+lx orders a tile's blocks as the global index does, so
 // the local root maps to the tile-local smallest global index. Also clears the
-// region sums that the resolve pass accumulates into.
+// region sums, counts and maxima that the resolve pass accumulates into.
 __global__ void tile_labels_kernel(const float *__restrict__ features, int bx, int by, float edge_threshold,
-                                   int *labels, unsigned long long *region_sums, uint32_t *region_counts) {
+                                   int *labels, unsigned long long *region_sums, uint32_t *region_counts,
+                                   uint32_t *region_max) {
   __shared__ int parent[kTile * kTile];
   __shared__ float feat[kTile * kTile][3];
   const int lx = threadIdx.x, x0 = blockIdx.x * kTile, y0 = blockIdx.y * kTile;
@@ -156,6 +157,7 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, int bx, i
     labels[g] = (y0 + root / kTile) * bx + x0 + root % kTile;
     region_sums[g] = 0;
     region_counts[g] = 0;
+    region_max[g] = 0;
   }
 }
 
@@ -186,14 +188,15 @@ __global__ void border_labels_kernel(const float *__restrict__ features, int bx,
 
 // ------------------------------------------------------------- steps 3-4 ---
 // The merges are done: every block takes its root as label, and adds its hq
-// to the root's sum. Integer atomics make the sums exact in any order; they are
-// aggregated first (a whole CTA when it lies in one region, the common case,
-// else per warp and label) because a large region would otherwise put every
-// block's atomic on one address.
+// to the root's sum and count and raises the root's maximum (ground contact).
+// Integer atomics make the results exact in any order; they are aggregated
+// first (a whole CTA when it lies in one region, the common case, else per
+// warp and label) because a large region would otherwise put every block's
+// atomic on one address.
 __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int height, Hypothesis hypothesis,
-                               unsigned long long *region_sums, uint32_t *region_counts) {
+                               unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
   __shared__ int cta_root;
-  __shared__ uint32_t warp_sum[kThreads / 32], warp_count[kThreads / 32];
+  __shared__ uint32_t warp_sum[kThreads / 32], warp_count[kThreads / 32], warp_max[kThreads / 32];
   const int i = blockIdx.x * kThreads + threadIdx.x;
   const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
   const bool valid = i < n;
@@ -209,19 +212,23 @@ __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int
   if (__syncthreads_and(!valid || root == cta_root)) {
     const uint32_t s = __reduce_add_sync(kFullMask, hq);  // <= 256 * 65535: no overflow
     const uint32_t c = __popc(__ballot_sync(kFullMask, valid));
+    const uint32_t m = __reduce_max_sync(kFullMask, hq);  // invalid lanes hold 0
     if (lane == 0) {
       warp_sum[warp] = s;
       warp_count[warp] = c;
+      warp_max[warp] = m;
     }
     __syncthreads();
     if (threadIdx.x == 0) {
-      uint32_t total = 0, count = 0;
+      uint32_t total = 0, count = 0, top = 0;
       for (int w = 0; w < kThreads / 32; ++w) {
         total += warp_sum[w];
         count += warp_count[w];
+        top = max(top, warp_max[w]);
       }
       atomicAdd(&region_sums[cta_root], static_cast<unsigned long long>(total));
       atomicAdd(&region_counts[cta_root], count);
+      atomicMax(&region_max[cta_root], top);
     }
     return;
   }
@@ -234,9 +241,11 @@ __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int
     const bool mine = valid && root == r;
     const unsigned group = __ballot_sync(kFullMask, mine);
     const uint32_t s = __reduce_add_sync(kFullMask, mine ? hq : 0u);
+    const uint32_t m = __reduce_max_sync(kFullMask, mine ? hq : 0u);
     if (lane == leader) {
       atomicAdd(&region_sums[r], static_cast<unsigned long long>(s));
       atomicAdd(&region_counts[r], static_cast<uint32_t>(__popc(group)));
+      atomicMax(&region_max[r], m);
     }
     pending &= ~group;
   }
@@ -244,7 +253,8 @@ __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int
 
 // ------------------------------------------------------------- steps 4-5 ---
 __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigned long long *__restrict__ region_sums,
-                                   const uint32_t *__restrict__ region_counts, const float *__restrict__ features,
+                                   const uint32_t *__restrict__ region_counts, const uint32_t *__restrict__ region_max,
+                                   const float *__restrict__ features,
                                    float *__restrict__ ref, float *__restrict__ block_depth, DepthDeviceState *state,
                                    DepthParams params, bool have_state, int n, int bx, int B, int width, int height) {
   const int i = blockIdx.x * kThreads + threadIdx.x;
@@ -258,7 +268,7 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
   if (decision == TemporalDecision::Reuse) return;  // previous depth and reference stay
   const int label = labels[i];
   const uint32_t hq = block_hypothesis_q(params.hypothesis, i % bx, i / bx, B, width, height);
-  const float fresh = block_depth_value(params.region_weight, region_sums[label], region_counts[label], hq);
+  const float fresh = block_depth_value(params, region_sums[label], region_counts[label], region_max[label], hq);
   const float prev = decision == TemporalDecision::Smooth ? block_depth[i] : 0.f;  // a cut never reads stale memory
   block_depth[i] = temporal_output(decision, prev, fresh, params.temporal_smoothing);
   for (int c = 0; c < 3; ++c) ref[static_cast<size_t>(i) * 3 + c] = features[static_cast<size_t>(i) * 3 + c];
@@ -301,6 +311,7 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   P3D_CUDA_TRY_STATUS(labels_.ensure(nb * sizeof(int)));
   P3D_CUDA_TRY_STATUS(region_sums_.ensure(nb * sizeof(unsigned long long)));
   P3D_CUDA_TRY_STATUS(region_counts_.ensure(nb * sizeof(uint32_t)));
+  P3D_CUDA_TRY_STATUS(region_max_.ensure(nb * sizeof(uint32_t)));
   P3D_CUDA_TRY_STATUS(block_depth_.ensure(nb * sizeof(float)));
   P3D_CUDA_TRY_STATUS(state_.ensure(sizeof(DepthDeviceState)));
   auto *state = state_.as<DepthDeviceState>();
@@ -317,7 +328,7 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   const int tiles_x = blocks_along(bx, kTile), tiles_y = blocks_along(by, kTile);
   tile_labels_kernel<<<dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream>>>(
       features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(),
-      region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>());
+      region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(), region_max_.as<uint32_t>());
   P3D_CUDA_TRY_LAUNCH(tile_labels_kernel);
   const long long vertical_pairs = static_cast<long long>(tiles_x - 1) * by;
   const long long pairs = vertical_pairs + static_cast<long long>(tiles_y - 1) * bx;
@@ -330,12 +341,14 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   // Steps 3-4.
   resolve_kernel<<<grid_for(n, kThreads), kThreads, 0, stream>>>(labels_.as<int>(), n, bx, B, W, H, params.hypothesis,
                                                                  region_sums_.as<unsigned long long>(),
-                                                                 region_counts_.as<uint32_t>());
+                                                                 region_counts_.as<uint32_t>(),
+                                                                 region_max_.as<uint32_t>());
   P3D_CUDA_TRY_LAUNCH(resolve_kernel);
 
   // Steps 4-5.
   block_depth_kernel<<<grid_for(n, kThreads), kThreads, 0, stream>>>(
-      labels_.as<int>(), region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(), features_.as<float>(),
+      labels_.as<int>(), region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(),
+      region_max_.as<uint32_t>(), features_.as<float>(),
       ref_features_.as<float>(), block_depth_.as<float>(), state, params, same_grid, n, bx, B, W, H);
   P3D_CUDA_TRY_LAUNCH(block_depth_kernel);
 

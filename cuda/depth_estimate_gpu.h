@@ -9,8 +9,9 @@
 //   labels    union-find in shared memory per 32x32 tile of blocks, then
 //             across tile borders (atomicCAS hooking: a root only ever points
 //             to a smaller index, so roots are the smallest index, step 2)
-//   resolve   every block's root, and the region sums of hq with 64-bit
-//             integer atomics (steps 3-4, exact)
+//   resolve   every block's root, and the region sums of hq (64-bit), block
+//             counts and maxima of hq (ground contact) with integer atomics
+//             (steps 3-4, exact)
 //   depth     step 4 and the temporal step: every thread derives the decision
 //             from the device sum (same input, same function, same answer),
 //             thread 0 records it in the device state; the reference features
@@ -46,9 +47,9 @@ class DepthEstimatorGpu {
  private:
   // features_/ref_features_: 3 floats a block; labels_: int a block (the
   // union-find forest, then the labels); region_sums_: uint64 a block;
-  // region_counts_: uint32 a block; block_depth_: float a block, the output
+  // region_counts_, region_max_: uint32 a block; block_depth_: float a block, the output
   // of the last frame; state_: DepthDeviceState (depth_estimate.cu).
-  DeviceBuffer features_, ref_features_, labels_, region_sums_, region_counts_, block_depth_, state_;
+  DeviceBuffer features_, ref_features_, labels_, region_sums_, region_counts_, region_max_, block_depth_, state_;
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   bool have_state_ = false;
 };

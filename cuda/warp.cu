@@ -121,6 +121,7 @@ struct RowJob {
   unsigned long long *keys;
   int *first, *last, *before, *after;
   uint8_t *mask;  // NeighborAverage masks (2 eyes x H x W), or null
+  uint32_t *zbits;  // BackgroundSmooth: smooth_zbits() of every pixel (2 eyes x H x W), or null
   unsigned long long *total;
   int y, W, H, chunks;
 };
@@ -162,6 +163,7 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
       if (j.fill == HoleFill::None) store_rgba(j.out, col0 + X, j.y, kHoleColour);
     }
     if (mask_row) mask_row[X] = key == 0 ? 1 : 0;
+    if (j.zbits) j.zbits[(static_cast<size_t>(eye) * j.H + j.y) * j.W + X] = smooth_zbits(key);
   }
   if (holes) atomicAdd(row_holes, holes);
   __syncthreads();  // also publishes this row's colours to the fill below
@@ -183,7 +185,8 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
 template <bool kSharedKeys>
 __global__ void warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out,
                                 EyeShifts eyes, float D, float convergence, HoleFill fill,
-                                unsigned long long *global_keys, uint8_t *mask, unsigned long long *total) {
+                                unsigned long long *global_keys, uint8_t *mask, uint32_t *zbits,
+                                unsigned long long *total) {
   extern __shared__ unsigned long long smem[];
   __shared__ int row_holes;
   RowJob j;
@@ -204,6 +207,7 @@ __global__ void warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float
   j.before = j.last + j.chunks;
   j.after = j.before + j.chunks;
   j.mask = mask;
+  j.zbits = zbits;
   j.total = total;
   j.row.format = PixelFormat::RGBA;
   j.row.width = j.W;
@@ -245,6 +249,147 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
   if ((threadIdx.x & 31) == 0 && ballot != 0) atomicAdd(filled, static_cast<unsigned>(__popc(ballot)));
 }
 
+// ---- BackgroundSmooth (common/warp.h): three kernels after the row kernel,
+// which wrote smooth_zbits() of every pixel of the warped eyes. Scratch per
+// eye (W x H each): zbits (uint32), state (uint8: 0 not in F, 1 in F without
+// an anchor, 2 with one), anchor (Rgba), column sums V (SmoothSum). Integer
+// sums throughout, so every reduction order gives the CPU's result.
+
+// Predicate bits of a row pixel for the anchor search.
+constexpr uint8_t kNonHole = 1, kClean = 2;
+
+// Per-chunk first and last pixel whose predicate has `bit` (INT_MAX / -1:
+// none), one warp per chunk.
+__device__ void chunk_extremes_bit(const uint8_t *pred, uint8_t bit, int W, int chunks, int *first, int *last) {
+  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
+  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
+    const int X = c * 32 + lane;
+    const unsigned set = __ballot_sync(kFullMask, X < W && (pred[X] & bit));
+    if (lane == 0) {
+      first[c] = set ? c * 32 + __ffs(set) - 1 : INT_MAX;
+      last[c] = set ? c * 32 + 31 - __clz(set) : -1;
+    }
+  }
+}
+
+// Anchors of one row of one eye (block = row blockIdx.x, eye blockIdx.y).
+// Dynamic shared memory: hole flags of rows y-1, y, y+1 (3 W bytes), the
+// predicate row (W bytes), then 8 int arrays of one entry per chunk; each
+// part starts 16-byte aligned (smooth_anchor_smem()).
+__host__ __device__ size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
+size_t smooth_anchor_smem(int W) {
+  return align16(3 * static_cast<size_t>(W)) + align16(W) + 8 * sizeof(int) * static_cast<size_t>(row_chunks(W));
+}
+__global__ void smooth_anchor_kernel(FrameView out, int W, int H, EyeShifts eyes, const uint32_t *zbits,
+                                     uint8_t *state, Rgba *anchor) {
+  extern __shared__ unsigned char smem_bytes[];
+  const int y = blockIdx.x, eye = blockIdx.y;
+  if (eyes.shift[eye] == 0.f) return;  // a copied eye has no holes
+  const size_t plane = static_cast<size_t>(W) * H;
+  const uint32_t *z = zbits + eye * plane;
+  uint8_t *rows = smem_bytes;  // [0, W): row y-1, [W, 2W): row y, [2W, 3W): row y+1
+  uint8_t *pred = rows + align16(3 * static_cast<size_t>(W));
+  const int chunks = row_chunks(W);
+  int *arrays = reinterpret_cast<int *>(pred + align16(W));
+  int *first_any = arrays, *last_any = arrays + chunks, *before_any = arrays + 2 * chunks,
+      *after_any = arrays + 3 * chunks;
+  int *first_clean = arrays + 4 * chunks, *last_clean = arrays + 5 * chunks, *before_clean = arrays + 6 * chunks,
+      *after_clean = arrays + 7 * chunks;
+  for (int X = threadIdx.x; X < W; X += blockDim.x)
+    for (int r = 0; r < 3; ++r) {
+      const int yy = y - 1 + r;
+      rows[r * W + X] = yy >= 0 && yy < H && smooth_zbits_hole(z[static_cast<size_t>(yy) * W + X]) ? 1 : 0;
+    }
+  __syncthreads();
+  const uint8_t *up = y > 0 ? rows : nullptr, *row = rows + W, *down = y + 1 < H ? rows + 2 * W : nullptr;
+  for (int X = threadIdx.x; X < W; X += blockDim.x) {
+    const bool ring = smooth_is_ring(up, row, down, X, W);
+    pred[X] = row[X] ? 0 : static_cast<uint8_t>(kNonHole | (ring ? 0 : kClean));
+  }
+  __syncthreads();
+  chunk_extremes_bit(pred, kNonHole, W, chunks, first_any, last_any);
+  chunk_extremes_bit(pred, kClean, W, chunks, first_clean, last_clean);
+  __syncthreads();
+  if (threadIdx.x < 32)
+    chunk_neighbours(chunks, first_any, last_any, before_any, after_any);
+  else if (threadIdx.x < 64)
+    chunk_neighbours(chunks, first_clean, last_clean, before_clean, after_clean);
+  __syncthreads();
+  const YuvToRgb packed;
+  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
+  const uint32_t *zrow = z + static_cast<size_t>(y) * W;
+  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
+    const int X = c * 32 + lane;
+    const bool in = X < W;
+    const uint8_t p = in ? pred[X] : 0;
+    const unsigned any = __ballot_sync(kFullMask, in && (p & kNonHole));
+    const unsigned clean = __ballot_sync(kFullMask, in && (p & kClean));
+    if (!in) continue;
+    const size_t i = eye * plane + static_cast<size_t>(y) * W + X;
+    const bool in_f = row[X] || !(p & kClean);  // a hole or a ring pixel
+    if (!in_f) {
+      state[i] = 0;
+      continue;
+    }
+    const unsigned below = (1u << lane) - 1u, above = ~((2u << lane) - 1u);
+    const int l_any = (any & below) ? c * 32 + 31 - __clz(any & below) : before_any[c];
+    const int l_clean = (clean & below) ? c * 32 + 31 - __clz(clean & below) : before_clean[c];
+    const int r_any = (any & above) ? c * 32 + __ffs(any & above) - 1 : after_any[c];
+    const int r_clean = (clean & above) ? c * 32 + __ffs(clean & above) - 1 : after_clean[c];
+    const int xl = smooth_side(l_clean, l_any), xr = smooth_side(r_clean, r_any);
+    const int pick = background_source(X, xl, xl >= 0 ? smooth_zbits_key(zrow[xl]) : 0ull, xr,
+                                       xr >= 0 ? smooth_zbits_key(zrow[xr]) : 0ull);
+    state[i] = pick >= 0 ? 2 : 1;
+    if (pick >= 0) anchor[i] = load_rgba(out, eye * W + pick, y, packed);
+  }
+}
+
+// Column sums V: one thread per column of one eye walks the column once with
+// a sliding window [max(a, y - R), min(b, y + R)] over each run a..b of F.
+__global__ void smooth_column_kernel(int W, int H, EyeShifts eyes, int2 radius, const uint8_t *state,
+                                     const Rgba *anchor, SmoothSum *column) {
+  const int X = blockIdx.x * blockDim.x + threadIdx.x, eye = blockIdx.y;
+  if (X >= W || eyes.shift[eye] == 0.f) return;
+  const int R = eye == 0 ? radius.x : radius.y;
+  const size_t plane = static_cast<size_t>(W) * H, base = eye * plane + X;
+  auto at = [&](int y) { return base + static_cast<size_t>(y) * W; };
+  SmoothSum s = SmoothSum{0, 0, 0, 0, 0};
+  int lo = 0, hi = -1;  // the window holds the F rows lo..hi of the current run
+  for (int y = 0; y < H; ++y) {
+    if (!state[at(y)]) {
+      s = SmoothSum{0, 0, 0, 0, 0};
+      lo = y + 1;
+      hi = y;
+      continue;
+    }
+    while (hi < y + R && hi + 1 < H && state[at(hi + 1)]) {
+      ++hi;
+      if (state[at(hi)] == 2) smooth_add(s, anchor[at(hi)]);
+    }
+    while (lo < y - R) {
+      if (state[at(lo)] == 2) s = smooth_window(s, SmoothSum{anchor[at(lo)].r, anchor[at(lo)].g, anchor[at(lo)].b,
+                                                              anchor[at(lo)].a, 1u});
+      ++lo;
+    }
+    column[at(y)] = s;
+  }
+}
+
+// Every hole: the mean of V over its row's run of F within +-Rx.
+__global__ void smooth_row_kernel(FrameView out, int W, int H, EyeShifts eyes, int2 radius_x, const uint32_t *zbits,
+                                  const uint8_t *state, const SmoothSum *column) {
+  const int X = blockIdx.x * blockDim.x + threadIdx.x;
+  const int y = blockIdx.y, eye = blockIdx.z;
+  if (X >= W || eyes.shift[eye] == 0.f) return;
+  const size_t row = eye * static_cast<size_t>(W) * H + static_cast<size_t>(y) * W;
+  if (!smooth_zbits_hole(zbits[row + X])) return;
+  const int Rx = eye == 0 ? radius_x.x : radius_x.y;
+  SmoothSum s = column[row + X];
+  for (int t = X - 1; t >= 0 && t >= X - Rx && state[row + t]; --t) smooth_add(s, column[row + t]);
+  for (int t = X + 1; t < W && t <= X + Rx && state[row + t]; ++t) smooth_add(s, column[row + t]);
+  store_rgba(out, eye * W + X, y, smooth_mean(s));
+}
+
 __global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *mask) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
@@ -265,6 +410,7 @@ struct RowLaunch {
   HoleFill fill;
   unsigned long long *global_keys;
   uint8_t *mask;
+  uint32_t *zbits;
   unsigned long long *total;
   size_t smem;
   cudaStream_t stream;
@@ -277,7 +423,7 @@ CudaStatus launch_rows(const RowLaunch &l) {
                                       static_cast<int>(l.smem)));
   const int threads = l.src.width > 1024 ? 512 : 256;
   warp_row_kernel<kSharedKeys><<<l.src.height, threads, l.smem, l.stream>>>(
-      l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence, l.fill, l.global_keys, l.mask, l.total);
+      l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence, l.fill, l.global_keys, l.mask, l.zbits, l.total);
   P3D_CUDA_TRY_LAUNCH(warp_row_kernel);
   return {};
 }
@@ -297,6 +443,7 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   const float D = disparity_scale(p, W);
   const EyeShifts eyes{{warp_eye_shift(p, D, 0), warp_eye_shift(p, D, 1)}};
   const bool average = p.fill == HoleFill::NeighborAverage;
+  const bool smooth = p.fill == HoleFill::BackgroundSmooth;
 
   if (smem_optin_ < 0) {
     int dev = 0;
@@ -311,16 +458,24 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
                       __LINE__};
   if (!shared_keys) P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(unsigned long long)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
+  const size_t plane = 2 * static_cast<size_t>(W) * H;                                      // both eyes
+  if (smooth) P3D_CUDA_TRY_STATUS(smooth_.ensure(plane * kSmoothBytesPerPixel));
   P3D_CUDA_TRY_STATUS(counters_.ensure(kCountersBytes));
   uint8_t *counters = counters_.as<uint8_t>();
   auto *total = reinterpret_cast<unsigned long long *>(counters + kTotalOffset);
   P3D_CUDA_TRY(cudaMemsetAsync(counters, 0, kCountersBytes, stream));
 
   uint8_t *mask = average ? scratch_.as<uint8_t>() : nullptr;
+  // BackgroundSmooth scratch, both eyes each: column sums, anchors, zbits, states.
+  SmoothSum *column = smooth ? smooth_.as<SmoothSum>() : nullptr;
+  Rgba *anchor = smooth ? reinterpret_cast<Rgba *>(column + plane) : nullptr;
+  uint32_t *zbits = smooth ? reinterpret_cast<uint32_t *>(anchor + plane) : nullptr;
+  uint8_t *state = smooth ? reinterpret_cast<uint8_t *>(zbits + plane) : nullptr;
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill, keys_.as<unsigned long long>(), mask,
-                         total, smem, stream};
+                         zbits, total, smem, stream};
   P3D_CUDA_TRY_STATUS(shared_keys ? launch_rows<true>(launch) : launch_rows<false>(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
+  if (smooth) P3D_CUDA_TRY_STATUS(background_smooth(out, W, H, eyes.shift, D, zbits, state, anchor, column, stream));
 
   if (holes_out) {
     unsigned long long h = 0;
@@ -328,6 +483,30 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     P3D_CUDA_TRY(cudaStreamSynchronize(stream));
     *holes_out = static_cast<long long>(h);
   }
+  return {};
+}
+
+// BackgroundSmooth driver: anchors (a block per row and eye), column sums (a
+// thread per column and eye), row means (a thread per pixel). No host sync.
+CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H, const float shift[2], float D,
+                                              const uint32_t *zbits, uint8_t *state, Rgba *anchor, SmoothSum *column,
+                                              cudaStream_t stream) {
+  const EyeShifts eyes{{shift[0], shift[1]}};
+  const int R0 = smooth_fill_radius(shift[0], D), R1 = smooth_fill_radius(shift[1], D);
+  const size_t smem = smooth_anchor_smem(W);
+  if (smem > 48 * 1024)
+    P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_anchor_kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                      static_cast<int>(smem)));
+  smooth_anchor_kernel<<<dim3(H, 2), W > 1024 ? 512 : 256, smem, stream>>>(out, W, H, eyes, zbits, state, anchor);
+  P3D_CUDA_TRY_LAUNCH(smooth_anchor_kernel);
+  constexpr int kColumnThreads = 64;
+  smooth_column_kernel<<<dim3((W + kColumnThreads - 1) / kColumnThreads, 2), kColumnThreads, 0, stream>>>(
+      W, H, eyes, make_int2(R0, R1), state, anchor, column);
+  P3D_CUDA_TRY_LAUNCH(smooth_column_kernel);
+  constexpr int kRowThreads = 128;
+  smooth_row_kernel<<<dim3((W + kRowThreads - 1) / kRowThreads, H, 2), kRowThreads, 0, stream>>>(
+      out, W, H, eyes, make_int2(smooth_fill_radius_x(R0), smooth_fill_radius_x(R1)), zbits, state, column);
+  P3D_CUDA_TRY_LAUNCH(smooth_row_kernel);
   return {};
 }
 

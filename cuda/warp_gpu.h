@@ -12,6 +12,14 @@
 // for Background, fills the row's holes: per-32-pixel-chunk ballots plus a
 // chunk-level prefix max / suffix min give each hole its nearest non-holes,
 // O(W) per row, no host sync. An eye with shift 0 is copied.
+//  * BackgroundSmooth: the row kernel also writes smooth_zbits() of every
+//    pixel; then one block per row and eye finds the anchors (the 3x3 ring
+//    from the hole flags of rows y-1..y+1 in shared memory, nearest clean /
+//    non-hole pixels by chunk ballots as for Background), one thread per
+//    column and eye slides the +-R window down each run of F (column sums
+//    V), and one thread per hole sums V over +-Rx along its row run. No host
+//    sync. Scratch: kSmoothBytesPerPixel per pixel and eye. NOT YET RUN ON A
+//    GPU (written and compiled on a machine without one).
 //  * NeighborAverage: afterwards, Jacobi steps ping-ponging two hole masks,
 //    in batches of kWarpFillBatch steps; after each batch the host reads the
 //    per-step fill counts (a stream sync) to stop when no hole is left or a
@@ -28,6 +36,8 @@ namespace p3d {
 
 // NeighborAverage steps launched between two host checks of the counters.
 constexpr int kWarpFillBatch = 8;
+// BackgroundSmooth scratch per pixel and eye: SmoothSum, Rgba, zbits, state.
+constexpr size_t kSmoothBytesPerPixel = sizeof(SmoothSum) + sizeof(Rgba) + sizeof(uint32_t) + 1;
 
 class WarpRendererGpu {
  public:
@@ -41,11 +51,15 @@ class WarpRendererGpu {
 
  private:
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
+  CudaStatus background_smooth(const FrameView &out, int W, int H, const float shift[2], float D,
+                               const uint32_t *zbits, uint8_t *state, Rgba *anchor, SmoothSum *column,
+                               cudaStream_t stream);
 
   // keys_: 2 eyes x H x W keys, only for rows too wide for shared memory.
   // counters_: total holes, per-step fill counts. scratch_: the two
-  // NeighborAverage hole masks (2 eyes x H x W bytes each).
-  DeviceBuffer keys_, counters_, scratch_;
+  // NeighborAverage hole masks (2 eyes x H x W bytes each). smooth_: the
+  // BackgroundSmooth planes (column sums, anchors, zbits, states; 2 eyes).
+  DeviceBuffer keys_, counters_, scratch_, smooth_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
 };
 

@@ -10,7 +10,7 @@
 #   aloe-sbs-half.jpg          half side-by-side (pipelines/image-to-sbs.sh layout=side-by-side-half)
 #   aloe-right-comparison.jpg  left view, ground-truth depth, right view synthesized
 #                              by the elements, real right view; only when the Aloe
-#                              test has left build/test-output/aloe-right-background-RGBA.png
+#                              test has left build/test-output/aloe-right-background-smooth-RGBA.png
 #                              (scripts/run-tests.sh writes it)
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -58,7 +58,7 @@ trap 'rm -rf "$tmp"' EXIT
 pipelines/image-to-anaglyph.sh data/aloeL.jpg "$tmp/anaglyph.png"
 pipelines/image-to-sbs.sh data/aloeL.jpg "$tmp/sbs-half.png" layout=side-by-side-half
 build/tools/pseudo3d-depthmap data/aloeL.jpg "$tmp/depth.png"
-synth=build/test-output/aloe-right-background-RGBA.png
+synth=build/test-output/aloe-right-background-smooth-RGBA.png
 mkdir -p "$img"
 
 "$py" - "$top" "$tmp" "$img" "$width" "$synth" <<'PY'

@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 LEVEL = 255.0  # depth errors are reported in 8-bit grey levels
 FILL_STYLE = {
+    "background-smooth": ("tab:purple", "D"),
     "background": ("tab:blue", "o"),
     "neighbor-average": ("tab:green", "s"),
     "none": ("tab:red", "^"),
@@ -136,38 +137,62 @@ def synthesis_section(rows):
     for r in sorted(synth, key=lambda r: (r["radius"], list(FILL_STYLE).index(r["fill"]))):
         filt = "GT as is" if r["radius"] == 0 else f"r {r['radius']}, sigma_s {fmt(r['sigma_space'], 1)}"
         lines.append([filt, r["fill"], fmt(r["psnr"]), fmt(r["ssim"], 4), fmt(r["psnr_masked"]),
-                      fmt(100 * r["hole_fraction"], 1), fmt(r["filter_ms"], 1), fmt(r["warp_ms"], 1),
-                      fmt(r["time_ms"], 1)])
+                      fmt(r.get("psnr_holes")), fmt(100 * r["hole_fraction"], 1), fmt(r["filter_ms"], 1),
+                      fmt(r["warp_ms"], 1), fmt(r["time_ms"], 1)])
     if base:
         b = base[0]
         lines.append(["(no warp: aloeL as is)", "-", fmt(b["psnr"]), fmt(b["ssim"], 4), fmt(b["psnr_masked"]),
-                      "-", "-", "-", "-"])
-    out = [table(["depth filter", "fill", "PSNR dB", "SSIM", "PSNR dB, known corr.", "holes %", "filter ms",
-                  "warp ms", "total ms"], lines)]
+                      "-", "-", "-", "-", "-"])
+    out = [table(["depth filter", "fill", "PSNR dB", "SSIM", "PSNR dB, known corr.", "PSNR dB, holes", "holes %",
+                  "filter ms", "warp ms", "total ms"], lines)]
     get = {(r["radius"], r["fill"]): r for r in synth}
     notes = []
-    bg0, bg5 = get.get((0, "background")), get.get((5, "background"))
+    sm0, bg0 = get.get((0, "background-smooth")), get.get((0, "background"))
+    sm5 = get.get((5, "background-smooth"))
     na0 = get.get((0, "neighbor-average"))
-    if bg0 and base:
-        notes.append(f"The warp with the true depth and background fill scores {fmt(bg0['psnr'])} dB / SSIM "
-                     f"{fmt(bg0['ssim'], 3)}, {fmt(bg0['psnr'] - base[0]['psnr'])} dB over the unwarped left view; "
-                     f"on the pixels with a known correspondence it reaches {fmt(bg0['psnr_masked'])} dB. "
-                     f"{fmt(100 * outside_share(bg0), 0)} % of the squared error lies in the other "
-                     f"{fmt(100 * (1 - bg0['mask_fraction']), 0)} % of the picture, mostly the "
-                     f"{fmt(100 * bg0['hole_fraction'], 1)} % the warp leaves as holes: disocclusions, the right "
-                     f"border band and the gaps beside unknown-GT pixels (GT 0, so they stay put as far).")
-    if bg0 and na0:
-        notes.append(f"Neighbour averaging (the paper's inpainting) changes PSNR by {sfmt(na0['psnr'] - bg0['psnr'])} dB "
-                     f"and SSIM by {sfmt(na0['ssim'] - bg0['ssim'], 4)} against background fill (smooth colour in "
-                     f"the holes suits SSIM, the wrong colour costs PSNR), at "
-                     f"{fmt(na0['warp_ms'] / bg0['warp_ms'], 1)}x its warp time (iterations scale with the hole "
-                     f"width); `none` shows the unfilled holes (magenta) for scale.")
-    if bg0 and bg5:
-        notes.append(f"Filtering the true depth does not help: radius 5 costs {fmt(bg0['psnr'] - bg5['psnr'])} dB "
-                     f"overall and {fmt(bg0['psnr_masked'] - bg5['psnr_masked'])} dB on known correspondences, since "
+    if sm0 and bg0 and base:
+        notes.append(f"The warp with the true depth scores {fmt(sm0['psnr'])} dB / SSIM {fmt(sm0['ssim'], 3)} with the "
+                     f"default fill (background-smooth), against {fmt(bg0['psnr'])} dB / {fmt(bg0['ssim'], 3)} with "
+                     f"background ({sfmt(sm0['psnr'] - bg0['psnr'])} dB, {sfmt(sm0['ssim'] - bg0['ssim'], 4)} SSIM); "
+                     f"{fmt(sm0['psnr'] - base[0]['psnr'])} dB over the unwarped left view. On the pixels with a known "
+                     f"correspondence it reaches {fmt(sm0['psnr_masked'])} dB; "
+                     f"{fmt(100 * outside_share(sm0), 0)} % of the squared error lies in the other "
+                     f"{fmt(100 * (1 - sm0['mask_fraction']), 0)} % of the picture, mostly the "
+                     f"{fmt(100 * sm0['hole_fraction'], 1)} % the warp leaves as holes (disocclusions, the right border "
+                     f"band, the gaps beside unknown-GT pixels), where it scores {fmt(sm0['psnr_holes'])} dB against "
+                     f"{fmt(bg0['psnr_holes'])} dB for background.")
+    if sm0 and na0:
+        notes.append(f"Neighbour averaging (the paper's inpainting) scores {fmt(na0['psnr'])} dB / "
+                     f"{fmt(na0['ssim'], 3)} at {fmt(na0['warp_ms'] / sm0['warp_ms'], 1)}x the default's warp time "
+                     f"(iterations scale with the hole width); `none` shows the unfilled holes (magenta) for scale.")
+    if sm0 and sm5:
+        notes.append(f"Filtering the true depth does not help: radius 5 costs {fmt(sm0['psnr'] - sm5['psnr'])} dB "
+                     f"overall and {fmt(sm0['psnr_masked'] - sm5['psnr_masked'])} dB on known correspondences, since "
                      f"it rounds the depth steps the GT has exactly (and spreads its unknown = 0 pixels). The filter "
                      f"is there for estimated, blocky depth, whose edges it moves onto image edges.")
     return out + [""] + notes
+
+
+def bounds_section(rows):
+    bounds = of_kind(rows, "synthesis_bound")
+    if not bounds:
+        return ["No bounds in this run."]
+    lines = [["aloeR itself" if r["blur_sigma"] == 0 else f"aloeR blurred, sigma {fmt(r['blur_sigma'], 0)}",
+              fmt(r["psnr"]), fmt(r["ssim"], 4), fmt(r["psnr_holes"])] for r in bounds]
+    out = [table(["in the GT warp's holes", "PSNR dB", "SSIM", "PSNR dB, holes"], lines)]
+    get = {r["blur_sigma"]: r for r in bounds}
+    smooth = next((r for r in of_kind(rows, "synthesis") if r["fill"] == "background-smooth" and r["radius"] == 0),
+                  None)
+    if 4.0 in get and smooth:
+        out += ["", f"A fill sees nothing of the real right view in its holes. Even aloeR blurred with sigma 4 pixels "
+                f"in the holes scores SSIM {fmt(get[4.0]['ssim'], 3)}, and sigma 16 {fmt(get[16.0]['ssim'], 3)}: SSIM's "
+                f"11-pixel window rewards detail only where it matches the real view, and detail that does not match "
+                f"(texture copied from the background, noise) scores lower than none. The default fill's SSIM "
+                f"({fmt(smooth['ssim'], 3)}) sits at the level of the blurred truth's; what is left to gain is "
+                f"matching structure (exemplar inpainting, a learned model), not smoothness. In PSNR the fill reaches "
+                f"{fmt(smooth['psnr_holes'])} dB in the holes, against {fmt(get[16.0]['psnr_holes'])} dB for the "
+                f"truth blurred with sigma 16."]
+    return out
 
 
 def filter_section(rows):
@@ -197,14 +222,16 @@ def filter_section(rows):
                              f"{fmt(sep['time_ms'], 1)} ms against {fmt(e['time_ms'], 1)} ms "
                              f"({fmt(e['time_ms'] / sep['time_ms'], 1)}x faster), off by {fmt(sep['mean_abs'] * LEVEL, 2)} "
                              f"levels on average and {fmt(sep['max_abs'] * LEVEL, 0)} at worst.")
-    gt5 = [r for r in variants if r["input"] == "ground-truth" and r["radius"] == 5 and "synth_psnr" in r]
+    gt5 = [r for r in variants if r["input"] == "ground-truth" and r["radius"] == 5 and r.get("synth_psnr")]
     if gt5:
         spread = max(r["synth_psnr"] for r in gt5) - min(r["synth_psnr"] for r in gt5)
         notes.append(f"Through the warp the variants are within {fmt(spread, 3)} dB of the exact filter's right "
                      f"view at radius 5, although single pixels can be off by tens of levels: at a depth edge, a "
                      f"tap pattern that skips a thin structure (stride 2) or reaches it only through an L-shaped "
                      f"path (separable) can weigh the other side of the edge. The separable pass is the cheapest; "
-                     f"its time grows linearly with the radius, the exact window's quadratically.")
+                     f"its time grows linearly with the radius, the exact window's quadratically. It is "
+                     f"`BilateralParams::mode = Separable` in common/bilateral.h (CPU and GPU); stride 2 stays a "
+                     f"study in tools/quality/filter_variants.cpp.")
     return out + [""] + notes
 
 
@@ -212,24 +239,53 @@ def depth_section(rows):
     ranks = of_kind(rows, "depth_rank")
     if not ranks:
         return ["No depth-rank measurements in this run."]
-    lines = [[r["hypothesis"], fmt(r["edge_threshold"], 0), fmt(r["region_weight"], 2), r["filter_radius"],
-              fmt(r["spearman"], 3), fmt(r["time_ms"], 1)] for r in ranks]
-    out = [table(["hypothesis", "edge_threshold", "region_weight", "filter radius", "Spearman rho", "ms"], lines)]
-    best = max((r for r in ranks if r["spearman"] is not None), key=lambda r: r["spearman"], default=None)
-    default = next((r for r in ranks if r["hypothesis"] == "top-bottom" and r["edge_threshold"] == 24
-                    and r["region_weight"] == 0.75 and r["filter_radius"] == 5), None)
+    key = lambda r: (r["cue"], r["hypothesis"], r["block_size"], r["edge_threshold"], r["region_weight"],
+                     r["ground_contact"], r["filter_radius"])
+    half = {key(r): r for r in ranks if r.get("scale") == "half"}
+    lines = []
+    for r in ranks:
+        if r.get("scale") != "full":
+            continue
+        h = half.get(key(r))
+        lines.append([r["cue"], r["hypothesis"], r["block_size"], fmt(r["edge_threshold"], 0),
+                      fmt(r["region_weight"], 2), fmt(r["ground_contact"], 2), r["filter_radius"],
+                      fmt(r["spearman"], 3), fmt(h["spearman"], 3) if h else "-", fmt(r["time_ms"], 1)])
+    full0 = next((r for r in ranks if r.get("scale") == "full"), {})
+    half0 = next((r for r in ranks if r.get("scale") == "half"), {})
+    out = [f"Full size {full0.get('width', '?')}x{full0.get('height', '?')}, half size "
+           f"{half0.get('width', '?')}x{half0.get('height', '?')}; each row moves one cue away from the defaults "
+           f"(`previous`: the defaults before the ground-contact cue, ground_contact 0 and region_weight 0.75).", "",
+           table(["cue", "hypothesis", "block_size", "edge_threshold", "region_weight", "ground_contact",
+                  "filter radius", "rho full", "rho half", "ms (full)"], lines)]
+    get = {(r["scale"], r["cue"], r["block_size"], r["ground_contact"], r["region_weight"], r["edge_threshold"]): r
+           for r in ranks if r["hypothesis"] == "top-bottom" and r["filter_radius"] == 5}
+    d = {s: next((r for r in ranks if r.get("scale") == s and r["cue"] == "defaults"), None) for s in ("full", "half")}
+    p = {s: next((r for r in ranks if r.get("scale") == s and r["cue"] == "previous"), None) for s in ("full", "half")}
+    b2 = {s: next((r for r in ranks if r.get("scale") == s and r["cue"] == "block_size" and r["block_size"] == 2),
+                  None) for s in ("full", "half")}
     notes = []
-    if default:
-        notes.append(f"With the defaults (top-bottom, edge_threshold 24, region_weight 0.75, filter radius 5) the "
-                     f"estimated depth ranks Aloe's pixels with rho = {fmt(default['spearman'], 3)} against the "
-                     f"true disparity. The hypothesis decides most of it; edge_threshold and region_weight move rho "
-                     f"by a few hundredths, and the filter hardly changes the ranking (it moves block edges onto "
-                     f"image edges, a few pixels). Flat has no ordering (n/a).")
-    if best:
-        notes.append(f"Best here: {best['hypothesis']}, edge_threshold {fmt(best['edge_threshold'], 0)}, "
-                     f"region_weight {fmt(best['region_weight'], 2)}, radius {best['filter_radius']} "
-                     f"(rho {fmt(best['spearman'], 3)}). One scene is one scene: in Aloe the pot and the floor at "
-                     f"the bottom are nearest and the backdrop behind the plant is far, which suits top-bottom.")
+    if d["full"] and p["full"] and d["half"] and p["half"]:
+        notes.append(f"Ground contact (a region takes the hypothesis of its nearest block: for top-bottom its lowest "
+                     f"one, where an object stands on the ground) with region_weight 0.9 raises rho from "
+                     f"{fmt(p['full']['spearman'], 3)} to {fmt(d['full']['spearman'], 3)} at full size and from "
+                     f"{fmt(p['half']['spearman'], 3)} to {fmt(d['half']['spearman'], 3)} at half size. The cue "
+                     f"depends on regions staying whole: at half size the 4-pixel blocks are twice as coarse "
+                     f"relative to the picture, thin leaves break away from the plant and each takes its own "
+                     f"contact.")
+    if b2["full"] and b2["half"]:
+        notes.append(f"Block size 2 keeps them whole at half size too (rho {fmt(b2['half']['spearman'], 3)}, "
+                     f"{fmt(b2['full']['spearman'], 3)} at full size), but doubles the static-background flicker on "
+                     f"vtest.avi (below): 2x2 blocks of 4:2:0 video carry one chroma sample and twice the noise of "
+                     f"4x4 ones, so region edges flip from frame to frame and fewer frames are reused. The default "
+                     f"stays 4.")
+    notes.append("The other cues: region_weight moves rho monotonically (the more a block takes its region's value, "
+                 "the more the ground contact counts); edge_threshold has a broad optimum around 24-32 and collapses "
+                 "at 48, where the backdrop merges with the floor and one region spans the picture; the filter "
+                 "hardly changes the ranking (it moves block edges onto image edges, a few pixels). Flat has no "
+                 "ordering (n/a). One scene is one scene: in Aloe the pot and the floor are nearest and the plant "
+                 "stands in front of a backdrop, which suits top-bottom and the ground contact; a scene whose ground "
+                 "is one region reaching the bottom of the picture gets that whole region near (vtest.avi's lawn "
+                 "and road), the depth then separates objects from the ground less by height in the picture.")
     return out + [""] + notes
 
 
@@ -240,33 +296,53 @@ def flicker_section(rows):
         return [f"Flicker not measured: {errors[0]['error']}"]
     if not flick:
         return ["No flicker measurements in this run."]
-    lines = [[r["stage"], fmt(r["temporal_smoothing"], 2), fmt(r["mean_abs"] * LEVEL, 3), fmt(r["p95_abs"] * LEVEL, 3),
+    lines = [[r.get("setting", "defaults"), r["stage"], fmt(r["temporal_smoothing"], 2),
+              fmt(r["mean_abs"] * LEVEL, 3), fmt(r["p95_abs"] * LEVEL, 3),
               fmt(r["worst_frame_mean_abs"] * LEVEL, 3), fmt(100 * r["share_over_1_level"], 2),
-              fmt(r["mean_abs_all_pixels"] * LEVEL, 3), f"{r['cuts']}/{r['smoothed']}/{r['reused']}",
-              fmt(r["time_ms"], 1)] for r in flick]
+              fmt(r["mean_abs_all_pixels"] * LEVEL, 3), fmt(r.get("depth_std", float("nan")) * LEVEL, 1),
+              f"{r['cuts']}/{r['smoothed']}/{r['reused']}", fmt(r["time_ms"], 1)] for r in flick]
     f0 = flick[0]
     out = [f"{f0['frames']} frames of {f0['video']} ({f0['width']}x{f0['height']}, decoded by OpenCV's "
            f"{f0.get('decoder') or '?'} backend); static background = "
            f"{fmt(100 * f0['mask_fraction'], 1)} % of the pixels (luma standard deviation under "
-           f"{fmt(f0['static_std_levels'], 0)} levels over the run). Changes in 8-bit depth levels (1 level = 1/255).",
+           f"{fmt(f0['static_std_levels'], 0)} levels over the run). Changes in 8-bit depth levels (1 level = 1/255); "
+           f"depth std = the spatial standard deviation of each depth map, averaged over the frames (how much of the "
+           f"depth range the setting uses).",
            "",
-           table(["depth", "temporal_smoothing", "mean abs change", "p95", "worst frame mean", "% changes >= 1 level",
-                  "mean abs change, all pixels", "cut/smooth/reuse", "ms/frame"], lines)]
-    get = {(r["stage"], r["temporal_smoothing"]): r for r in flick}
-    off, on = get.get(("filtered", 0.0)), get.get(("filtered", 0.5))
-    if off and on and off["mean_abs"] > 0:
-        out += ["", f"The depth the warp receives changes by {fmt(off['mean_abs'] * LEVEL, 3)} levels per frame on "
-                f"the static background without smoothing and {fmt(on['mean_abs'] * LEVEL, 3)} with the default 0.5 "
-                f"({fmt(100 * (1 - on['mean_abs'] / off['mean_abs']), 0)} % less); 95 % of the changes are under "
-                f"{fmt(off['p95_abs'] * LEVEL, 2)} and {fmt(on['p95_abs'] * LEVEL, 2)} levels, and only "
-                f"{fmt(100 * off['share_over_1_level'], 2)} % and {fmt(100 * on['share_over_1_level'], 2)} % reach "
-                f"one level. Background blocks move at all because a block takes region_weight of its region's "
-                f"mean: when a walker's blocks join or leave the large background region, that mean shifts and "
-                f"every block of the region with it. Smoothing spreads such a step over several frames (so slightly "
-                f"more, smaller changes reach one level); its cost is lag on moving objects, which this "
-                f"measurement does not see. Frames that hardly change reuse the previous depth outright "
-                f"({on['reused']} of {on['frames']} here), with or without smoothing."]
-    return out
+           table(["setting", "depth", "temporal_smoothing", "mean abs change", "p95", "worst frame mean",
+                  "% changes >= 1 level", "mean abs change, all pixels", "depth std", "cut/smooth/reuse",
+                  "ms/frame"], lines)]
+    get = {(r.get("setting", "defaults"), r["stage"], r["temporal_smoothing"]): r for r in flick}
+    on, off = get.get(("defaults", "filtered", 0.5)), get.get(("defaults", "filtered", 0.0))
+    prev, fine = get.get(("previous", "filtered", 0.5)), get.get(("block_size 2", "filtered", 0.5))
+    notes = []
+    if on and prev:
+        notes.append(f"With the default smoothing (0.5) the depth the warp receives changes by "
+                     f"{fmt(on['mean_abs'] * LEVEL, 3)} levels per frame on the static background, against "
+                     f"{fmt(prev['mean_abs'] * LEVEL, 3)} before the ground-contact cue; 95 % of the changes are under "
+                     f"{fmt(on['p95_abs'] * LEVEL, 2)} levels (before: {fmt(prev['p95_abs'] * LEVEL, 2)}) and "
+                     f"{fmt(100 * on['share_over_1_level'], 2)} % reach one level (before: "
+                     f"{fmt(100 * prev['share_over_1_level'], 2)} %). The cue changes the kind of flicker: a region's "
+                     f"depth no longer follows its mean, which moved a little with every block that joined or left it, "
+                     f"but its nearest block, which holds still until a block joins below it and then jumps. The "
+                     f"maps also use more of the depth range (std {fmt(on['depth_std'] * LEVEL, 1)} levels against "
+                     f"{fmt(prev['depth_std'] * LEVEL, 1)}). Over all pixels, walkers included, the change grows "
+                     f"from {fmt(prev['mean_abs_all_pixels'] * LEVEL, 2)} to "
+                     f"{fmt(on['mean_abs_all_pixels'] * LEVEL, 2)} levels per frame: a walker now takes the depth of "
+                     f"its feet and stands out from the ground behind it, so the pixels it passes change depth; that "
+                     f"is depth contrast on moving objects, not flicker of static ones, but it is more motion in the "
+                     f"depth.")
+    if fine:
+        notes.append(f"Block size 2 (which keeps Aloe's regions whole at half size) flickers by "
+                     f"{fmt(fine['mean_abs'] * LEVEL, 3)} levels per frame, {fmt(100 * fine['share_over_1_level'], 2)} % "
+                     f"of the changes reaching one level, and reuses {fine['reused']} frames against "
+                     f"{on['reused'] if on else '?'} (noisier block means).")
+    if on and off and off["mean_abs"] > 0:
+        notes.append(f"Temporal smoothing still halves the flicker ({fmt(off['mean_abs'] * LEVEL, 3)} levels without, "
+                     f"{fmt(on['mean_abs'] * LEVEL, 3)} with 0.5); its cost is lag on moving objects, which this "
+                     f"measurement does not see. Frames that hardly change reuse the previous depth outright "
+                     f"({on['reused']} of {on['frames']} here), with or without smoothing.")
+    return out + [""] + notes
 
 
 def report(rows, md, png_rel, data_rel):
@@ -274,7 +350,7 @@ def report(rows, md, png_rel, data_rel):
     parts = [
         "# Quality against run time",
         "",
-        f"Generated by `scripts/quality-report.sh` (tools/pseudo3d_quality.cpp, scripts/plot_quality.py) on "
+        f"Generated by `scripts/quality-report.sh` (tools/quality/, scripts/plot_quality.py) on "
         f"{run.get('date', '?')}, commit `{run.get('git') or '?'}`, {run.get('cpu', '?')} with "
         f"{threads(run)}, OpenCV {run.get('opencv', '?')}. Raw data: "
         f"[{os.path.basename(data_rel)}]({data_rel}).",
@@ -284,7 +360,8 @@ def report(rows, md, png_rel, data_rel):
         "## How it is measured",
         "",
         "Everything runs the CPU reference code of `common/` (the CUDA kernels compute the same functions, so the "
-        "errors hold for the GPU too; their times are in [benchmarks.md](benchmarks.md)). Times are wall-clock "
+        "errors hold for the GPU too; their times are in [benchmarks.md](benchmarks.md)). All times here are CPU "
+        "times (this machine's cores, not a GPU). Times are wall-clock "
         f"medians of {run.get('runs', '?')} runs, taken round-robin across the configurations of a table so that "
         "a burst of other load slows them alike; the machine is shared: read them as ratios, not absolutes.",
         "",
@@ -295,23 +372,33 @@ def report(rows, md, png_rel, data_rel):
         "0.6 radius, which is the element's default 3 at radius 5). PSNR and SSIM against aloeR over the whole "
         "picture; \"known corr.\" is PSNR over the right-view pixels some known-GT left pixel lands on "
         "(x - GT(x), one-pixel gaps closed), which leaves out disocclusions, the right border band and unknown-GT "
-        "areas. Time = filter + warp (`warp_render_cpu` renders both views; the left is a copy).",
-        "* **Filter variants.** The exact windowed filter (`bilateral_filter_cpu`) against two approximations "
-        "implemented in the tool with the same weight tables and threading: *stride2* (only taps with even dx, dy: "
-        "a quarter of the window) and *separable* (a 1D cross-bilateral pass along rows, then along columns, "
-        "each against the centre's guide: 2(2r+1) taps). Inputs: the estimator's depth of aloeL (what the element "
-        "filters) and the GT depth (which also goes through the warp, background fill).",
+        "areas; \"holes\" is PSNR over the pixels the warp leaves as holes. Time = filter + warp "
+        "(`warp_render_cpu` renders both views; the left is a copy). The bounds put aloeR itself (sharp or "
+        "blurred) into the holes of the GT warp.",
+        "* **Filter variants.** The exact windowed filter (`bilateral_filter_cpu`, mode Exact) against two "
+        "approximations with the same weight tables and threading: *separable* (mode Separable of "
+        "common/bilateral.h: a 1D cross-bilateral pass along rows, then along columns, each against the centre's "
+        "guide: 2(2r+1) taps) and *stride2* (a study in tools/quality/: only taps with even dx, dy, a quarter of "
+        "the window). Inputs: the estimator's depth of aloeL (what the element filters) and the GT depth (which "
+        "also goes through the warp, default fill).",
         "* **Depth estimation.** `DepthEstimatorCpu` + the default filter on aloeL; Spearman rank correlation "
         "(ties get their average rank) with aloeGT over a fixed random sample of 50,000 known-GT pixels "
-        "(disparity grows with nearness, like depth).",
+        "(disparity grows with nearness, like depth), at full size and at half size (aloeL INTER_AREA-downscaled, "
+        "the GT sampled nearest).",
         "* **Flicker.** vtest.avi (static camera, people walking) decoded with cv::VideoCapture and fed as I420; "
         "mean |depth(t) - depth(t-1)| over the static-background mask, per frame pair, averaged; p95 of all those "
         "per-pixel changes. `estimate` is the estimator's output, `filtered` what the warp receives. "
-        "temporal_smoothing 0 still reuses the depth of frames that hardly change (static_threshold 0.5).",
+        "temporal_smoothing 0 still reuses the depth of frames that hardly change (static_threshold 0.5). "
+        "Settings: the defaults at three smoothings, `previous` (the defaults before the ground-contact cue) and "
+        "block_size 2.",
         "",
         "## View synthesis (Aloe right view)",
         "",
         *synthesis_section(rows),
+        "",
+        "### What a fill can reach",
+        "",
+        *bounds_section(rows),
         "",
         "## Bilateral filter: exact vs faster variants",
         "",

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Measures error against run time on real data and writes the report:
-#   docs/quality.jsonl           raw measurements (tools/pseudo3d_quality.cpp)
+#   docs/quality.jsonl           raw measurements (tools/quality/, one file per study)
 #   docs/quality.md              tables and what they say
 #   docs/img/quality-vs-time.png PSNR vs time of view synthesis, filter error vs time
 # Builds pseudo3d-quality in build/ (BUILDDIR=... for another folder) and

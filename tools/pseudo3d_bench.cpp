@@ -34,6 +34,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench_gpu.h"  // types only unless P3D_BENCH_GPU
+#include "cli_args.h"
 #include "json_line.h"
 
 namespace p3d::bench {
@@ -79,8 +80,10 @@ const std::map<std::string, PackLayout> kLayouts = {
     {"left", PackLayout::Left},
     {"right", PackLayout::Right}};
 
-const std::map<std::string, HoleFill> kFills = {
-    {"background", HoleFill::Background}, {"neighbor-average", HoleFill::NeighborAverage}, {"none", HoleFill::None}};
+const std::map<std::string, HoleFill> kFills = {{"background-smooth", HoleFill::BackgroundSmooth},
+                                                {"background", HoleFill::Background},
+                                                {"neighbor-average", HoleFill::NeighborAverage},
+                                                {"none", HoleFill::None}};
 
 template <typename T>
 std::string name_of(const std::map<std::string, T> &table, T value) {
@@ -102,7 +105,7 @@ void print_usage(std::ostream &os) {
         "                          checkerboard, left, right\n"
         "  --radius N              bilateral radius (default 5)\n"
         "  --max-disparity P       percent of width (default 3)\n"
-        "  --fill F                background (default), neighbor-average, none\n"
+        "  --fill F                background-smooth (default), background, neighbor-average, none\n"
         "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
         "  --warmup N              GPU warm-up iterations (default 10; CPU always 1)\n"
         "  --cpu-threads N         OpenCV worker threads for the CPU timings\n"
@@ -112,19 +115,9 @@ void print_usage(std::ostream &os) {
         "Exit status: 0 ok, 1 runtime/CUDA error, 2 GPU requested but none usable, 64 bad usage.\n";
 }
 
-[[noreturn]] void usage_error(const std::string &msg) {
-  std::cerr << "pseudo3d-bench: " << msg << "\n";
-  print_usage(std::cerr);
-  std::exit(kExitUsage);
-}
-
-int parse_int(const std::string &opt, const std::string &v, int lo, int hi) {
-  char *end = nullptr;
-  const long n = std::strtol(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0' || n < lo || n > hi)
-    usage_error(opt + " wants an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" + v + "'");
-  return static_cast<int>(n);
-}
+const p3d::tools::Cli kCli("pseudo3d-bench", print_usage, kExitUsage);
+[[noreturn]] void usage_error(const std::string &msg) { kCli.fail(msg); }
+int parse_int(const std::string &opt, const std::string &v, int lo, int hi) { return kCli.integer(opt, v, lo, hi); }
 
 float parse_float(const std::string &opt, const std::string &v) {
   char *end = nullptr;

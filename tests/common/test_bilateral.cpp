@@ -1,5 +1,6 @@
 // CPU cross-bilateral filter: known answers, degenerate parameters, sizes
-// and every guide format, against an independent double-precision reference.
+// and every guide format, against an independent double-precision reference;
+// the Separable mode against its own two-pass reference and the exact filter.
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -289,6 +290,113 @@ TEST(BilateralCpu, FormatsWithTheSameLumaGiveTheSameResult) {
     EXPECT_TRUE(bit_equal(rgba, filter(p, HostFrame::from_bgr(crop, f, 3), depth))) << test::format_name(f);
   EXPECT_TRUE(bit_equal(filter(p, HostFrame::from_bgr(crop, PixelFormat::NV12, 1), depth),
                         filter(p, HostFrame::from_bgr(crop, PixelFormat::I420, 2), depth)));
+}
+
+// ---- Separable mode -------------------------------------------------------------
+
+BilateralParams separable(int radius, float sigma_space, float sigma_range) {
+  BilateralParams p{radius, sigma_space, sigma_range};
+  p.mode = BilateralMode::Separable;
+  return p;
+}
+
+// One pass of the Separable mode written out in double with exp(): taps
+// along x (along_x) or y over `in` (CV_64FC1), weighted against the centre's guide.
+cv::Mat reference_pass(const BilateralParams &p, const FrameView &guide, const cv::Mat &in, bool along_x) {
+  const int r = p.radius, length = along_x ? in.cols : in.rows;
+  cv::Mat out(in.size(), CV_64FC1);
+  for (int y = 0; y < in.rows; ++y)
+    for (int x = 0; x < in.cols; ++x) {
+      const int gc = load_luma(guide, x, y), pos = along_x ? x : y;
+      double sw = 0, swd = 0;
+      for (int q = std::max(0, pos - r); q <= std::min(length - 1, pos + r); ++q) {
+        const int qx = along_x ? q : x, qy = along_x ? y : q, d = q - pos, g = load_luma(guide, qx, qy) - gc;
+        const double ws = d == 0 ? 1.0 : std::exp(-double(d * d) / (2.0 * p.sigma_space * p.sigma_space));
+        const double wr = p.sigma_range > 0 ? std::exp(-double(g * g) / (2.0 * p.sigma_range * p.sigma_range))
+                                            : (g == 0 ? 1.0 : 0.0);
+        sw += ws * wr;
+        swd += ws * wr * in.at<double>(qy, qx);
+      }
+      out.at<double>(y, x) = swd / sw;
+    }
+  return out;
+}
+
+// The two passes of common/bilateral.h: rows, then columns of the result.
+cv::Mat separable_reference(const BilateralParams &p, const FrameView &guide, const cv::Mat &depth) {
+  cv::Mat in;
+  depth.convertTo(in, CV_64FC1);
+  return reference_pass(p, guide, reference_pass(p, guide, in, true), false);
+}
+
+TEST(BilateralSeparable, MatchesTheTwoPassDefinition) {
+  for (const cv::Size sz : {cv::Size(53, 41), cv::Size(1, 1), cv::Size(3, 2), cv::Size(1, 9), cv::Size(9, 1)})
+    for (int r : {1, 5, 16}) {
+      HostFrame guide(PixelFormat::NV12, sz.width, sz.height, 3);
+      guide.fill_random(60 + r);
+      const cv::Mat depth = random_depth(sz.width, sz.height, 61 + r);
+      const BilateralParams p = separable(r, 0.6f * r + 0.5f, 20.f);
+      const cv::Mat out = filter(p, guide, depth);
+      EXPECT_TRUE(all_finite(out));
+      EXPECT_LE(max_abs_diff(out, separable_reference(p, guide.view(), depth)), kRefTol) << sz << " r=" << r;
+    }
+}
+
+// Depth and guide that vary along x only: the column pass averages equal
+// values with equal guides, and the exact window factorises into the row
+// pass, so both modes give the same map (up to float rounding).
+TEST(BilateralSeparable, EqualsTheExactFilterForOneAxisImages) {
+  const int w = 64, h = 24;
+  cv::Mat luma(h, w, CV_8UC1), depth(h, w, CV_32FC1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      luma.at<uint8_t>(y, x) = static_cast<uint8_t>(x < 30 ? 40 + x : 200 - x);
+      depth.at<float>(y, x) = x < 30 ? 0.2f + 0.01f * x : 0.9f - 0.005f * x;
+    }
+  const HostFrame guide = luma_guide(luma);
+  const cv::Mat exact = filter(BilateralParams{6, 3.f, 12.f}, guide, depth);
+  const cv::Mat sep = filter(separable(6, 3.f, 12.f), guide, depth);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) ASSERT_NEAR(sep.at<float>(y, x), exact.at<float>(y, x), 1e-6) << x << "," << y;
+}
+
+// A depth corner (one quadrant near) under a matching guide: the separable
+// passes keep the corner where the guide has it, like the exact filter, and
+// a constant map comes back unchanged.
+TEST(BilateralSeparable, KeepsGuidedEdgesAndConstants) {
+  const int w = 40, h = 30;
+  cv::Mat luma(h, w, CV_8UC1, cv::Scalar(30)), depth(h, w, CV_32FC1, cv::Scalar(0.1f));
+  luma(cv::Rect(20, 15, 20, 15)).setTo(cv::Scalar(220));
+  depth(cv::Rect(20, 15, 20, 15)).setTo(cv::Scalar(0.8f));
+  const HostFrame guide = luma_guide(luma);
+  const cv::Mat sep = filter(separable(5, 3.f, 12.f), guide, depth);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) ASSERT_NEAR(sep.at<float>(y, x), depth.at<float>(y, x), 1e-5) << x << "," << y;
+  const cv::Mat flat(h, w, CV_32FC1, cv::Scalar(0.37f));
+  HostFrame noisy(PixelFormat::RGBA, w, h, 0);
+  noisy.fill_random(70);
+  const cv::Mat out = filter(separable(7, 4.f, 10.f), noisy, flat);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) ASSERT_NEAR(out.at<float>(y, x), 0.37f, 1e-6);
+}
+
+TEST(BilateralSeparable, RadiusZeroInPlaceThreadsAndSanitise) {
+  HostFrame guide(PixelFormat::BGRA, 37, 23, 0);
+  guide.fill_random(71);
+  cv::Mat depth = random_depth(37, 23, 72);
+  EXPECT_TRUE(bit_equal(filter(separable(0, 3.f, 12.f), guide, depth), depth));
+  const BilateralParams p = separable(4, 2.f, 15.f);
+  const cv::Mat expected = filter(p, guide, depth);
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  EXPECT_TRUE(bit_equal(filter(p, guide, depth), expected));
+  cv::setNumThreads(threads);
+  bilateral_filter_cpu(p, guide.view(), as_const(depth_view_of(depth)), depth_view_of(depth));
+  EXPECT_TRUE(bit_equal(depth, expected));
+  BilateralParams odd = p;
+  odd.mode = static_cast<BilateralMode>(7);
+  EXPECT_EQ(bilateral_sanitize(odd).mode, BilateralMode::Exact);
+  EXPECT_EQ(bilateral_sanitize(p).mode, BilateralMode::Separable);
 }
 
 }  // namespace

@@ -139,11 +139,13 @@ TEST(DepthRegions, TwoFlatHalvesGiveTwoRegions) {
   EXPECT_TRUE(all_finite(depth));
 }
 
+// ground_contact 0: the region's depth is the mean of its blocks' hq.
 TEST(DepthRegions, UniformFrameIsOneRegionWithMeanHypothesis) {
   const int W = 40, H = 24, B = 4;  // 10 x 6 blocks
   DepthParams p;
   p.block_size = B;
   p.region_weight = 1.f;
+  p.ground_contact = 0.f;
   DepthEstimatorCpu est;
   const cv::Mat depth = estimate(est, p, solid(W, H, cv::Scalar(40, 90, 160)));
   for (int l : est.labels()) EXPECT_EQ(l, 0);
@@ -284,6 +286,7 @@ TEST(DepthEstimator, RegionDepthIsMeanOverRegion) {
   DepthParams p;
   p.block_size = 8;  // 8 x 2 blocks: 2 columns of blocks in the left region
   p.region_weight = 1.f;
+  p.ground_contact = 0.f;
   p.hypothesis = Hypothesis::LeftRight;
   DepthEstimatorCpu est;
   estimate(est, p, HostFrame::from_bgr(bgr, PixelFormat::BGRA, kPad));
@@ -292,6 +295,74 @@ TEST(DepthEstimator, RegionDepthIsMeanOverRegion) {
   left /= 2;
   right /= 6;
   for (int k = 0; k < 16; ++k) EXPECT_NEAR(est.block_depth()[k], k % 8 < 2 ? left : right, 1e-6) << k;
+}
+
+// Ground contact: a region takes the hypothesis of its nearest block (the
+// largest hq). Top-bottom: a grey square standing on a black floor touches it
+// at its lowest block row, so the whole square gets that row's depth, and
+// the floor its own lowest row; ground_contact 0.5 and region_weight 0.5
+// blend as step 4 says, in float, operation by operation.
+TEST(DepthEstimator, GroundContactTakesTheRegionsNearestBlock) {
+  const int W = 64, H = 48, B = 4;  // 16 x 12 blocks; the square is blocks (4..7, 2..6)
+  cv::Mat bgr(H, W, CV_8UC3, cv::Scalar(0, 0, 0));
+  bgr(cv::Rect(16, 8, 16, 20)).setTo(cv::Scalar(200, 200, 200));
+  const HostFrame f = HostFrame::from_bgr(bgr, PixelFormat::BGRA, kPad);
+  DepthParams p;
+  p.block_size = B;
+  p.region_weight = 1.f;
+  p.ground_contact = 1.f;
+  DepthEstimatorCpu est;
+  estimate(est, p, f);
+  const float square = static_cast<float>(quantised(centre(6, B, H)));
+  const float floor = static_cast<float>(quantised(centre(11, B, H)));
+  for (int j = 0; j < 12; ++j)
+    for (int i = 0; i < 16; ++i) {
+      const bool in = i >= 4 && i <= 7 && j >= 2 && j <= 6;
+      EXPECT_EQ(est.block_depth()[j * 16 + i], in ? square : floor) << i << "," << j;
+    }
+  // Blends, against the formula of step 4 (region sums written out here).
+  p.ground_contact = 0.5f;
+  p.region_weight = 0.5f;
+  DepthEstimatorCpu est2;
+  estimate(est2, p, f);
+  uint64_t sq_sum = 0, fl_sum = 0;
+  uint32_t sq_n = 0, fl_n = 0;
+  for (int j = 0; j < 12; ++j)
+    for (int i = 0; i < 16; ++i) {
+      const uint32_t hq = block_hypothesis_q(Hypothesis::TopBottom, i, j, B, W, H);
+      const bool in = i >= 4 && i <= 7 && j >= 2 && j <= 6;
+      (in ? sq_sum : fl_sum) += hq;
+      ++(in ? sq_n : fl_n);
+    }
+  for (int j = 0; j < 12; ++j)
+    for (int i = 0; i < 16; ++i) {
+      const bool in = i >= 4 && i <= 7 && j >= 2 && j <= 6;
+      const uint32_t hq = block_hypothesis_q(Hypothesis::TopBottom, i, j, B, W, H);
+      const float r_mean = static_cast<float>(in ? sq_sum : fl_sum) / static_cast<float>(in ? sq_n : fl_n) / 65535.f;
+      const float r_near = (in ? square : floor);
+      const float r = 0.5f * r_near + (1.f - 0.5f) * r_mean;
+      const float want = 0.5f * r + (1.f - 0.5f) * (static_cast<float>(hq) / 65535.f);
+      EXPECT_EQ(est2.block_depth()[j * 16 + i], want) << i << "," << j;
+    }
+  // The helpers: ground_contact 0 is the region mean bit for bit, 1 the maximum.
+  EXPECT_EQ(region_depth(0.f, 3 * 65535ull, 4, 65535), static_cast<float>(3 * 65535ull) / 4.f / 65535.f);
+  EXPECT_EQ(region_depth(1.f, 12345, 7, 40000), 40000.f / 65535.f);
+}
+
+// The cue follows the hypothesis: with left-right the nearest block of a
+// region is its rightmost one.
+TEST(DepthEstimator, GroundContactFollowsTheHypothesis) {
+  cv::Mat bgr(16, 64, CV_8UC3, cv::Scalar(0, 200, 0));
+  bgr.colRange(0, 16).setTo(cv::Scalar(250, 250, 250));
+  DepthParams p;
+  p.block_size = 8;  // 8 x 2 blocks: block columns 0-1 and 2-7
+  p.region_weight = 1.f;
+  p.ground_contact = 1.f;
+  p.hypothesis = Hypothesis::LeftRight;
+  DepthEstimatorCpu est;
+  estimate(est, p, HostFrame::from_bgr(bgr, PixelFormat::BGRA, kPad));
+  for (int k = 0; k < 16; ++k)
+    EXPECT_EQ(est.block_depth()[k], static_cast<float>(quantised(centre(k % 8 < 2 ? 1 : 7, 8, 64)))) << k;
 }
 
 // ------------------------------------------------------------- temporal ---

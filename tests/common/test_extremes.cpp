@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -257,16 +258,22 @@ constexpr Hypothesis kAllHypotheses[] = {Hypothesis::TopBottom, Hypothesis::Left
                                          Hypothesis::Flat};
 
 // Block depths of a frame that is one region: every block gets
-// region_weight * (mean hq) + (1 - region_weight) * its own hq.
+// region_weight * r + (1 - region_weight) * its own hq, r the ground-contact
+// blend of the largest and the mean hq of all blocks.
 std::vector<float> one_region_block_depth(const DepthParams &p, int w, int h) {
   const int B = effective_block_size(p), bx = blocks_along(w, B), by = blocks_along(h, B);
   std::vector<uint32_t> hq(static_cast<size_t>(bx) * by);
   uint64_t sum = 0;
+  uint32_t max = 0;
   for (int j = 0; j < by; ++j)
-    for (int i = 0; i < bx; ++i) sum += hq[static_cast<size_t>(j) * bx + i] = block_hypothesis_q(p.hypothesis, i, j, B, w, h);
+    for (int i = 0; i < bx; ++i) {
+      const uint32_t q = hq[static_cast<size_t>(j) * bx + i] = block_hypothesis_q(p.hypothesis, i, j, B, w, h);
+      sum += q;
+      max = std::max(max, q);
+    }
   std::vector<float> out(hq.size());
   for (size_t k = 0; k < hq.size(); ++k)
-    out[k] = block_depth_value(p.region_weight, sum, static_cast<uint32_t>(hq.size()), hq[k]);
+    out[k] = block_depth_value(p, sum, static_cast<uint32_t>(hq.size()), max, hq[k]);
   return out;
 }
 
@@ -452,8 +459,9 @@ TEST(ExtremeDepth, TemporalExtremes) {
 
 // One 8K frame (the largest size the plugin is meant for): a uniform grey is
 // one region of 1920 x 1080 blocks. TopBottom with region_weight 1 gives the
-// mean of the block centres, 0.5 (quantisation aside), everywhere; with
-// region_weight 0 every pixel gets its block row's centre.
+// mean of the block centres, 0.5 (quantisation aside), everywhere with
+// ground_contact 0 and the lowest block row's centre with ground_contact 1;
+// with region_weight 0 every pixel gets its block row's centre.
 TEST(ExtremeDepth, Frame8K) {
   const int W = 7680, H = 4320;
   HostFrame frame(PixelFormat::RGBA, W, H);
@@ -461,6 +469,7 @@ TEST(ExtremeDepth, Frame8K) {
   DepthParams p;
   p.hypothesis = Hypothesis::TopBottom;
   p.region_weight = 1.f;
+  p.ground_contact = 0.f;
   const DepthResult mean = estimate(p, frame);
   ASSERT_TRUE(depth_ok(mean.depth));
   EXPECT_TRUE(all_labels(mean.labels, 0));
@@ -468,6 +477,12 @@ TEST(ExtremeDepth, Frame8K) {
   cv::minMaxLoc(mean.depth, &lo, &hi);
   EXPECT_EQ(lo, hi);
   EXPECT_NEAR(lo, 0.5, 1e-5);
+
+  p.ground_contact = 1.f;
+  const DepthResult nearest = estimate(p, frame);
+  cv::minMaxLoc(nearest.depth, &lo, &hi);
+  EXPECT_EQ(lo, hi);
+  EXPECT_NEAR(lo, (H - 2.0) / H, 0.5 / 65535 + 1e-6);
 
   p.region_weight = 0.f;
   const DepthResult own = estimate(p, frame);
@@ -634,7 +649,7 @@ TEST(ExtremeWarp, DepthOnTheScreenPlaneCopiesTheSource) {
         for (float conv : {0.f, 0.5f, 1.f})
           for (StereoView v : kAllViews) {
             ++i;
-            const WarpParams p = warp_params(i % 2 ? 25.f : 1e9f, conv, v, kAllFills[i % 3]);
+            const WarpParams p = warp_params(i % 2 ? 25.f : 1e9f, conv, v, kAllFills[i % std::size(kAllFills)]);
             SCOPED_TRACE(::testing::Message() << test::format_name(f) << " " << pattern_name(pat) << " "
                                               << size_name(s) << " convergence " << conv << " view " << int(v)
                                               << " max_disparity " << p.max_disparity << " fill " << int(p.fill));

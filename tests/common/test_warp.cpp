@@ -1,6 +1,7 @@
 // DIBR warp (common/warp.h): known shifts (integer and sub-pixel), view
 // directions, depth ordering, disocclusion filling from the background,
-// NeighborAverage against a naive Jacobi written here, hole counts, every
+// NeighborAverage against a naive Jacobi written here, BackgroundSmooth
+// against a brute-force reading of its specification, hole counts, every
 // source and output format, edge sizes, extreme and invalid parameters.
 #include <cmath>
 #include <cstring>
@@ -430,17 +431,30 @@ HostFrame naive_neighbour_average(const HostFrame &none_render) {
   return out;
 }
 
-void expect_neighbour_average_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
+// A fill against its naive reference, which gets the fill=none rendering
+// (holes magenta), the parameters and the depth.
+using NaiveFill = std::function<HostFrame(const WarpParams &, const HostFrame &none_render, const cv::Mat &depth)>;
+void expect_fill_matches_naive(HoleFill fill, const NaiveFill &naive, const WarpParams &base, const HostFrame &src,
+                               const cv::Mat &depth) {
   WarpParams p = base;
   p.fill = HoleFill::None;
   const Rendered none = render(p, src, depth);
-  p.fill = HoleFill::NeighborAverage;
-  const Rendered avg = render(p, src, depth);
-  EXPECT_EQ(avg.holes, none.holes);
-  EXPECT_EQ(count_colour(avg.out, kHoleColour), 0);
-  const HostFrame want = naive_neighbour_average(none.out);
+  p.fill = fill;
+  const Rendered got = render(p, src, depth);
+  EXPECT_EQ(got.holes, none.holes);
+  EXPECT_GT(got.holes, 0);
+  EXPECT_EQ(count_colour(got.out, kHoleColour), 0);
+  const HostFrame want = naive(p, none.out, depth);
   for (int eye = 0; eye < 2; ++eye)
-    EXPECT_TRUE(view_is(avg.out, eye, [&](int x, int y) { return view_at(want, eye, x, y); }));
+    EXPECT_TRUE(view_is(got.out, eye, [&](int x, int y) { return view_at(want, eye, x, y); }));
+}
+
+void expect_neighbour_average_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
+  expect_fill_matches_naive(HoleFill::NeighborAverage,
+                            [](const WarpParams &, const HostFrame &none, const cv::Mat &) {
+                              return naive_neighbour_average(none);
+                            },
+                            base, src, depth);
 }
 
 TEST(WarpFill, NeighborAverageFillsAllHoles) {
@@ -459,6 +473,227 @@ TEST(WarpFill, NeighborAverageOfOneColourIsThatColour) {
                             square_depth());
   EXPECT_EQ(r.holes, 2 * 4 * 4);
   for (int eye = 0; eye < 2; ++eye) EXPECT_TRUE(view_is(r.out, eye, [&](int, int) { return c; }));
+}
+
+// ---- BackgroundSmooth ---------------------------------------------------------
+
+// Keys of one rendered view, recomputed from the public helpers (the warp's
+// scatter is tested above): what BackgroundSmooth's background pick reads.
+std::vector<unsigned long long> view_keys(const WarpParams &params, const cv::Mat &depth, int eye) {
+  const WarpParams p = warp_sanitize(params);
+  const int w = depth.cols, h = depth.rows;
+  const float D = disparity_scale(p, w), shift = warp_eye_shift(p, D, eye);
+  std::vector<unsigned long long> keys(static_cast<size_t>(w) * h, 0ull);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const WarpSource s = warp_source(depth.ptr<float>(y), x, w, shift, D, p.convergence);
+      const WarpSpan span = warp_span(s, w);
+      for (int X = span.first; X <= span.last; ++X) {
+        unsigned long long &k = keys[static_cast<size_t>(y) * w + X];
+        k = std::max(k, warp_key_at(s, X, w));
+      }
+    }
+  return keys;
+}
+
+// Independent BackgroundSmooth, the header's rules read literally (brute
+// force, no prefix sums): from the None rendering and the keys of each
+// warped view.
+HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &none_render, const cv::Mat &depth) {
+  HostFrame out(PixelFormat::BGRA, none_render.width(), none_render.height());
+  const int w = none_render.width() / 2, h = none_render.height();
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < 2 * w; ++x) store_rgba(out.view(), x, y, at(none_render, x, y));
+  const WarpParams p = warp_sanitize(params);
+  const float D = disparity_scale(p, w);
+  for (int eye = 0; eye < 2; ++eye) {
+    const float shift = warp_eye_shift(p, D, eye);
+    if (shift == 0.f) continue;
+    const std::vector<unsigned long long> keys = view_keys(params, depth, eye);
+    auto hole = [&](int x, int y) { return keys[static_cast<size_t>(y) * w + x] == 0; };
+    auto ring = [&](int x, int y) {
+      if (hole(x, y)) return false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx >= 0 && yy >= 0 && xx < w && yy < h && hole(xx, yy)) return true;
+        }
+      return false;
+    };
+    auto in_f = [&](int x, int y) { return hole(x, y) || ring(x, y); };
+    // The anchor of an F pixel, or false when it has none.
+    auto anchor = [&](int x, int y, Rgba *c) {
+      int side[2];
+      for (int dir = 0; dir < 2; ++dir) {
+        int clean = -1, any = -1;
+        for (int k = 1; k <= w; ++k) {
+          const int xx = dir == 0 ? x - k : x + k;
+          if (xx < 0 || xx >= w) break;
+          if (!hole(xx, y) && any < 0) any = xx;
+          if (!hole(xx, y) && !ring(xx, y)) {
+            clean = xx;
+            break;
+          }
+        }
+        side[dir] = clean >= 0 ? clean : any;
+      }
+      const int xl = side[0], xr = side[1];
+      const int pick = background_source(x, xl, xl >= 0 ? keys[static_cast<size_t>(y) * w + xl] : 0ull, xr,
+                                         xr >= 0 ? keys[static_cast<size_t>(y) * w + xr] : 0ull);
+      if (pick < 0) return false;
+      *c = view_at(none_render, eye, pick, y);
+      return true;
+    };
+    const int R = 1 + static_cast<int>(std::fabs(shift) * D / 2.f), Rx = R / 4;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        if (!hole(x, y)) continue;
+        long long sum[4] = {0, 0, 0, 0}, n = 0;
+        // The row run of F through (x, y) within Rx, then each column's run within R.
+        for (int dir = -1; dir <= 1; dir += 2)
+          for (int dx = dir < 0 ? 0 : 1; dx <= Rx; ++dx) {
+            const int xx = x + dir * dx;
+            if (xx < 0 || xx >= w || !in_f(xx, y)) break;
+            for (int vdir = -1; vdir <= 1; vdir += 2)
+              for (int dy = vdir < 0 ? 0 : 1; dy <= R; ++dy) {
+                const int yy = y + vdir * dy;
+                if (yy < 0 || yy >= h || !in_f(xx, yy)) break;
+                Rgba c;
+                if (!anchor(xx, yy, &c)) continue;
+                sum[0] += c.r, sum[1] += c.g, sum[2] += c.b, sum[3] += c.a, ++n;
+              }
+          }
+        Rgba c = kFillBlack;
+        if (n > 0) {
+          auto mean = [n](long long v) { return static_cast<uint8_t>((v + n / 2) / n); };
+          c = Rgba{mean(sum[0]), mean(sum[1]), mean(sum[2]), mean(sum[3])};
+        }
+        store_rgba(out.view(), eye * w + x, y, c);
+      }
+  }
+  return out;
+}
+
+void expect_background_smooth_matches_naive(const WarpParams &base, const HostFrame &src, const cv::Mat &depth) {
+  expect_fill_matches_naive(HoleFill::BackgroundSmooth, naive_background_smooth, base, src, depth);
+}
+
+TEST(WarpFill, BackgroundSmoothMatchesTheSpecification) {
+  expect_background_smooth_matches_naive(kSceneParams, textured(PixelFormat::BGRA, kSceneW, kSceneH, 40),
+                                         square_depth());
+  const HostFrame src = textured(PixelFormat::I420, 61, 37, 41);
+  for (StereoView v : kAllViews) {
+    SCOPED_TRACE(int(v));
+    expect_background_smooth_matches_naive(warp_params(15.f, 0.4f, v, HoleFill::None), src,
+                                           noise_depth(61, 37, 42, true));
+    expect_background_smooth_matches_naive(warp_params(25.f, 0.f, v, HoleFill::None), src,
+                                           noise_depth(61, 37, 43, false));
+  }
+  // Smooth depth with steps: long runs, so R and Rx clip (R = 7, Rx = 1 at D = 12.2).
+  const cv::Mat steps = make_depth(97, 45, [](int x, int y) { return ((x / 13 + y / 9) % 3) / 2.f; });
+  expect_background_smooth_matches_naive(warp_params(12.6f, 0.f, StereoView::Right, HoleFill::None),
+                                         textured(PixelFormat::RGBA, 97, 45, 44), steps);
+}
+
+TEST(WarpFill, BackgroundSmoothOfOneColourIsThatColour) {
+  const Rgba c{90, 60, 30, 255};
+  const Rendered r = render(warp_params(12.5f, 0.f, StereoView::Both, HoleFill::BackgroundSmooth),
+                            two_colour_scene(c, c), square_depth());
+  EXPECT_EQ(r.holes, 2 * 4 * 4);
+  for (int eye = 0; eye < 2; ++eye) EXPECT_TRUE(view_is(r.out, eye, [&](int, int) { return c; }));
+}
+
+// Two flat colours: every anchor of the disocclusion is background (the
+// foreground's ring pixel beside the hole picks the background too), so the
+// holes are exactly the background colour, never a blend with the square.
+TEST(WarpFill, BackgroundSmoothFillsDisocclusionWithBackground) {
+  const Rgba bg{20, 180, 40, 255}, fg{220, 30, 10, 255};
+  WarpParams p = kSceneParams;
+  p.fill = HoleFill::BackgroundSmooth;
+  const Rendered r = render(p, two_colour_scene(bg, fg), square_depth());
+  EXPECT_EQ(r.holes, 2 * 4 * 4);
+  EXPECT_TRUE(view_is(r.out, 0, [&](int x, int y) { return in_square(x - 4, y) ? fg : bg; }));
+  EXPECT_TRUE(view_is(r.out, 1, [&](int x, int y) { return in_square(x + 4, y) ? fg : bg; }));
+}
+
+// The averaging, by hand: background rows of grey level 10 y, a flat
+// foreground square (rows 2..5). D = 8, shift 1/2: R = 1 + 4 / 2 = 3 rows,
+// Rx = 0. The hole's column run of F is rows 1..6 (the ring rows above and
+// below the hole included), every anchor is the background of its row
+// (10 y), so hole (X, y) = the rounded mean of 10 y' over max(1, y - 3) ..
+// min(6, y + 3). The pixels beside the hole, which the warp sampled across
+// the depth edge, never leak in.
+TEST(WarpFill, BackgroundSmoothAveragesDownTheColumn) {
+  HostFrame src(PixelFormat::BGRA, kSceneW, kSceneH);
+  for (int y = 0; y < kSceneH; ++y)
+    for (int x = 0; x < kSceneW; ++x) {
+      const uint8_t g = static_cast<uint8_t>(10 * y);
+      store_rgba(src.view(), x, y, in_square(x, y) ? Rgba{250, 250, 250, 255} : Rgba{g, g, g, 255});
+    }
+  WarpParams p = kSceneParams;
+  p.fill = HoleFill::BackgroundSmooth;
+  const Rendered r = render(p, src, square_depth());
+  ASSERT_EQ(r.holes, 2 * 4 * 4);
+  auto expected = [](int y) {
+    int sum = 0, n = 0;
+    for (int t = std::max(1, y - 3); t <= std::min(6, y + 3); ++t) sum += 10 * t, ++n;
+    const uint8_t g = static_cast<uint8_t>((sum + n / 2) / n);
+    return Rgba{g, g, g, 255};
+  };
+  for (int y = 2; y <= 5; ++y)
+    for (int x = 24; x <= 27; ++x) EXPECT_TRUE(same(view_at(r.out, 0, x, y), expected(y))) << x << "," << y;
+  for (int y = 2; y <= 5; ++y)
+    for (int x = 36; x <= 39; ++x) EXPECT_TRUE(same(view_at(r.out, 1, x, y), expected(y))) << x << "," << y;
+}
+
+// Integer sums: the result does not depend on how the rows and columns are
+// split between threads.
+TEST(WarpFill, BackgroundSmoothIsIndependentOfThreadCount) {
+  const HostFrame src = textured(PixelFormat::BGRA, 211, 67, 45);
+  const cv::Mat depth = noise_depth(211, 67, 46, false);
+  const WarpParams p = warp_params(20.f, 0.3f, StereoView::Both, HoleFill::BackgroundSmooth);
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  const Rendered one = render(p, src, depth);
+  cv::setNumThreads(threads);
+  const Rendered many = render(p, src, depth);
+  EXPECT_EQ(one.holes, many.holes);
+  EXPECT_TRUE(same_bytes(one.out, many.out));
+}
+
+TEST(WarpHelpers, BackgroundSmoothHelpers) {
+  EXPECT_EQ(smooth_fill_radius(-1.f, 0.f), 1);
+  EXPECT_EQ(smooth_fill_radius(-1.f, 211.f), 106);
+  EXPECT_EQ(smooth_fill_radius(0.5f, 8.f), 3);
+  EXPECT_EQ(smooth_fill_radius(-0.5f, 3.9f), 1);  // floor(0.975)
+  EXPECT_EQ(smooth_fill_radius(1.f, 0.25f * 8192.f), 1025);
+  EXPECT_EQ(smooth_fill_radius_x(106), 26);
+  EXPECT_EQ(smooth_fill_radius_x(3), 0);
+  // Ring: 8-neighbourhood, clipped to the view; holes themselves are not ring.
+  const uint8_t up[5] = {0, 0, 0, 0, 1}, row[5] = {1, 0, 0, 0, 0}, down[5] = {0, 0, 0, 0, 0};
+  EXPECT_FALSE(smooth_is_ring(up, row, down, 0, 5));  // a hole
+  EXPECT_TRUE(smooth_is_ring(up, row, down, 1, 5));   // left neighbour
+  EXPECT_FALSE(smooth_is_ring(up, row, down, 2, 5));
+  EXPECT_TRUE(smooth_is_ring(up, row, down, 3, 5));   // diagonal, row above
+  EXPECT_TRUE(smooth_is_ring(up, row, down, 4, 5));   // straight above
+  EXPECT_FALSE(smooth_is_ring(nullptr, row, nullptr, 3, 5));  // no row above at the top
+  const uint8_t one[1] = {0}, one_hole[1] = {1};
+  EXPECT_TRUE(smooth_is_ring(one_hole, one, nullptr, 0, 1));
+  EXPECT_FALSE(smooth_is_ring(nullptr, one, nullptr, 0, 1));
+  EXPECT_EQ(smooth_side(3, 5), 3);
+  EXPECT_EQ(smooth_side(-1, 5), 5);
+  EXPECT_EQ(smooth_side(-1, -1), -1);
+  // Rounded mean, halves up; empty -> black.
+  EXPECT_TRUE(same(smooth_mean(SmoothSum{0, 0, 0, 0, 0}), kFillBlack));
+  EXPECT_TRUE(same(smooth_mean(SmoothSum{3, 1, 2, 510, 2}), Rgba{2, 1, 1, 255}));
+  SmoothSum s{0, 0, 0, 0, 0};
+  smooth_add(s, Rgba{255, 1, 2, 3});
+  smooth_add(s, Rgba{255, 2, 2, 4});
+  smooth_add(s, Rgba{254, 2, 3, 4});
+  EXPECT_TRUE(same(smooth_mean(s), Rgba{255, 2, 2, 4}));
+  const SmoothSum w = smooth_window(SmoothSum{10, 20, 30, 40, 5}, SmoothSum{1, 2, 3, 4, 2});
+  EXPECT_EQ(w.r, 9u);
+  EXPECT_EQ(w.n, 3u);
 }
 
 // ---- hole counts ------------------------------------------------------------

@@ -73,30 +73,39 @@ AloeResult synthesize_right(const char *fill, PixelFormat fmt) {
 
 }  // namespace
 
-// Background filling: the synthesized right view must be far closer to the
-// real one than the left view itself is (the no-warp baseline).
+// The default fill (background-smooth): the synthesized right view must be
+// far closer to the real one than the left view itself is (the no-warp
+// baseline).
 TEST(Aloe, SynthesizedRightViewMatchesRealRightView) {
-  const AloeResult r = synthesize_right("background", PixelFormat::RGBA);
+  const AloeResult r = synthesize_right("background-smooth", PixelFormat::RGBA);
   RecordProperty("psnr_db", std::to_string(r.psnr));
   RecordProperty("ssim", std::to_string(r.ssim));
   RecordProperty("baseline_psnr_db", std::to_string(r.baseline_psnr));
   std::printf("Aloe right view: PSNR %.2f dB, SSIM %.4f (left view as is: PSNR %.2f dB)\n", r.psnr, r.ssim,
               r.baseline_psnr);
-  // Measured (2026-11-21, CPU): 22.97 dB, SSIM 0.790, baseline 14.96 dB.
+  // Measured (2026-11-22, CPU): 24.56 dB, SSIM 0.805, baseline 14.96 dB.
   // What is left is disocclusions, the right border (content the left view
-  // never saw) and pixels whose ground truth is unknown (0).
-  EXPECT_GT(r.psnr, 22.5);
-  EXPECT_GT(r.psnr, r.baseline_psnr + 7.0);
-  EXPECT_GT(r.ssim, 0.77);
+  // never saw) and pixels whose ground truth is unknown (0). SSIM: even the
+  // real right view blurred (sigma 4) in the holes scores 0.823, so no
+  // smooth fill reaches 0.83 (docs/quality.md).
+  EXPECT_GE(r.psnr, 24.5);
+  EXPECT_GT(r.psnr, r.baseline_psnr + 9.0);
+  EXPECT_GT(r.ssim, 0.80);
 }
 
-// The paper's inpainting and a YUV input reach the same quality band.
-TEST(Aloe, NeighborAverageAndYuvInput) {
+// The other fills and a YUV input stay in their quality bands.
+TEST(Aloe, OtherFillsAndYuvInput) {
+  const AloeResult bg = synthesize_right("background", PixelFormat::RGBA);
   const AloeResult na = synthesize_right("neighbor-average", PixelFormat::RGBA);
-  const AloeResult yuv = synthesize_right("background", PixelFormat::I420);
-  std::printf("Aloe: neighbor-average PSNR %.2f dB SSIM %.4f; I420 input PSNR %.2f dB\n", na.psnr, na.ssim, yuv.psnr);
-  // Measured: 22.91 dB / SSIM 0.800 and 22.91 dB.
+  const AloeResult yuv = synthesize_right("background-smooth", PixelFormat::I420);
+  std::printf("Aloe: background PSNR %.2f dB SSIM %.4f; neighbor-average PSNR %.2f dB SSIM %.4f; I420 input PSNR "
+              "%.2f dB SSIM %.4f\n",
+              bg.psnr, bg.ssim, na.psnr, na.ssim, yuv.psnr, yuv.ssim);
+  // Measured: 22.97 dB / 0.790, 22.91 dB / 0.800, I420 24.45 dB / 0.798.
+  EXPECT_GT(bg.psnr, 22.5);
+  EXPECT_GT(bg.ssim, 0.77);
   EXPECT_GT(na.psnr, 22.5);
   EXPECT_GT(na.ssim, 0.77);
-  EXPECT_GT(yuv.psnr, 22.4);  // 4:2:0 chroma and a colour round trip cost a little
+  EXPECT_GT(yuv.psnr, 24.3);  // 4:2:0 chroma and a colour round trip cost a little
+  EXPECT_GT(yuv.ssim, 0.79);
 }

@@ -407,10 +407,11 @@ TEST(Warp, LeavesHolesAndFillsThem) {
   cv::Mat magenta;
   cv::inRange(holes, cv::Scalar(255, 0, 255, 0), cv::Scalar(255, 0, 255, 255), magenta);
   EXPECT_GT(cv::countNonZero(magenta), 10) << "5% disparity over a depth edge must disocclude pixels";
-  const cv::Mat filled = render("background", &depth);
+  const cv::Mat filled = render("background-smooth", &depth);  // the default
   HostFrame want(PixelFormat::RGBA, 256, 64);
   WarpParams p;
   p.max_disparity = 5.f;
+  ASSERT_EQ(p.fill, HoleFill::BackgroundSmooth);
   ASSERT_GT(warp_render_cpu(p, frame.view(), YuvToRgb(), as_const(depth_view_of(depth)), want.view()), 0);
   EXPECT_EQ(cv::norm(filled, want.to_bgra(), cv::NORM_INF), 0) << "the fill must close every hole as the reference does";
   EXPECT_GT(cv::norm(filled(cv::Rect(0, 0, 128, 64)), filled(cv::Rect(128, 0, 128, 64)), cv::NORM_L1), 0);

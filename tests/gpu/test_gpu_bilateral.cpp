@@ -128,6 +128,21 @@ TEST_P(GpuBilateralFormats, OddSizesAndRadii) {
                        random_depth(sz.width, sz.height, seed ^ 0x9e3779b9u), "odd");
 }
 
+// The Separable mode: two 1-D passes, the CPU's bilateral_pass_pixel on the
+// same tables, so bit-identical too; odd sizes clip both passes.
+TEST_P(GpuBilateralFormats, SeparableOddSizesAndRadii) {
+  BilateralFilterGpu filter;
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  for (const cv::Size sz : {cv::Size(1, 1), cv::Size(3, 2), cv::Size(33, 17), cv::Size(1001, 7), cv::Size(161, 83)})
+    for (int r : {0, 1, 5, 16}) {
+      BilateralParams p{r, 0.7f * r + 0.5f, 20.f};
+      p.mode = BilateralMode::Separable;
+      expect_identical(filter, p, random_guide(GetParam(), sz.width, sz.height, seed),
+                       random_depth(sz.width, sz.height, seed ^ 0x85ebca6bu), "separable");
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(GpuBilateral, GpuBilateralFormats, ::testing::ValuesIn(test::kAllFormats),
                          [](const auto &info) { return std::string(test::format_name(info.param)); });
 

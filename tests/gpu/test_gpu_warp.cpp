@@ -278,10 +278,12 @@ void large_case(GpuWarpTest &t, int w, int h, const std::initializer_list<HoleFi
 }
 
 TEST_F(GpuWarpLarge, Uhd4k) {
-  large_case(*this, 3840, 2160, {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None});
+  large_case(*this, 3840, 2160,
+             {HoleFill::BackgroundSmooth, HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None});
 }
 TEST_F(GpuWarpLarge, Uhd8k) {
-  large_case(*this, 7680, 4320, {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None});
+  large_case(*this, 7680, 4320,
+             {HoleFill::BackgroundSmooth, HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None});
 }
 
 }  // namespace

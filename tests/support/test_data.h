@@ -94,7 +94,8 @@ inline constexpr StereoInput kAllInputs[] = {StereoInput::SideBySide,     Stereo
                                              StereoInput::TopBottom,      StereoInput::TopBottomHalf,
                                              StereoInput::RowInterleaved, StereoInput::ColumnInterleaved,
                                              StereoInput::Checkerboard};
-inline constexpr HoleFill kAllFills[] = {HoleFill::Background, HoleFill::NeighborAverage, HoleFill::None};
+inline constexpr HoleFill kAllFills[] = {HoleFill::BackgroundSmooth, HoleFill::Background, HoleFill::NeighborAverage,
+                                          HoleFill::None};
 inline constexpr StereoView kAllViews[] = {StereoView::Both, StereoView::Left, StereoView::Right};
 
 }  // namespace p3d::test
