@@ -287,13 +287,29 @@ static GstCaps *cuda_first(GstCaps *caps) {
 }
 #endif
 
+// Brackets a negotiation in the streaming thread (see staged_geometry.h).
+static void freeze_geometry(GstPseudo3DBase *self, gboolean frozen) {
+  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
+  if (klass->freeze_geometry) klass->freeze_geometry(self, frozen);
+}
+
 static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection direction, GstQuery *query) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
 #if HAVE_CUDA
   if (GST_QUERY_TYPE(query) == GST_QUERY_CONTEXT && self->gpu->handle_context_query(GST_ELEMENT(self), query))
     return TRUE;
 #endif
-  if (!GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query)) return FALSE;
+  // A caps query transforms caps twice (through this element and back), and
+  // GstBaseTransform answers upstream's ALLOCATION query by first doing a
+  // pending renegotiation: each is one negotiation, bracketed like the one
+  // before a buffer, or a property change from another thread between its
+  // transform_caps calls (or before its set_caps) would make them disagree.
+  const GstQueryType type = GST_QUERY_TYPE(query);
+  const bool negotiates = type == GST_QUERY_CAPS || type == GST_QUERY_ACCEPT_CAPS || type == GST_QUERY_ALLOCATION;
+  if (negotiates) freeze_geometry(self, TRUE);
+  const gboolean answered = GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query);
+  if (negotiates) freeze_geometry(self, FALSE);
+  if (!answered) return FALSE;
 #if HAVE_CUDA
   // With a GPU in use, ask neighbours for CUDA memory first: without it,
   // `cudaupload ! pseudo3d...` would negotiate system memory and run staged.
@@ -525,12 +541,6 @@ static void request_history_reset(GstPseudo3DBase *self, const char *why) {
   GST_OBJECT_LOCK(self);
   self->history_reset_pending = TRUE;
   GST_OBJECT_UNLOCK(self);
-}
-
-// Brackets a negotiation in the streaming thread (see staged_geometry.h).
-static void freeze_geometry(GstPseudo3DBase *self, gboolean frozen) {
-  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  if (klass->freeze_geometry) klass->freeze_geometry(self, frozen);
 }
 
 static gboolean gst_pseudo3d_base_sink_event(GstBaseTransform *trans, GstEvent *event) {

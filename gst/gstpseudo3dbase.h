@@ -82,8 +82,10 @@ struct _GstPseudo3DBaseClass {
    * gst_pseudo3d_base_refuse_caps) and set in-place/passthrough. */
   gboolean (*set_info)(GstPseudo3DBase *self, GstCaps *incaps, GstVideoInfo *in_info, GstCaps *outcaps,
                        GstVideoInfo *out_info);
-  /* Called with TRUE before and FALSE after each negotiation in the
-   * streaming thread: freeze the StagedGeometry's configuring value. */
+  /* Called with TRUE before and FALSE after each negotiation (a CAPS event,
+   * the renegotiation before a buffer, a caps, accept-caps or allocation
+   * query; from any thread, possibly nested): freeze the StagedGeometry's
+   * configuring value. */
   void (*freeze_geometry)(GstPseudo3DBase *self, gboolean frozen);
   /* Before each frame, in the streaming thread: TRUE when a staged geometry
    * request differs from the active value (the base then renegotiates). */

@@ -42,6 +42,7 @@ enum {
   PROP_BLOCK_SIZE,
   PROP_EDGE_THRESHOLD,
   PROP_REGION_WEIGHT,
+  PROP_GROUND_CONTACT,
   PROP_TEMPORAL_SMOOTHING,
   PROP_STATIC_THRESHOLD,
   PROP_CUT_THRESHOLD,
@@ -248,6 +249,7 @@ static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, cons
     case PROP_BLOCK_SIZE: self->params.block_size = g_value_get_int(value); break;
     case PROP_EDGE_THRESHOLD: self->params.edge_threshold = g_value_get_float(value); break;
     case PROP_REGION_WEIGHT: self->params.region_weight = g_value_get_float(value); break;
+    case PROP_GROUND_CONTACT: self->params.ground_contact = g_value_get_float(value); break;
     case PROP_TEMPORAL_SMOOTHING: self->params.temporal_smoothing = g_value_get_float(value); break;
     case PROP_STATIC_THRESHOLD: self->params.static_threshold = g_value_get_float(value); break;
     case PROP_CUT_THRESHOLD: self->params.cut_threshold = g_value_get_float(value); break;
@@ -266,6 +268,7 @@ static void gst_pseudo3d_depth_get_property(GObject *object, guint prop_id, GVal
     case PROP_BLOCK_SIZE: g_value_set_int(value, self->params.block_size); break;
     case PROP_EDGE_THRESHOLD: g_value_set_float(value, self->params.edge_threshold); break;
     case PROP_REGION_WEIGHT: g_value_set_float(value, self->params.region_weight); break;
+    case PROP_GROUND_CONTACT: g_value_set_float(value, self->params.ground_contact); break;
     case PROP_TEMPORAL_SMOOTHING: g_value_set_float(value, self->params.temporal_smoothing); break;
     case PROP_STATIC_THRESHOLD: g_value_set_float(value, self->params.static_threshold); break;
     case PROP_CUT_THRESHOLD: g_value_set_float(value, self->params.cut_threshold); break;
@@ -300,7 +303,8 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
   g_object_class_install_property(
       gobject_class, PROP_HYPOTHESIS,
       g_param_spec_enum("hypothesis", "Depth-gradient hypothesis",
-                        "Global depth layout assumed for the scene; regions take its mean over their area",
+                        "Global depth layout assumed for the scene; each region takes its value where the region "
+                        "comes nearest (see ground-contact)",
                         GST_TYPE_PSEUDO3D_HYPOTHESIS, static_cast<gint>(d.hypothesis), flags));
   g_object_class_install_property(
       gobject_class, PROP_BLOCK_SIZE,
@@ -316,9 +320,16 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
   g_object_class_install_property(
       gobject_class, PROP_REGION_WEIGHT,
       g_param_spec_float("region-weight", "Region weight",
-                         "Share of the region's mean depth in a block's depth (the rest is the hypothesis at the "
+                         "Share of the region's depth in a block's depth (the rest is the hypothesis at the "
                          "block): 1 = flat regions, 0 = pure hypothesis",
                          0.f, 1.f, d.region_weight, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_GROUND_CONTACT,
+      g_param_spec_float("ground-contact", "Ground contact",
+                         "How a region's depth is taken from the hypothesis: 1 = at its nearest block (for "
+                         "top-bottom its lowest, where an object stands on the ground), 0 = the mean over the "
+                         "region, between = a blend",
+                         0.f, 1.f, d.ground_contact, flags));
   g_object_class_install_property(
       gobject_class, PROP_TEMPORAL_SMOOTHING,
       g_param_spec_float("temporal-smoothing", "Temporal smoothing",

@@ -255,9 +255,6 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   return TRUE;
 }
 
-// A request whose output caps equal the negotiated ones (swap-eyes of an
-// anaglyph, or a declared input layout that the caps already said) takes
-// effect at once; any other asks for renegotiation.
 static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   GST_OBJECT_LOCK(self);
@@ -268,6 +265,9 @@ static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
   GST_OBJECT_UNLOCK(self);
 }
 
+// A request whose output caps equal the negotiated ones (swap-eyes of an
+// anaglyph, or a declared input layout that the caps already said) takes
+// effect at once; any other asks for renegotiation.
 static gboolean frame_boundary(GstPseudo3DBase *base) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   GST_OBJECT_LOCK(self);

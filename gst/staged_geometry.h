@@ -4,10 +4,12 @@
 // value lives in three places:
 //
 //   requested    what the property was last set to (set_property);
-//   configuring  what a negotiation in the streaming thread works with: the
-//                request as it was when the negotiation began, frozen until
-//                it ends, so that all its transform_caps calls and set_info
-//                agree (caps queries at other times see the request);
+//   configuring  what a negotiation works with (a CAPS event, the
+//                renegotiation before a buffer, a caps, accept-caps or
+//                allocation query): the request as it was when the outermost
+//                one began, frozen until the last one ends, so that all the
+//                transform_caps calls of one negotiation and its set_info
+//                agree;
 //   active       what the negotiated caps belong to: set_info commits the
 //                configuring value, and every frame is processed with it.
 //
@@ -33,13 +35,15 @@ class StagedGeometry {
   }
   const G &requested() const { return requested_; }
 
-  // Around a negotiation in the streaming thread (a CAPS event, or a
-  // renegotiation before a buffer).
+  // Around a negotiation. Brackets may nest (and come from two threads: a
+  // caps query from the application while the streaming thread negotiates):
+  // the outermost one freezes the request.
   void begin_negotiation() {
-    configuring_ = requested_;
-    frozen_ = true;
+    if (frozen_++ == 0) configuring_ = requested_;
   }
-  void end_negotiation() { frozen_ = false; }
+  void end_negotiation() {
+    if (frozen_ > 0) --frozen_;
+  }
 
   // transform_caps: the value to negotiate with.
   const G &negotiating() const { return frozen_ ? configuring_ : requested_; }
@@ -60,7 +64,7 @@ class StagedGeometry {
 
  private:
   G requested_, configuring_, active_;
-  bool frozen_ = false;
+  int frozen_ = 0;  // nesting depth of the negotiation brackets
 };
 
 }  // namespace p3d::gst

@@ -16,7 +16,8 @@
 #   the demuxer, and the video waits for it forever (a deadlock);
 # - the caps after "d." pick the right decodebin pad for each branch;
 # - format=I420 keeps x264 in the High profile players decode (from RGB it
-#   would choose High 4:4:4); frame-packing=auto writes the layout into the
+#   would choose High 4:4:4), and pseudo3dconvert's pack stage writes that
+#   I420 itself (no videoconvert after it); frame-packing=auto writes the layout into the
 #   stream's frame-packing SEI; pass=qual quantizer=20 is x264's CRF 20;
 # - pseudo3dsignal writes the eye order into that SEI and keeps mp4mux from
 #   writing its own (wrong) stereo box; -e finishes the file on Ctrl-C.
@@ -31,6 +32,6 @@ fi
 gst-launch-1.0 -e filesrc location="$in" ! decodebin name=d \
   d. ! video/x-raw ! queue max-size-buffers=8 max-size-bytes=0 max-size-time=0 ! videoconvert ! \
   pseudo3dconvert layout=side-by-side-half "$@" ! queue max-size-buffers=4 max-size-bytes=0 max-size-time=0 ! \
-  videoconvert ! video/x-raw,format=I420 ! x264enc pass=qual quantizer=20 frame-packing=auto ! \
+  video/x-raw,format=I420 ! x264enc pass=qual quantizer=20 frame-packing=auto ! \
   progressreport update-freq=10 ! h264parse ! pseudo3dsignal ! mp4mux name=m ! filesink location="$out" \
   "${audio[@]}"

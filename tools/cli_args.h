@@ -1,6 +1,6 @@
 // Command-line helpers the tools share (pseudo3d-bench, pseudo3d-quality):
-// one usage error (the tool's name, the message, its usage text, exit code)
-// and the integer options that end in one.
+// one usage error (the tool's name, the message, its usage text, exit code),
+// the walk over the arguments, and the integer options that end in one.
 #pragma once
 
 #include <cstdlib>
@@ -19,6 +19,30 @@ class Cli {
     std::cerr << tool_ << ": " << msg << "\n";
     usage_(std::cerr);
     std::exit(exit_code_);
+  }
+
+  // Walks argv the way both tools read it: -h/--help prints the usage and
+  // exits 0; the one flag `flag` (no value) calls on_flag(); every other
+  // option takes the next argument as its value: on_option(name, value),
+  // which fail()s on names it does not know. *command_line gets the whole
+  // command, for the result files.
+  template <class OnFlag, class OnOption>
+  void parse(int argc, char **argv, const std::string &flag, std::string *command_line, OnFlag on_flag,
+             OnOption on_option) const {
+    for (int i = 0; i < argc; ++i) *command_line += (i ? " " : "") + std::string(argv[i]);
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "-h" || a == "--help") {
+        usage_(std::cout);
+        std::exit(0);
+      }
+      if (a == flag) {
+        on_flag();
+        continue;
+      }
+      if (i + 1 >= argc) fail("missing value after " + a);
+      on_option(a, std::string(argv[++i]));
+    }
   }
 
   // The integer in `v`, which must be one in lo..hi (else fail()).

@@ -146,19 +146,7 @@ T parse_name(const std::string &opt, const std::string &v, const std::map<std::s
 Options parse_args(int argc, char **argv) {
   Options o;
   bool quick = false;
-  for (int i = 0; i < argc; ++i) o.argv += (i ? " " : "") + std::string(argv[i]);
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      print_usage(std::cout);
-      std::exit(0);
-    }
-    if (a == "--quick") {
-      quick = true;
-      continue;
-    }
-    if (i + 1 >= argc) usage_error("missing value after " + a);
-    const std::string v = argv[++i];
+  kCli.parse(argc, argv, "--quick", &o.argv, [&]() { quick = true; }, [&](const std::string &a, const std::string &v) {
     if (a == "--device") {
       if (v != "cpu" && v != "gpu") usage_error("--device wants cpu or gpu");
       o.device_given = true;
@@ -189,7 +177,7 @@ Options parse_args(int argc, char **argv) {
     } else {
       usage_error("unknown option " + a);
     }
-  }
+  });
   if (quick) {
     if (o.iterations == 0) o.iterations = 3;
     if (o.sizes.empty()) o.sizes = {{1280, 720}, {1920, 1080}};

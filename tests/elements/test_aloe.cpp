@@ -73,7 +73,7 @@ AloeResult synthesize_right(const char *fill, PixelFormat fmt) {
 
 }  // namespace
 
-// The default fill (background-smooth): the synthesized right view must be
+// The best fill (background-smooth): the synthesized right view must be
 // far closer to the real one than the left view itself is (the no-warp
 // baseline).
 TEST(Aloe, SynthesizedRightViewMatchesRealRightView) {

@@ -5,11 +5,13 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "element_helpers.h"
 #include "test_data.h"
 
 #include "bilateral.h"
+#include "depth_estimate.h"
 #include "warp.h"
 
 using namespace p3d;
@@ -192,6 +194,29 @@ TEST(Depth, TopIsFartherThanBottom) {
   EXPECT_LT(cv::mean(d.rowRange(0, 8))[0], cv::mean(d.rowRange(56, 64))[0]);
   gst_buffer_unref(out);
   gst_harness_teardown(h);
+}
+
+// ground-contact reaches the estimator: the element's map is the CPU
+// reference's with the same value, and the cue changes the map.
+TEST(Depth, GroundContactPropertyReachesTheEstimator) {
+  const int w = 64, h = 64;
+  const HostFrame frame = test_frame(PixelFormat::RGBA, w, h, 3);
+  std::vector<cv::Mat> maps;
+  for (float g : {0.f, 0.5f, 1.f}) {
+    GstHarness *hx = harness("pseudo3ddepth ground-contact=" + std::to_string(g), PixelFormat::RGBA, w, h);
+    GstBuffer *out = gst_harness_push_and_pull(hx, buffer_from_frame(frame));
+    ASSERT_NE(out, nullptr);
+    maps.push_back(buffer_depth(out).clone());
+    DepthParams p;
+    p.ground_contact = g;
+    DepthEstimatorCpu cpu;
+    cv::Mat want(h, w, CV_32FC1);
+    cpu.estimate(p, frame.view(), depth_view_of(want));
+    EXPECT_EQ(cv::norm(maps.back(), want, cv::NORM_INF), 0) << "ground-contact " << g;
+    gst_buffer_unref(out);
+    gst_harness_teardown(hx);
+  }
+  EXPECT_GT(cv::norm(maps.front(), maps.back(), cv::NORM_INF), 0.01) << "the cue changes nothing on this frame";
 }
 
 // Depth supplied upstream is kept, not re-estimated.
@@ -407,11 +432,11 @@ TEST(Warp, LeavesHolesAndFillsThem) {
   cv::Mat magenta;
   cv::inRange(holes, cv::Scalar(255, 0, 255, 0), cv::Scalar(255, 0, 255, 255), magenta);
   EXPECT_GT(cv::countNonZero(magenta), 10) << "5% disparity over a depth edge must disocclude pixels";
-  const cv::Mat filled = render("background-smooth", &depth);  // the default
+  const cv::Mat filled = render("background-smooth", &depth);
   HostFrame want(PixelFormat::RGBA, 256, 64);
   WarpParams p;
   p.max_disparity = 5.f;
-  ASSERT_EQ(p.fill, HoleFill::BackgroundSmooth);
+  p.fill = HoleFill::BackgroundSmooth;
   ASSERT_GT(warp_render_cpu(p, frame.view(), YuvToRgb(), as_const(depth_view_of(depth)), want.view()), 0);
   EXPECT_EQ(cv::norm(filled, want.to_bgra(), cv::NORM_INF), 0) << "the fill must close every hole as the reference does";
   EXPECT_GT(cv::norm(filled(cv::Rect(0, 0, 128, 64)), filled(cv::Rect(128, 0, 128, 64)), cv::NORM_L1), 0);

@@ -3,7 +3,8 @@
 // no error and every frame consistent with its caps; geometry-changing
 // properties (pack's layout, swap-eyes and input layout, depth's method)
 // checked frame by frame against the reference for the caps each frame came
-// with; READY-only properties refused while playing; caps renegotiation mid
+// with; a caps query answered with one layout even when it changes halfway;
+// READY-only properties refused while playing; caps renegotiation mid
 // stream (size and format).
 #include <gst/check/gstharness.h>
 #include <gtest/gtest.h>
@@ -249,6 +250,46 @@ TEST(LiveProperties, PackFramesMatchTheirCaps) {
   EXPECT_GE(checked, 300);
   EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{});
   g_type_class_unref(layouts);
+  gst_object_unref(pack);
+  gst_harness_teardown(hx);
+}
+
+// A caps query is one negotiation: pseudo3dpack transforms the filter
+// towards its source, asks downstream, and transforms the answer back. The
+// layout changes (from another thread in real use; here from a probe, each
+// time downstream has answered) between the two transforms: both must still use
+// one layout, or the answer is empty and upstream (pseudo3dwarp in a chain
+// whose layout changes while playing) fails to negotiate, as it did under
+// AddressSanitizer's timing.
+TEST(LiveProperties, CapsQueryUsesOneLayoutThroughout) {
+  const int w = 12, h = 8;
+  GstHarness *hx = gst_harness_new_parse("pseudo3dpack layout=left");
+  GstElement *pack = find(hx, "pseudo3dpack");
+  GstPad *src = gst_element_get_static_pad(pack, "src");
+  struct Flip {
+    GstElement *pack;
+    int flips = 0;
+  } flip{pack};
+  gst_pad_add_probe(
+      src, static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_QUERY_DOWNSTREAM | GST_PAD_PROBE_TYPE_PULL),
+      [](GstPad *, GstPadProbeInfo *info, gpointer data) {
+        auto *f = static_cast<Flip *>(data);
+        if (GST_QUERY_TYPE(GST_PAD_PROBE_INFO_QUERY(info)) == GST_QUERY_CAPS)
+          gst_util_set_object_arg(G_OBJECT(f->pack), "layout", f->flips++ % 2 ? "left" : "side-by-side");
+        return GST_PAD_PROBE_OK;
+      },
+      &flip, nullptr);
+  GstCaps *filter = gst_caps_from_string(raw_caps(PixelFormat::RGBA, 2 * w, h, ",multiview-mode=side-by-side").c_str());
+  for (int i = 0; i < 4; ++i) {
+    GstCaps *caps = gst_pad_peer_query_caps(hx->srcpad, filter);
+    ASSERT_NE(caps, nullptr);
+    EXPECT_FALSE(gst_caps_is_empty(caps)) << "query " << i << ": the two transforms used different layouts";
+    EXPECT_TRUE(gst_caps_can_intersect(caps, filter)) << "query " << i << ": " << gst_caps_to_string(caps);
+    gst_caps_unref(caps);
+  }
+  EXPECT_EQ(flip.flips, 4) << "downstream answered once per query, and the layout changed each time";
+  gst_caps_unref(filter);
+  gst_object_unref(src);
   gst_object_unref(pack);
   gst_harness_teardown(hx);
 }

@@ -1,6 +1,9 @@
 #include "media_source.h"
 
+#include <fcntl.h>
 #include <gst/pbutils/pbutils.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 
@@ -43,15 +46,28 @@ bool is_video_decoder(GstElement *e) {
 
 bool MediaSource::build(GstElement *pipeline, const std::string &input, Hooks hooks, std::string *error) {
   hooks_ = std::move(hooks);
-  GstElement *src = gst_element_factory_make("filesrc", "source");
+  // A FIFO or a device is opened once, here, and read through fdsrc:
+  // filesrc opens and closes its file to probe for random access before it
+  // opens it for good, and a writer that writes in that gap gets EPIPE
+  // (and the pipeline then waits for data that never comes).
+  struct stat st;
+  const bool regular = stat(input.c_str(), &st) != 0 || S_ISREG(st.st_mode);
+  if (!regular && (fd_ = open(input.c_str(), O_RDONLY | O_CLOEXEC)) < 0) {
+    *error = input + ": " + g_strerror(errno);
+    return false;
+  }
+  GstElement *src = gst_element_factory_make(regular ? "filesrc" : "fdsrc", "source");
   GstElement *dec = gst_element_factory_make("decodebin", "decoder");
   if (!src || !dec) {
     if (src) gst_object_unref(gst_object_ref_sink(src));
     if (dec) gst_object_unref(gst_object_ref_sink(dec));
-    *error = "GStreamer's filesrc or decodebin is missing (gstreamer1.0-plugins-base)";
+    *error = "GStreamer's filesrc, fdsrc or decodebin is missing (gstreamer1.0-plugins-base)";
     return false;
   }
-  g_object_set(src, "location", input.c_str(), NULL);
+  if (regular)
+    g_object_set(src, "location", input.c_str(), NULL);
+  else
+    g_object_set(src, "fd", fd_, NULL);
   gst_bin_add_many(GST_BIN(pipeline), src, dec, NULL);
   gst_element_link(src, dec);
   g_signal_connect(dec, "autoplug-continue", G_CALLBACK(on_autoplug_continue), this);
@@ -60,6 +76,10 @@ bool MediaSource::build(GstElement *pipeline, const std::string &input, Hooks ho
   g_signal_connect(dec, "no-more-pads", G_CALLBACK(on_no_more_pads), this);
   g_signal_connect(dec, "element-added", G_CALLBACK(on_element_added), this);
   return true;
+}
+
+MediaSource::~MediaSource() {
+  if (fd_ >= 0) close(fd_);
 }
 
 void MediaSource::set_piece(GstClockTime start, GstClockTime duration) {

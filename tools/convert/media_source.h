@@ -1,4 +1,5 @@
-// The input side of a video run: filesrc ! decodebin, with
+// The input side of a video run: filesrc ! decodebin (fdsrc for a FIFO or
+// a device, opened once), with
 //  * the streams the output takes as they are left encoded (autoplug-continue),
 //  * video decoders told what the 3D chain takes before it is linked
 //    (autoplug-query), so NVDEC hands over CUDA memory when the GPU runs,
@@ -31,10 +32,12 @@ class MediaSource {
   };
 
   MediaSource() = default;
+  // Closes the input it opened itself; the pipeline is stopped by then.
+  ~MediaSource();
   MediaSource(const MediaSource &) = delete;
   MediaSource &operator=(const MediaSource &) = delete;
 
-  // Adds filesrc ! decodebin for `input` to `pipeline`.
+  // Adds filesrc (fdsrc) ! decodebin for `input` to `pipeline`.
   bool build(GstElement *pipeline, const std::string &input, Hooks hooks, std::string *error);
 
   // The piece to convert: [start, start + duration); NONE for either end
@@ -69,6 +72,7 @@ class MediaSource {
   GstClockTime start_ = GST_CLOCK_TIME_NONE, duration_ = GST_CLOCK_TIME_NONE;
   mutable std::mutex lock_;
   std::string video_decoder_;
+  int fd_ = -1;  // a FIFO or device input, opened by build()
 };
 
 }  // namespace p3d::convert

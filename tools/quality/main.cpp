@@ -49,19 +49,7 @@ std::set<std::string> parse_parts(const std::string &v) {
 Options parse_args(int argc, char **argv) {
   Options o;
   bool quick = false, runs_given = false, frames_given = false;
-  for (int i = 0; i < argc; ++i) o.argv += (i ? " " : "") + std::string(argv[i]);
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      print_usage(std::cout);
-      std::exit(0);
-    }
-    if (a == "--quick") {
-      quick = true;
-      continue;
-    }
-    if (i + 1 >= argc) usage_error("missing value after " + a);
-    const std::string v = argv[++i];
+  kCli.parse(argc, argv, "--quick", &o.argv, [&]() { quick = true; }, [&](const std::string &a, const std::string &v) {
     if (a == "--data") {
       o.data_dir = v;
     } else if (a == "--out") {
@@ -79,7 +67,7 @@ Options parse_args(int argc, char **argv) {
     } else {
       usage_error("unknown option " + a);
     }
-  }
+  });
   if (quick) {
     if (!runs_given) o.runs = 1;
     if (!frames_given) o.frames = 20;
