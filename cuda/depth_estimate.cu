@@ -1,4 +1,5 @@
 #include "depth_estimate_gpu.h"
+#include "warp_reduce.cuh"
 
 namespace p3d {
 
@@ -210,9 +211,9 @@ __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int
   if (threadIdx.x == 0) cta_root = root;  // thread 0 is always valid
   __syncthreads();
   if (__syncthreads_and(!valid || root == cta_root)) {
-    const uint32_t s = __reduce_add_sync(kFullMask, hq);  // <= 256 * 65535: no overflow
+    const uint32_t s = warp_reduce_sum(hq);  // <= 256 * 65535: no overflow
     const uint32_t c = __popc(__ballot_sync(kFullMask, valid));
-    const uint32_t m = __reduce_max_sync(kFullMask, hq);  // invalid lanes hold 0
+    const uint32_t m = warp_reduce_max(hq);  // invalid lanes hold 0
     if (lane == 0) {
       warp_sum[warp] = s;
       warp_count[warp] = c;
@@ -240,8 +241,8 @@ __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int
     const int r = __shfl_sync(kFullMask, root, leader);
     const bool mine = valid && root == r;
     const unsigned group = __ballot_sync(kFullMask, mine);
-    const uint32_t s = __reduce_add_sync(kFullMask, mine ? hq : 0u);
-    const uint32_t m = __reduce_max_sync(kFullMask, mine ? hq : 0u);
+    const uint32_t s = warp_reduce_sum(mine ? hq : 0u);
+    const uint32_t m = warp_reduce_max(mine ? hq : 0u);
     if (lane == leader) {
       atomicAdd(&region_sums[r], static_cast<unsigned long long>(s));
       atomicAdd(&region_counts[r], static_cast<uint32_t>(__popc(group)));

@@ -2,6 +2,7 @@
 
 #include "bilateral.h"
 #include "depth_estimate.h"
+#include "depth_import.h"
 #include "pack.h"
 #include "warp.h"
 
@@ -28,6 +29,15 @@ P3D_DEFINE_ENUM(gst_pseudo3d_depth_method_get_type, "GstPseudo3DDepthMethod",
                 {GST_PSEUDO3D_DEPTH_METHOD_EDGES, "Estimate from edges and a depth-gradient hypothesis", "edges"},
                 {GST_PSEUDO3D_DEPTH_METHOD_RGBD,
                  "Input holds colour (left half) and depth as grey (right half, white = near)", "rgbd"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_depth_convention_get_type, "GstPseudo3DDepthConvention",
+                {(gint)p3d::DepthConvention::NearWhite, "Larger is nearer (white = near: most depth maps, "
+                 "Depth-Anything)", "near-white"},
+                {(gint)p3d::DepthConvention::NearDark, "Larger is farther (dark = near: a Z-buffer)", "near-dark"},
+                {(gint)p3d::DepthConvention::Metric,
+                 "Distance in any unit (a depth camera's millimetres), near..far mapped linearly in 1/distance; "
+                 "0 = not seen, taken as far",
+                 "metric"})
 
 P3D_DEFINE_ENUM(gst_pseudo3d_view_get_type, "GstPseudo3DView",
                 {(gint)p3d::StereoView::Both, "Synthesize both views, half the parallax each", "both"},

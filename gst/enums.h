@@ -34,6 +34,9 @@ typedef enum {
 // pseudo3ddepth's method property.
 typedef enum { GST_PSEUDO3D_DEPTH_METHOD_EDGES = 0, GST_PSEUDO3D_DEPTH_METHOD_RGBD = 1 } GstPseudo3DDepthMethod;
 
+#define GST_TYPE_PSEUDO3D_DEPTH_CONVENTION (gst_pseudo3d_depth_convention_get_type())
+GType gst_pseudo3d_depth_convention_get_type(void);
+
 #define GST_TYPE_PSEUDO3D_INPUT_LAYOUT (gst_pseudo3d_input_layout_get_type())
 GType gst_pseudo3d_input_layout_get_type(void);
 // pseudo3dpack's input-layout property: from the caps, or p3d::StereoInput + 1

@@ -5,6 +5,7 @@
 #include "depth_meta.h"
 #include "gstpseudo3dconvert.h"
 #include "gstpseudo3ddepth.h"
+#include "gstpseudo3ddepthmux.h"
 #include "gstpseudo3dfilter.h"
 #include "gstpseudo3dpack.h"
 #include "gstpseudo3dsignal.h"
@@ -34,6 +35,7 @@ static gboolean plugin_init(GstPlugin *plugin) {
   ok &= GST_ELEMENT_REGISTER(pseudo3dpack, plugin);
   ok &= GST_ELEMENT_REGISTER(pseudo3dconvert, plugin);
   ok &= GST_ELEMENT_REGISTER(pseudo3dsignal, plugin);
+  ok &= GST_ELEMENT_REGISTER(pseudo3ddepthmux, plugin);
   return ok;
 }
 

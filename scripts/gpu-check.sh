@@ -3,7 +3,7 @@
 #
 #   scripts/gpu-check.sh prepare        (here, no GPU needed) builds build-gpu/
 #       for sm_90, bundles GStreamer + the project's binaries + test data into
-#       .gpu/payload.tar.gz with ../shared/gpu/make-gst-runtime.
+#       .gpu/payload.tar.gz with scripts/make-gst-runtime.sh.
 #   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|pipelines|convert|all]]   (on the GPU machine, from the repo
 #       root, with .gpu carried) unpacks, runs the GPU suites, compute-sanitizer
 #       memcheck on the kernel suite and on element cases, racecheck on the
@@ -27,7 +27,7 @@ prepare() {
   rm -rf .gpu && mkdir -p .gpu/payload/bin .gpu/payload/data
   local bins=(build-gpu/tests/gpu/test_gpu build-gpu/tests/gpu/test_gpu_elements build-gpu/tools/pseudo3d-bench
               build-gpu/tools/pseudo3d-convert)
-  "$top/../shared/gpu/make-gst-runtime" .gpu/payload/gstrt build-gpu/gst/libgstpseudo3d.so "${bins[@]}" >/dev/null
+  "$top/scripts/make-gst-runtime.sh" .gpu/payload/gstrt build-gpu/gst/libgstpseudo3d.so "${bins[@]}" >/dev/null
   cp "${bins[@]}" build-gpu/gst/libgstpseudo3d.so .gpu/payload/bin/
   strip --strip-unneeded .gpu/payload/bin/* 2>/dev/null || true
   cp build-gpu/tests/raw-data/*.p3draw .gpu/payload/data/  # decoded here: no image codecs there

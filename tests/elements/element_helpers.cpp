@@ -42,6 +42,37 @@ GstBuffer *buffer_from_frame(const HostFrame &frame) {
   return buf;
 }
 
+static GstVideoInfo grey_info(const cv::Mat &grey) {
+  GstVideoInfo info;
+  gst_video_info_set_format(&info, grey.depth() == CV_8U ? GST_VIDEO_FORMAT_GRAY8 : GST_VIDEO_FORMAT_GRAY16_LE, grey.cols,
+                            grey.rows);
+  return info;
+}
+
+GstBuffer *buffer_from_grey(const cv::Mat &grey) {
+  GstVideoInfo info = grey_info(grey);
+  GstBuffer *buf = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+  GstVideoFrame vf;
+  gst_video_frame_map(&vf, &info, buf, GST_MAP_WRITE);
+  for (int y = 0; y < grey.rows; ++y)
+    memcpy(static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&vf, 0)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(&vf, 0),
+           grey.ptr(y), grey.cols * grey.elemSize());
+  gst_video_frame_unmap(&vf);
+  gst_buffer_add_video_meta_full(buf, GST_VIDEO_FRAME_FLAG_NONE, GST_VIDEO_INFO_FORMAT(&info), grey.cols, grey.rows,
+                                 1, info.offset, info.stride);
+  return buf;
+}
+
+std::string grey_caps(const cv::Mat &grey) {
+  GstVideoInfo info = grey_info(grey);
+  GstCaps *caps = gst_video_info_to_caps(&info);
+  gchar *s = gst_caps_to_string(caps);
+  std::string out = s;
+  g_free(s);
+  gst_caps_unref(caps);
+  return out;
+}
+
 cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps) {
   GstVideoInfo info;
   if (!gst_video_info_from_caps(&info, caps)) return cv::Mat();

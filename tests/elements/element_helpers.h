@@ -22,6 +22,10 @@ std::string raw_caps(PixelFormat f, int width, int height, const char *extra = "
 // A GstBuffer (system memory) holding the frame, laid out as GstVideoInfo
 // says (with its strides), plus a GstVideoMeta.
 GstBuffer *buffer_from_frame(const HostFrame &frame);
+// A GRAY8 (CV_8UC1) or GRAY16_LE (CV_16UC1) buffer of the picture, with
+// GstVideoInfo's strides and a GstVideoMeta; its caps: grey_caps().
+GstBuffer *buffer_from_grey(const cv::Mat &grey);
+std::string grey_caps(const cv::Mat &grey);
 // The buffer's pixels as BGRA through load_rgba (info from caps).
 cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps);
 // The depth meta as a CV_32FC1 copy; empty if none.

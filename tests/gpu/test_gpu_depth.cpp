@@ -10,6 +10,7 @@
 // real error (one hypothesis quantum, 1/65535 = 1.5e-5, or a block in the
 // wrong region) is far larger. Every output starts poisoned with NaN, so an
 // unwritten pixel counts as non-finite and fails.
+#include <algorithm>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -21,6 +22,7 @@
 #include "depth_estimate_gpu.h"
 #include "gpu_util.h"
 #include "test_data.h"
+#include "warp_reduce_check.h"
 
 namespace p3d {
 namespace {
@@ -408,6 +410,32 @@ TEST(GpuDepth, LargeFramesMatchCpu) {
     const test::FloatDiff d = test::compare_f32(c.depth, depth.download());
     EXPECT_EQ(d.nonfinite, 0) << name;
     EXPECT_LE(d.max_abs, kDepthTolerance) << name;
+  }
+}
+
+// The region reductions' warp sums and maxima: the shuffle form that Turing
+// (sm_75) runs gives the very bits of the hardware instructions this GPU
+// runs, and both the CPU's; random values over the whole range (sums wrap
+// mod 2^32 alike) and the kernel's own range (at most 65535 a lane).
+TEST(GpuDepth, WarpReductionsFallbackMatchesHardware) {
+  std::mt19937 rng(fresh_seed());
+  for (uint32_t top : {0xffffffffu, 65535u, 1u}) {
+    std::vector<uint32_t> in(32 * 4096);
+    for (uint32_t &v : in) v = static_cast<uint32_t>(rng()) % (top == 0xffffffffu ? top : top + 1);
+    for (int k = 0; k < 32; ++k) in[32 * 7 + k] = top;  // a warp of equal lanes
+    std::vector<uint32_t> out;
+    check_cuda(test::warp_reductions_gpu(in, &out));
+    for (size_t w = 0; w < in.size() / 32; ++w) {
+      uint32_t sum = 0, mx = 0;
+      for (int k = 0; k < 32; ++k) {
+        sum += in[32 * w + k];
+        mx = std::max(mx, in[32 * w + k]);
+      }
+      ASSERT_EQ(out[4 * w + 0], sum) << "warp " << w << ", top " << top;
+      ASSERT_EQ(out[4 * w + 1], sum) << "warp " << w << ", top " << top;
+      ASSERT_EQ(out[4 * w + 2], mx) << "warp " << w << ", top " << top;
+      ASSERT_EQ(out[4 * w + 3], mx) << "warp " << w << ", top " << top;
+    }
   }
 }
 

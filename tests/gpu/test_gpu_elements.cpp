@@ -334,6 +334,33 @@ std::vector<cv::Mat> pull_all(GstElement *pipeline) {
   return frames;
 }
 
+// pseudo3ddepthmux on CUDA memory: the depth goes to the frame's context
+// and the GPU stages after it give the CPU chain's output exactly, for a
+// depth picture of the frame's size and of another size, 8 and 16 bits.
+TEST(GpuDepthMux, CudaFramesMatchTheCpuChain) {
+  for (const char *depth : {"format=GRAY8,width=320,height=240", "format=GRAY16_LE,width=160,height=90"}) {
+    std::vector<cv::Mat> out[2];
+    for (int gpu = 0; gpu < 2; ++gpu) {
+      const std::string launch =
+          std::string("videotestsrc num-buffers=4 pattern=ball ! video/x-raw,format=NV12,width=320,height=240 ! ") +
+          (gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") + "m.video " +
+          "videotestsrc num-buffers=1 pattern=smpte ! videoconvert ! video/x-raw," + depth + " ! m.depth " +
+          "pseudo3ddepthmux name=m ! pseudo3dfilter processing=" + (gpu ? "gpu" : "cpu") +
+          " ! pseudo3dwarp processing=" + (gpu ? "gpu" : "cpu") + " ! pseudo3dpack layout=side-by-side processing=" +
+          (gpu ? "gpu" : "cpu") + (gpu ? " ! video/x-raw(memory:CUDAMemory) ! cudadownload" : "") +
+          " ! video/x-raw,format=RGBA ! appsink name=out sync=false";
+      GstElement *p = gst_parse_launch(launch.c_str(), nullptr);
+      ASSERT_NE(p, nullptr) << launch;
+      gst_element_set_state(p, GST_STATE_PLAYING);
+      out[gpu] = pull_all(p);
+      gst_element_set_state(p, GST_STATE_NULL);
+      gst_object_unref(p);
+    }
+    ASSERT_EQ(out[0].size(), 4u) << depth;
+    expect_same(out[1], out[0], std::string("depthmux ") + depth);
+  }
+}
+
 // cudaupload on one CUDA context, the stages given another (both device 0,
 // set before they start, so nothing shares them): with cuda-device-id -1
 // the stages adopt the context of the incoming buffers and give the CPU

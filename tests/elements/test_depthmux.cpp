@@ -1,0 +1,253 @@
+// pseudo3ddepthmux: external depth (grey pictures on a second pad) attached
+// to each frame. Each test says what the element must give; the expected
+// depth comes from the CPU reference (common/depth_import.h), and from the
+// conventions' formulas where the reference itself is checked.
+#include <gst/check/gstharness.h>
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "depth_import.h"
+#include "element_helpers.h"
+
+using namespace p3d;
+using namespace p3d::test;
+
+namespace {
+
+// The mux with a harness on each sink pad; the video harness pulls from src.
+struct Mux {
+  GstHarness *video, *depth;
+  explicit Mux(const std::string &props = "") {
+    GstElement *e = gst_parse_launch(("pseudo3ddepthmux " + props).c_str(), nullptr);
+    video = gst_harness_new_with_element(e, "video", "src");
+    depth = gst_harness_new_with_element(e, "depth", nullptr);
+    gst_object_unref(e);
+  }
+  ~Mux() {
+    gst_harness_teardown(depth);
+    gst_harness_teardown(video);
+  }
+  GstElement *element() const { return video->element; }
+};
+
+GstBuffer *at(GstBuffer *buf, double seconds) {
+  GST_BUFFER_PTS(buf) = static_cast<GstClockTime>(seconds * GST_SECOND);
+  return buf;
+}
+
+HostFrame frame_of(int w, int h, uint32_t seed) {
+  cv::Mat bgr(h, w, CV_8UC3);
+  cv::RNG(seed).fill(bgr, cv::RNG::UNIFORM, 0, 255);
+  return HostFrame::from_bgr(bgr, PixelFormat::RGBA, 0);
+}
+
+cv::Mat random_grey(int w, int h, int type, uint32_t seed) {
+  cv::Mat g(h, w, type);
+  cv::RNG(seed).fill(g, cv::RNG::UNIFORM, 0, type == CV_8UC1 ? 256 : 65536);
+  return g;
+}
+
+// The reference: the element's function on the CPU.
+cv::Mat imported(const cv::Mat &grey, int w, int h, const DepthImportParams &p = DepthImportParams()) {
+  cv::Mat out(h, w, CV_32FC1);
+  ImageView<const uint8_t> src;
+  src.data = grey.data;
+  src.width = grey.cols;
+  src.height = grey.rows;
+  src.pitch = grey.step;
+  ImageView<float> dst;
+  dst.data = out.ptr<float>();
+  dst.width = w;
+  dst.height = h;
+  dst.pitch = out.step;
+  import_depth_cpu(p, src, grey.depth() == CV_8U ? 8 : 16, dst);
+  return out;
+}
+
+// The errors the element posts, waiting up to 2 s for the first.
+std::vector<std::string> wait_for_errors(BusMessages &bus) {
+  std::vector<std::string> errors;
+  for (int i = 0; i < 100 && errors.empty(); ++i) {
+    errors = bus.take(GST_MESSAGE_ERROR);
+    if (errors.empty()) g_usleep(20000);
+  }
+  return errors;
+}
+
+}  // namespace
+
+// The conventions' formulas, sample by sample.
+TEST(DepthImport, Conventions) {
+  DepthImportParams p;
+  EXPECT_EQ(import_depth_sample(p, 0, 255), 0.f);
+  EXPECT_EQ(import_depth_sample(p, 255, 255), 1.f);
+  EXPECT_EQ(import_depth_sample(p, 65535, 65535), 1.f);
+  p.convention = DepthConvention::NearDark;
+  EXPECT_EQ(import_depth_sample(p, 0, 255), 1.f);
+  EXPECT_EQ(import_depth_sample(p, 255, 255), 0.f);
+  p.convention = DepthConvention::Metric;
+  p.near = 500;
+  p.far = 4000;
+  EXPECT_EQ(import_depth_sample(p, 0, 65535), 0.f) << "0 = not seen: far";
+  EXPECT_FLOAT_EQ(import_depth_sample(p, 500, 65535), 1.f);
+  EXPECT_FLOAT_EQ(import_depth_sample(p, 4000, 65535), 0.f);
+  EXPECT_FLOAT_EQ(import_depth_sample(p, 100, 65535), 1.f) << "nearer than near: clamped";
+  EXPECT_FLOAT_EQ(import_depth_sample(p, 60000, 65535), 0.f) << "farther than far: clamped";
+  // Linear in 1/distance: 1000 mm is (1/1000 - 1/4000) / (1/500 - 1/4000) = 3/7.
+  EXPECT_NEAR(import_depth_sample(p, 1000, 65535), 3.0 / 7.0, 1e-6);
+}
+
+// Same size, both sample widths: the frame passes unchanged and carries the
+// depth of the reference, bit for bit.
+TEST(DepthMux, AttachesGreyDepthOfTheFrameSize) {
+  const int w = 37, h = 21;
+  for (int type : {CV_8UC1, CV_16UC1}) {
+    Mux m;
+    const cv::Mat grey = random_grey(w, h, type, 3);
+    gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::RGBA, w, h).c_str());
+    gst_harness_set_src_caps_str(m.depth, grey_caps(grey).c_str());
+    const HostFrame f = frame_of(w, h, 1);
+    ASSERT_EQ(gst_harness_push(m.depth, at(buffer_from_grey(grey), 0)), GST_FLOW_OK);
+    gst_harness_push_event(m.depth, gst_event_new_eos());
+    ASSERT_EQ(gst_harness_push(m.video, at(buffer_from_frame(f), 0)), GST_FLOW_OK);
+    GstBuffer *out = gst_harness_pull(m.video);
+    ASSERT_NE(out, nullptr);
+    const cv::Mat d = buffer_depth(out);
+    ASSERT_EQ(d.size(), cv::Size(w, h));
+    EXPECT_EQ(cv::norm(d, imported(grey, w, h), cv::NORM_INF), 0) << "type " << type;
+    GstCaps *caps = gst_pad_get_current_caps(m.video->sinkpad);
+    EXPECT_EQ(cv::norm(buffer_to_bgra(out, caps), f.to_bgra(YuvToRgb()), cv::NORM_INF), 0) << "the frame is untouched";
+    gst_caps_unref(caps);
+    gst_buffer_unref(out);
+  }
+}
+
+// Another size: resampled to the frame's (the reference's nearest-sample
+// resize), including a 1x1 picture (one depth for the whole frame).
+TEST(DepthMux, ResamplesDepthOfAnotherSize) {
+  const int w = 64, h = 48;
+  for (cv::Size ds : {cv::Size(32, 24), cv::Size(100, 7), cv::Size(1, 1)}) {
+    Mux m("convention=near-dark");
+    const cv::Mat grey = random_grey(ds.width, ds.height, CV_16UC1, 5);
+    gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::NV12, w, h).c_str());
+    gst_harness_set_src_caps_str(m.depth, grey_caps(grey).c_str());
+    gst_harness_push(m.depth, at(buffer_from_grey(grey), 0));
+    gst_harness_push_event(m.depth, gst_event_new_eos());
+    cv::Mat bgr(h, w, CV_8UC3, cv::Scalar(10, 200, 30));
+    gst_harness_push(m.video, at(buffer_from_frame(HostFrame::from_bgr(bgr, PixelFormat::NV12)), 0));
+    GstBuffer *out = gst_harness_pull(m.video);
+    ASSERT_NE(out, nullptr);
+    DepthImportParams p;
+    p.convention = DepthConvention::NearDark;
+    const cv::Mat d = buffer_depth(out);
+    ASSERT_EQ(d.size(), cv::Size(w, h));
+    EXPECT_EQ(cv::norm(d, imported(grey, w, h, p), cv::NORM_INF), 0) << ds;
+    EXPECT_TRUE(cv::checkRange(d, true, nullptr, 0.0, 1.0 + 1e-6)) << ds;
+    gst_buffer_unref(out);
+  }
+}
+
+// Pairing by time: each frame gets the last depth picture not after it; the
+// first picture serves frames before it; after the depth stream's end its
+// last picture serves the rest.
+TEST(DepthMux, PairsFramesWithTheLatestDepthPicture) {
+  const int w = 8, h = 8;
+  Mux m;
+  std::vector<cv::Mat> greys;
+  for (int i = 0; i < 3; ++i) greys.emplace_back(h, w, CV_8UC1, cv::Scalar(50 + 80 * i));
+  gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::RGBA, w, h, ",framerate=2/1").c_str());
+  gst_harness_set_src_caps_str(m.depth, grey_caps(greys[0]).c_str());
+  // Depth at 0.25 s, 1 s and 2 s; frames every 0.5 s from 0 to 3 s. The
+  // aggregator holds one buffer per pad, so each stream is pushed from its
+  // own thread, as from the two branches of a pipeline.
+  const double depth_times[] = {0.25, 1.0, 2.0};
+  const int want[] = {0, 0, 1, 1, 2, 2, 2};
+  std::thread depth_branch([&]() {
+    for (int k = 0; k < 3; ++k) gst_harness_push(m.depth, at(buffer_from_grey(greys[k]), depth_times[k]));
+    gst_harness_push_event(m.depth, gst_event_new_eos());
+  });
+  for (int i = 0; i < 7; ++i) gst_harness_push(m.video, at(buffer_from_frame(frame_of(w, h, i)), 0.5 * i));
+  depth_branch.join();
+  std::vector<int> got;
+  gst_harness_push_event(m.video, gst_event_new_eos());
+  for (int i = 0; i < 7; ++i) {
+    GstBuffer *out = gst_harness_pull(m.video);
+    ASSERT_NE(out, nullptr) << "frame " << i;
+    const cv::Mat d = buffer_depth(out);
+    ASSERT_FALSE(d.empty()) << "frame " << i;
+    got.push_back(static_cast<int>(std::lround((d.at<float>(0, 0) * 255 - 50) / 80)));
+    EXPECT_EQ(GST_BUFFER_PTS(out), static_cast<GstClockTime>(0.5 * i * GST_SECOND));
+    gst_buffer_unref(out);
+  }
+  EXPECT_EQ(got, std::vector<int>(want, want + 7));
+}
+
+// One still picture (a single buffer, then the end of the depth stream)
+// serves a whole stream of frames.
+TEST(DepthMux, StillDepthServesTheWholeStream) {
+  const int w = 16, h = 12;
+  Mux m;
+  const cv::Mat grey = random_grey(w, h, CV_8UC1, 9);
+  gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::I420, w, h, ",framerate=25/1").c_str());
+  gst_harness_set_src_caps_str(m.depth, grey_caps(grey).c_str());
+  gst_harness_push(m.depth, at(buffer_from_grey(grey), 0));
+  gst_harness_push_event(m.depth, gst_event_new_eos());
+  const cv::Mat want = imported(grey, w, h);
+  for (int i = 0; i < 50; ++i) {
+    cv::Mat bgr(h, w, CV_8UC3, cv::Scalar(i, 2 * i, 3 * i));
+    GstBuffer *out =
+        gst_harness_push_and_pull(m.video, at(buffer_from_frame(HostFrame::from_bgr(bgr, PixelFormat::I420)), i / 25.0));
+    ASSERT_NE(out, nullptr) << "frame " << i;
+    EXPECT_EQ(cv::norm(buffer_depth(out), want, cv::NORM_INF), 0) << "frame " << i;
+    gst_buffer_unref(out);
+  }
+}
+
+// A depth stream that ends before giving any picture is an error, not a hang
+// or frames without depth.
+TEST(DepthMux, NoDepthAtAllIsAnError) {
+  Mux m;
+  BusMessages bus(m.element());
+  gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::RGBA, 8, 8).c_str());
+  gst_harness_set_src_caps_str(m.depth, grey_caps(cv::Mat(8, 8, CV_8UC1)).c_str());
+  gst_harness_push_event(m.depth, gst_event_new_eos());
+  gst_harness_push(m.video, at(buffer_from_frame(frame_of(8, 8, 1)), 0));
+  gst_harness_push_event(m.video, gst_event_new_eos());
+  GstBuffer *out = gst_harness_try_pull(m.video);
+  EXPECT_EQ(out, nullptr);
+  if (out) gst_buffer_unref(out);
+  const std::vector<std::string> errors = wait_for_errors(bus);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("without a depth picture"), std::string::npos) << errors[0];
+}
+
+// metric with near >= far cannot mean anything: an error naming both.
+TEST(DepthMux, MetricNeedsNearBelowFar) {
+  Mux m("convention=metric near=5000 far=1000");
+  BusMessages bus(m.element());
+  const cv::Mat grey(4, 4, CV_16UC1, cv::Scalar(2000));
+  gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::RGBA, 4, 4).c_str());
+  gst_harness_set_src_caps_str(m.depth, grey_caps(grey).c_str());
+  gst_harness_push(m.depth, at(buffer_from_grey(grey), 0));
+  gst_harness_push_event(m.depth, gst_event_new_eos());
+  gst_harness_push(m.video, at(buffer_from_frame(frame_of(4, 4, 1)), 0));
+  const std::vector<std::string> errors = wait_for_errors(bus);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("near 5000, far 1000"), std::string::npos) << errors[0];
+}
+
+// The stages that follow take the depth as they take pseudo3ddepth's: a
+// whole chain from a video test source and a grey depth picture.
+TEST(DepthMux, FeedsTheStereoChain) {
+  const std::string err = run_to_eos(
+      "videotestsrc num-buffers=5 ! video/x-raw,format=RGBA,width=64,height=48 ! m.video "
+      "videotestsrc num-buffers=1 pattern=gradient ! video/x-raw,format=GRAY16_LE,width=32,height=24 ! m.depth "
+      "pseudo3ddepthmux name=m ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack layout=side-by-side-half ! fakesink");
+  EXPECT_EQ(err, "");
+}
