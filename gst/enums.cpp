@@ -2,7 +2,7 @@
 
 #include "bilateral.h"
 #include "depth_estimate.h"
-#include "depth_import.h"
+#include "depth_grey.h"
 #include "pack.h"
 #include "warp.h"
 

@@ -35,7 +35,7 @@
 #include <string>
 
 #include "config.h"
-#include "depth_import.h"
+#include "depth_grey.h"
 #include "depth_meta.h"
 #include "depth_plane.h"
 #include "enums.h"

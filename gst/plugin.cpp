@@ -6,6 +6,7 @@
 #include "gstpseudo3dconvert.h"
 #include "gstpseudo3ddepth.h"
 #include "gstpseudo3ddepthmux.h"
+#include "gstpseudo3ddepthout.h"
 #include "gstpseudo3dfilter.h"
 #include "gstpseudo3dpack.h"
 #include "gstpseudo3dsignal.h"
@@ -36,6 +37,7 @@ static gboolean plugin_init(GstPlugin *plugin) {
   ok &= GST_ELEMENT_REGISTER(pseudo3dconvert, plugin);
   ok &= GST_ELEMENT_REGISTER(pseudo3dsignal, plugin);
   ok &= GST_ELEMENT_REGISTER(pseudo3ddepthmux, plugin);
+  ok &= GST_ELEMENT_REGISTER(pseudo3ddepthout, plugin);
   return ok;
 }
 

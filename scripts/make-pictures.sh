@@ -39,7 +39,7 @@ write_elements_md() {
   echo "and \`gst-inspect-1.0\` (GStreamer $(gst-inspect-1.0 --version | sed -n 's/^GStreamer //p'))."
   echo "Property lists include the generic GObject/GStreamer ones (\`name\`, \`parent\`, \`qos\`...)."
   echo "Build the plugin and run \`GST_PLUGIN_PATH_1_0=build/gst gst-inspect-1.0 ELEMENT\` for the same."
-  for e in pseudo3dconvert pseudo3ddepth pseudo3dfilter pseudo3dwarp pseudo3dpack pseudo3dsignal pseudo3ddepthmux; do
+  for e in pseudo3dconvert pseudo3ddepth pseudo3dfilter pseudo3dwarp pseudo3dpack pseudo3dsignal pseudo3ddepthmux pseudo3ddepthout; do
     echo
     echo "## $e"
     section_doc "$e"

@@ -15,6 +15,7 @@
 
 #include "bilateral.h"
 #include "depth_estimate.h"
+#include "depth_grey.h"
 #include "host_frame.h"
 
 namespace {
@@ -114,11 +115,8 @@ cv::Mat estimate_depth(const cv::Mat &bgr, const Options &o) {
 
 cv::Mat to_grey8(const cv::Mat &depth) {
   cv::Mat grey(depth.size(), CV_8UC1);
-  for (int y = 0; y < depth.rows; ++y) {
-    const float *src = depth.ptr<float>(y);
-    uint8_t *dst = grey.ptr<uint8_t>(y);
-    for (int x = 0; x < depth.cols; ++x) dst[x] = p3d::to_u8(src[x] * 255.f);
-  }
+  p3d::export_depth_cpu(p3d::ImageView<const float>{depth.ptr<float>(), depth.cols, depth.rows, depth.step}, 8,
+                        p3d::ImageView<uint8_t>{grey.ptr<uint8_t>(), grey.cols, grey.rows, grey.step});
   return grey;
 }
 

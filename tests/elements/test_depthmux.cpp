@@ -1,18 +1,20 @@
 // pseudo3ddepthmux: external depth (grey pictures on a second pad) attached
-// to each frame. Each test says what the element must give; the expected
-// depth comes from the CPU reference (common/depth_import.h), and from the
+// to each frame; pseudo3ddepthout: the depth taken out as grey video. Each test says what the element must give; the expected
+// depth comes from the CPU reference (common/depth_grey.h), and from the
 // conventions' formulas where the reference itself is checked.
 #include <gst/check/gstharness.h>
+#include <gst/video/video.h>
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "depth_import.h"
+#include "depth_grey.h"
 #include "element_helpers.h"
 
 using namespace p3d;
@@ -250,4 +252,137 @@ TEST(DepthMux, FeedsTheStereoChain) {
       "videotestsrc num-buffers=1 pattern=gradient ! video/x-raw,format=GRAY16_LE,width=32,height=24 ! m.depth "
       "pseudo3ddepthmux name=m ! pseudo3dfilter ! pseudo3dwarp ! pseudo3dpack layout=side-by-side-half ! fakesink");
   EXPECT_EQ(err, "");
+}
+
+// Depth out: 16- and 8-bit grey of the frame's size, white = near, the
+// reference's values; fed back through pseudo3ddepthmux it is the same
+// depth to within half a step.
+TEST(DepthOut, GreyOfTheDepthAndBackThroughTheMux) {
+  const int w = 45, h = 31;
+  const HostFrame f = frame_of(w, h, 4);
+  for (const char *format : {"GRAY16_LE", "GRAY8"}) {
+    GstHarness *est = gst_harness_new_parse("pseudo3ddepth ! pseudo3dfilter");
+    gst_harness_set_src_caps_str(est, raw_caps(PixelFormat::RGBA, w, h).c_str());
+    GstBuffer *with_depth = gst_harness_push_and_pull(est, buffer_from_frame(f));
+    ASSERT_NE(with_depth, nullptr);
+    const cv::Mat depth = buffer_depth(with_depth);
+    GstHarness *out =
+        gst_harness_new_parse((std::string("pseudo3ddepthout ! capsfilter caps=video/x-raw,format=") + format).c_str());
+    gst_harness_set_src_caps_str(out, raw_caps(PixelFormat::RGBA, w, h).c_str());
+    GstBuffer *grey_buf = gst_harness_push_and_pull(out, gst_buffer_ref(with_depth));
+    ASSERT_NE(grey_buf, nullptr) << format;
+    GstCaps *caps = gst_pad_get_current_caps(out->sinkpad);
+    GstVideoInfo info;
+    ASSERT_TRUE(gst_video_info_from_caps(&info, caps));
+    gst_caps_unref(caps);
+    EXPECT_EQ(GST_VIDEO_INFO_WIDTH(&info), w);
+    EXPECT_EQ(GST_VIDEO_INFO_HEIGHT(&info), h);
+    const bool eight = GST_VIDEO_INFO_FORMAT(&info) == GST_VIDEO_FORMAT_GRAY8;
+    EXPECT_EQ(eight, std::string(format) == "GRAY8");
+    GstVideoFrame vf;
+    ASSERT_TRUE(gst_video_frame_map(&vf, &info, grey_buf, GST_MAP_READ));
+    const cv::Mat grey(h, w, eight ? CV_8UC1 : CV_16UC1, GST_VIDEO_FRAME_PLANE_DATA(&vf, 0),
+                       GST_VIDEO_FRAME_PLANE_STRIDE(&vf, 0));
+    const cv::Mat grey_copy = grey.clone();
+    gst_video_frame_unmap(&vf);
+    const double smax = eight ? 255 : 65535;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double s = eight ? grey_copy.at<uint8_t>(y, x) : grey_copy.at<uint16_t>(y, x);
+        const float d = depth.at<float>(y, x);
+        ASSERT_EQ(s, export_depth_sample(d, static_cast<uint32_t>(smax))) << x << "," << y;
+        ASSERT_LE(std::abs(s - std::clamp(d, 0.f, 1.f) * smax), 0.5 + 1e-3) << x << "," << y << ": the nearest step";
+      }
+    // Back in through the mux.
+    Mux m;
+    gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::RGBA, w, h).c_str());
+    gst_harness_set_src_caps_str(m.depth, grey_caps(grey_copy).c_str());
+    gst_harness_push(m.depth, at(buffer_from_grey(grey_copy), 0));
+    gst_harness_push_event(m.depth, gst_event_new_eos());
+    GstBuffer *back = gst_harness_push_and_pull(m.video, at(buffer_from_frame(f), 0));
+    ASSERT_NE(back, nullptr);
+    EXPECT_LE(cv::norm(buffer_depth(back), depth, cv::NORM_INF), 0.5 / smax + 1e-6) << format;
+    gst_buffer_unref(back);
+    gst_buffer_unref(grey_buf);
+    gst_buffer_unref(with_depth);
+    gst_harness_teardown(out);
+    gst_harness_teardown(est);
+  }
+}
+
+// Upstream may hand over frames in either memory domain whatever grey
+// format downstream takes: a caps query from upstream keeps CUDA memory
+// (in a build with CUDA) next to system memory, at the same size.
+TEST(DepthOut, FramesInEitherMemoryDomain) {
+  // The domains the element takes at all (CUDA memory only in a CUDA build).
+  auto domains = [](GstCaps *caps, bool *cuda, bool *system) {
+    *cuda = *system = false;
+    for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
+      GstCapsFeatures *f = gst_caps_get_features(caps, i);
+      (f && gst_caps_features_contains(f, "memory:CUDAMemory") ? *cuda : *system) = true;
+    }
+  };
+  GstElement *probe = gst_element_factory_make("pseudo3ddepthout", nullptr);
+  ASSERT_NE(probe, nullptr);
+  GstPad *probe_sink = gst_element_get_static_pad(probe, "sink");
+  GstCaps *templ = gst_pad_get_pad_template_caps(probe_sink);
+  bool templ_cuda, templ_system;
+  domains(templ, &templ_cuda, &templ_system);
+  gst_caps_unref(templ);
+  gst_object_unref(probe_sink);
+  gst_object_unref(probe);
+
+  GstHarness *hx = gst_harness_new_parse("pseudo3ddepthout ! capsfilter caps=video/x-raw,format=GRAY8,width=64");
+  GstCaps *caps = gst_pad_peer_query_caps(hx->srcpad, nullptr);
+  ASSERT_NE(caps, nullptr);
+  gchar *text = gst_caps_to_string(caps);
+  bool cuda, system;
+  domains(caps, &cuda, &system);
+  EXPECT_NE(std::string(text).find("width=(int)64"), std::string::npos) << text;
+  EXPECT_TRUE(system) << text;
+  EXPECT_EQ(cuda, templ_cuda) << text;
+  g_free(text);
+  gst_caps_unref(caps);
+  gst_harness_teardown(hx);
+}
+
+// Without depth: one clear error that says what to put before it.
+TEST(DepthOut, FramesWithoutDepthAreAnError) {
+  GstHarness *hx = gst_harness_new_parse("pseudo3ddepthout");
+  BusMessages bus(hx->element);
+  gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::NV12, 16, 8).c_str());
+  cv::Mat bgr(8, 16, CV_8UC3, cv::Scalar(1, 2, 3));
+  EXPECT_EQ(gst_harness_push(hx, buffer_from_frame(HostFrame::from_bgr(bgr, PixelFormat::NV12))), GST_FLOW_ERROR);
+  const std::vector<std::string> errors = bus.take(GST_MESSAGE_ERROR);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("put pseudo3ddepth or pseudo3ddepthmux"), std::string::npos) << errors[0];
+  gst_harness_teardown(hx);
+}
+
+// A real video: vtest.avi's depth taken out as GRAY8 and encoded, read back
+// with its frame count and size.
+TEST(DepthOut, VideoDepthEncodesAsGreyVideo) {
+  const std::string out = output_dir() + "/vtest-depth.mkv";
+  const std::string err = run_to_eos("videotestsrc num-buffers=20 pattern=ball ! video/x-raw,width=160,height=120 ! "
+                                     "pseudo3ddepth ! pseudo3dfilter ! pseudo3ddepthout ! video/x-raw,format=GRAY8 ! "
+                                     "videoconvert ! x264enc speed-preset=ultrafast ! matroskamux ! filesink location=" +
+                                     out);
+  ASSERT_EQ(err, "");
+  int frames = 0;
+  const std::string back = run_to_eos("filesrc location=" + out + " ! decodebin ! video/x-raw,width=160,height=120 ! "
+                                      "fakesink name=s signal-handoffs=false",
+                                      60, [&](GstElement *p) {
+                                        GstElement *s = gst_bin_get_by_name(GST_BIN(p), "s");
+                                        guint64 n = 0;
+                                        GstStructure *st = nullptr;
+                                        g_object_get(s, "stats", &st, NULL);
+                                        if (st) {
+                                          gst_structure_get_uint64(st, "rendered", &n);
+                                          gst_structure_free(st);
+                                        }
+                                        frames = static_cast<int>(n);
+                                        gst_object_unref(s);
+                                      });
+  EXPECT_EQ(back, "");
+  EXPECT_EQ(frames, 20);
 }

@@ -21,7 +21,7 @@ using namespace p3d::test;
 namespace {
 
 const char *kFactories[] = {"pseudo3ddepth", "pseudo3dfilter", "pseudo3dwarp", "pseudo3dpack",
-                             "pseudo3dconvert", "pseudo3dsignal", "pseudo3ddepthmux"};
+                             "pseudo3dconvert", "pseudo3dsignal", "pseudo3ddepthmux", "pseudo3ddepthout"};
 
 // A frame with a top/bottom colour split, so depth and edges are non-trivial.
 HostFrame test_frame(PixelFormat f, int w, int h, uint32_t seed) {

@@ -334,6 +334,27 @@ std::vector<cv::Mat> pull_all(GstElement *pipeline) {
   return frames;
 }
 
+// Plays `launch` (with an appsink named "out") and returns its frames; an
+// error the pipeline posts fails the test with its text.
+std::vector<cv::Mat> play_and_pull(const std::string &launch) {
+  GstElement *p = gst_parse_launch(launch.c_str(), nullptr);
+  if (!p) {
+    ADD_FAILURE() << "cannot parse " << launch;
+    return {};
+  }
+  gst_element_set_state(p, GST_STATE_PLAYING);
+  std::vector<cv::Mat> frames = pull_all(p);
+  GstBus *bus = gst_element_get_bus(p);
+  if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
+    ADD_FAILURE() << launch << ": " << message_text(m);
+    gst_message_unref(m);
+  }
+  gst_object_unref(bus);
+  gst_element_set_state(p, GST_STATE_NULL);
+  gst_object_unref(p);
+  return frames;
+}
+
 // pseudo3ddepthmux on CUDA memory: the depth goes to the frame's context
 // and the GPU stages after it give the CPU chain's output exactly, for a
 // depth picture of the frame's size and of another size, 8 and 16 bits.
@@ -349,15 +370,29 @@ TEST(GpuDepthMux, CudaFramesMatchTheCpuChain) {
           " ! pseudo3dwarp processing=" + (gpu ? "gpu" : "cpu") + " ! pseudo3dpack layout=side-by-side processing=" +
           (gpu ? "gpu" : "cpu") + (gpu ? " ! video/x-raw(memory:CUDAMemory) ! cudadownload" : "") +
           " ! video/x-raw,format=RGBA ! appsink name=out sync=false";
-      GstElement *p = gst_parse_launch(launch.c_str(), nullptr);
-      ASSERT_NE(p, nullptr) << launch;
-      gst_element_set_state(p, GST_STATE_PLAYING);
-      out[gpu] = pull_all(p);
-      gst_element_set_state(p, GST_STATE_NULL);
-      gst_object_unref(p);
+      out[gpu] = play_and_pull(launch);
     }
     ASSERT_EQ(out[0].size(), 4u) << depth;
     expect_same(out[1], out[0], std::string("depthmux ") + depth);
+  }
+}
+
+// pseudo3ddepthout reads a device depth back: the grey video of the GPU
+// chain is the CPU chain's, 16 and 8 bits.
+TEST(GpuDepthOut, DeviceDepthReadsBackAsTheCpuChain) {
+  for (const char *format : {"GRAY16_LE", "GRAY8"}) {
+    std::vector<cv::Mat> out[2];
+    for (int gpu = 0; gpu < 2; ++gpu) {
+      const std::string p = gpu ? "gpu" : "cpu";
+      const std::string launch =
+          std::string("videotestsrc num-buffers=3 pattern=ball ! video/x-raw,format=NV12,width=320,height=240 ! ") +
+          (gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") + "pseudo3ddepth processing=" + p +
+          " ! pseudo3dfilter processing=" + p + " ! pseudo3ddepthout ! video/x-raw,format=" + format +
+          " ! videoconvert ! video/x-raw,format=RGBA ! appsink name=out sync=false";
+      out[gpu] = play_and_pull(launch);
+    }
+    ASSERT_EQ(out[0].size(), 3u) << format;
+    expect_same(out[1], out[0], std::string("depthout ") + format);
   }
 }
 

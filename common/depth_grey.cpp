@@ -1,4 +1,4 @@
-#include "depth_import.h"
+#include "depth_grey.h"
 
 #include <algorithm>
 #include <vector>
@@ -43,6 +43,26 @@ void import_depth_cpu(const DepthImportParams &p, const ImageView<const uint8_t>
     converted.copyTo(dst);
   else
     cv::resize(converted, dst, dst.size(), 0, 0, cv::INTER_NEAREST_EXACT);  // see the header
+}
+
+uint32_t export_depth_sample(float d, uint32_t smax) {
+  if (!(d > 0.f)) return 0;  // also NaN
+  if (d >= 1.f) return smax;
+  return static_cast<uint32_t>(d * static_cast<float>(smax) + 0.5f);
+}
+
+void export_depth_cpu(const ImageView<const float> &depth, int bits, ImageView<uint8_t> out) {
+  const uint32_t smax = bits == 8 ? 255u : 65535u;
+  for (int y = 0; y < depth.height; ++y) {
+    const float *d = depth.row(y);
+    uint8_t *row = out.row(y);
+    if (bits == 8) {
+      for (int x = 0; x < depth.width; ++x) row[x] = static_cast<uint8_t>(export_depth_sample(d[x], smax));
+    } else {
+      auto *row16 = reinterpret_cast<uint16_t *>(row);
+      for (int x = 0; x < depth.width; ++x) row16[x] = static_cast<uint16_t>(export_depth_sample(d[x], smax));
+    }
+  }
 }
 
 }  // namespace p3d

@@ -1,5 +1,8 @@
-// External depth (a depth camera, a depth file, an ML model's output) turned
-// into the plugin's depth: float, 0 = far, 1 = near, the frame's size.
+// Depth as grey pictures, in and out.
+//
+// In (pseudo3ddepthmux): external depth (a depth camera, a depth file, an ML
+// model's output) turned into the plugin's depth: float, 0 = far, 1 = near,
+// the frame's size.
 //
 // Samples are 8- or 16-bit grey. The conventions met in the wild:
 //   NearWhite  larger = nearer (Depth-Anything and most "depth map" images;
@@ -39,5 +42,12 @@ float import_depth_sample(const DepthImportParams &p, uint32_t s, uint32_t smax)
 // `src` (8-bit when bits == 8, else 16-bit, any size) into `out` (its own size).
 void import_depth_cpu(const DepthImportParams &p, const ImageView<const uint8_t> &src, int bits,
                       ImageView<float> out);
+
+// Out (pseudo3ddepthout, pseudo3d-depthmap): depth as grey, white = near:
+// s = round(clamp(d, 0, 1) * smax), smax 255 (bits 8) or 65535 (bits 16),
+// NaN as 0 (far). `out` has `depth`'s size; 16-bit rows are uint16_t.
+// import_depth_cpu (near-white) of the result gives d to within 0.5 / smax.
+uint32_t export_depth_sample(float d, uint32_t smax);
+void export_depth_cpu(const ImageView<const float> &depth, int bits, ImageView<uint8_t> out);
 
 }  // namespace p3d
