@@ -30,6 +30,10 @@ P3D_DEFINE_ENUM(gst_pseudo3d_depth_method_get_type, "GstPseudo3DDepthMethod",
                 {GST_PSEUDO3D_DEPTH_METHOD_RGBD,
                  "Input holds colour (left half) and depth as grey (right half, white = near)", "rgbd"})
 
+P3D_DEFINE_ENUM(gst_pseudo3d_filter_mode_get_type, "GstPseudo3DFilterMode",
+                {(gint)p3d::BilateralMode::Exact, "Every pixel of the (2r+1) x (2r+1) window", "exact"},
+                {(gint)p3d::BilateralMode::Separable, "A row pass, then a column pass: 2 (2r+1) taps", "separable"})
+
 P3D_DEFINE_ENUM(gst_pseudo3d_depth_convention_get_type, "GstPseudo3DDepthConvention",
                 {(gint)p3d::DepthConvention::NearWhite, "Larger is nearer (white = near: most depth maps, "
                  "Depth-Anything)", "near-white"},

@@ -34,6 +34,8 @@ typedef enum {
 // pseudo3ddepth's method property.
 typedef enum { GST_PSEUDO3D_DEPTH_METHOD_EDGES = 0, GST_PSEUDO3D_DEPTH_METHOD_RGBD = 1 } GstPseudo3DDepthMethod;
 
+#define GST_TYPE_PSEUDO3D_FILTER_MODE (gst_pseudo3d_filter_mode_get_type())
+GType gst_pseudo3d_filter_mode_get_type(void);
 #define GST_TYPE_PSEUDO3D_DEPTH_CONVENTION (gst_pseudo3d_depth_convention_get_type())
 GType gst_pseudo3d_depth_convention_get_type(void);
 

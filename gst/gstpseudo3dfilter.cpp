@@ -16,6 +16,7 @@
 
 #include "bilateral.h"
 #include "depth_meta.h"
+#include "enums.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
@@ -25,7 +26,7 @@
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_filter_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_filter_debug
 
-enum { PROP_0, PROP_RADIUS, PROP_SIGMA_SPACE, PROP_SIGMA_RANGE };
+enum { PROP_0, PROP_RADIUS, PROP_SIGMA_SPACE, PROP_SIGMA_RANGE, PROP_MODE };
 
 struct FilterState {
 #if HAVE_CUDA
@@ -104,6 +105,7 @@ static void gst_pseudo3d_filter_set_property(GObject *object, guint prop_id, con
     case PROP_RADIUS: self->params.radius = g_value_get_int(value); break;
     case PROP_SIGMA_SPACE: self->params.sigma_space = g_value_get_float(value); break;
     case PROP_SIGMA_RANGE: self->params.sigma_range = g_value_get_float(value); break;
+    case PROP_MODE: self->params.mode = static_cast<p3d::BilateralMode>(g_value_get_enum(value)); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
@@ -116,6 +118,7 @@ static void gst_pseudo3d_filter_get_property(GObject *object, guint prop_id, GVa
     case PROP_RADIUS: g_value_set_int(value, self->params.radius); break;
     case PROP_SIGMA_SPACE: g_value_set_float(value, self->params.sigma_space); break;
     case PROP_SIGMA_RANGE: g_value_set_float(value, self->params.sigma_range); break;
+    case PROP_MODE: g_value_set_enum(value, static_cast<gint>(self->params.mode)); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
@@ -152,7 +155,14 @@ static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
                          "Standard deviation of the guide-luma Gaussian, in 8-bit levels: smaller keeps depth edges "
                          "sharper at image edges; 0 averages only over pixels of identical luma",
                          0.f, 1000.f, d.sigma_range, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_MODE,
+      g_param_spec_enum("mode", "Filter mode",
+                        "The whole window, or a row pass then a column pass (about 4.7 times faster on the CPU at "
+                        "radius 5, within 0.02 dB through the warp: docs/quality.md)",
+                        GST_TYPE_PSEUDO3D_FILTER_MODE, static_cast<gint>(d.mode), flags));
 
+  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_FILTER_MODE, (GstPluginAPIFlags)0);
   gst_element_class_set_static_metadata(element_class, "pseudo3d depth filter", "Filter/Effect/Video",
                                         "Cross-bilateral filtering of a frame's depth map guided by the frame",
                                         "pseudo3d developers");

@@ -85,6 +85,9 @@ const std::map<std::string, HoleFill> kFills = {{"background-smooth", HoleFill::
                                                 {"neighbor-average", HoleFill::NeighborAverage},
                                                 {"none", HoleFill::None}};
 
+const std::map<std::string, BilateralMode> kFilterModes = {{"exact", BilateralMode::Exact},
+                                                           {"separable", BilateralMode::Separable}};
+
 template <typename T>
 std::string name_of(const std::map<std::string, T> &table, T value) {
   for (const auto &kv : table)
@@ -104,6 +107,7 @@ void print_usage(std::ostream &os) {
         "                          top-bottom, top-bottom-half, row-interleaved, column-interleaved,\n"
         "                          checkerboard, left, right\n"
         "  --radius N              bilateral radius (default 5)\n"
+        "  --filter-mode M         exact (default) or separable\n"
         "  --max-disparity P       percent of width (default 3)\n"
         "  --fill F                background (default), background-smooth, neighbor-average, none\n"
         "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
@@ -160,6 +164,8 @@ Options parse_args(int argc, char **argv) {
       o.params.pack.layout = parse_name(a, v, kLayouts);
     } else if (a == "--radius") {
       o.params.filter.radius = parse_int(a, v, 0, kMaxBilateralRadius);
+    } else if (a == "--filter-mode") {
+      o.params.filter.mode = parse_name(a, v, kFilterModes);
     } else if (a == "--max-disparity") {
       o.params.warp.max_disparity = parse_float(a, v);
     } else if (a == "--fill") {
@@ -327,6 +333,7 @@ class Reporter {
     j.str("device", m.device).str("gpu_name", m.gpu_name);
     if (m.device == "cpu") j.integer("cpu_threads", cv::getNumThreads());
     j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kLayouts, o_.params.pack.layout));
+    j.str("filter_mode", name_of(kFilterModes, o_.params.filter.mode)).str("fill", name_of(kFills, o_.params.warp.fill));
     j.integer("iterations", m.iterations);
     j.num("median_ms", m.st.median_ms).num("min_ms", m.st.min_ms).num("fps", m.fps());
     j.integer("bytes", std::llround(m.bytes)).num("gbps", m.gbps());

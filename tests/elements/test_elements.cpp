@@ -351,25 +351,37 @@ class FilterFormats : public ::testing::TestWithParam<std::tuple<PixelFormat, Si
 // given, guided by the frame, bit for bit.
 TEST_P(FilterFormats, FiltersDepth) {
   const auto [fmt, size] = GetParam();
-  GstHarness *ref = harness("pseudo3ddepth", fmt, size.w, size.h);
-  GstHarness *h = harness("pseudo3ddepth ! pseudo3dfilter radius=3", fmt, size.w, size.h);
   const HostFrame frame = test_frame(fmt, size.w, size.h, 9);
+  GstHarness *ref = harness("pseudo3ddepth", fmt, size.w, size.h);
   GstBuffer *a = gst_harness_push_and_pull(ref, buffer_from_frame(frame));
-  GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(frame));
-  const cv::Mat da = buffer_depth(a), db = buffer_depth(b);
-  ASSERT_EQ(db.size(), cv::Size(size.w, size.h));
-  cv::Mat want(size.h, size.w, CV_32FC1);
-  BilateralParams p;
-  p.radius = 3;
-  bilateral_filter_cpu(p, frame.view(), depth_view_of(da), depth_view_of(want));
-  EXPECT_EQ(cv::norm(db, want, cv::NORM_INF), 0) << "the element is bilateral_filter_cpu";
+  const cv::Mat da = buffer_depth(a);
+  cv::Mat by_mode[2];
+  for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
+    const bool separable = mode == BilateralMode::Separable;
+    GstHarness *h = harness(std::string("pseudo3ddepth ! pseudo3dfilter radius=3 mode=") +
+                                (separable ? "separable" : "exact"),
+                            fmt, size.w, size.h);
+    GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(frame));
+    const cv::Mat db = buffer_depth(b);
+    ASSERT_EQ(db.size(), cv::Size(size.w, size.h));
+    cv::Mat want(size.h, size.w, CV_32FC1);
+    BilateralParams p;
+    p.radius = 3;
+    p.mode = mode;
+    bilateral_filter_cpu(p, frame.view(), depth_view_of(da), depth_view_of(want));
+    EXPECT_EQ(cv::norm(db, want, cv::NORM_INF), 0) << "the element is bilateral_filter_cpu, mode " << separable;
+    if (size.w >= 16) {
+      EXPECT_GT(cv::norm(da, db, cv::NORM_INF), 1e-4) << "a radius-3 filter changes blocky depth";
+    }
+    by_mode[separable] = db.clone();
+    gst_buffer_unref(b);
+    gst_harness_teardown(h);
+  }
   if (size.w >= 16) {
-    EXPECT_GT(cv::norm(da, db, cv::NORM_INF), 1e-4) << "a radius-3 filter changes blocky depth";
+    EXPECT_GT(cv::norm(by_mode[0], by_mode[1], cv::NORM_INF), 0) << "mode reaches the filter";
   }
   gst_buffer_unref(a);
-  gst_buffer_unref(b);
   gst_harness_teardown(ref);
-  gst_harness_teardown(h);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllFormatsAndSizes, FilterFormats,
