@@ -31,12 +31,24 @@ struct Eye {
   int col0;
 };
 
-void copy_rows(const WarpJob &j, const Eye &eye) {
-  cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y)
-      for (int x = 0; x < j.width; ++x) store_rgba(j.out, eye.col0 + x, y, load_rgba(j.src, x, y, j.m));
-  });
-}
+// The source row y converted once to RGBA (load_rgba), as the GPU does in
+// shared memory: both eyes sample it, so a pixel is converted once instead
+// of twice per eye (sample_row reads two of them), and sample_row on this
+// copy reads exactly the load_rgba() values it would read on the source.
+struct SourceRow {
+  std::vector<Rgba> rgba;
+  FrameView view;  // RGBA, width x 1, over rgba
+  explicit SourceRow(int width) : rgba(static_cast<size_t>(width)) {
+    view.format = PixelFormat::RGBA;
+    view.width = width;
+    view.height = 1;
+    view.plane[0] = reinterpret_cast<uint8_t *>(rgba.data());
+    view.stride[0] = 4 * width;
+  }
+  void load(const WarpJob &j, int y) {
+    for (int x = 0; x < j.width; ++x) rgba[x] = load_rgba(j.src, x, y, j.m);
+  }
+};
 
 // Z-buffer of row y: keys[X] = the largest key any source pixel offers X.
 void scatter_row(const WarpJob &j, const Eye &eye, int y, std::vector<unsigned long long> &keys) {
@@ -49,13 +61,16 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, std::vector<unsigned l
   }
 }
 
-// Colours of the covered targets; holes get kHoleColour for fill=None and
-// are left for the fill otherwise. Returns the row's hole count.
-long long resolve_row(const WarpJob &j, const Eye &eye, int y, const std::vector<unsigned long long> &keys) {
+// Colours of the covered targets, sampled from the converted source row;
+// holes get kHoleColour for fill=None and are left for the fill otherwise.
+// Returns the row's hole count.
+long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &src,
+                      const std::vector<unsigned long long> &keys) {
+  const YuvToRgb packed;  // src is RGBA
   long long holes = 0;
   for (int X = 0; X < j.width; ++X) {
     if (keys[X] != 0) {
-      store_rgba(j.out, eye.col0 + X, y, sample_row(j.src, warp_key_u(keys[X]), y, j.m));
+      store_rgba(j.out, eye.col0 + X, y, sample_row(src.view, warp_key_u(keys[X]), 0, packed));
     } else {
       ++holes;
       if (j.params.fill == HoleFill::None) store_rgba(j.out, eye.col0 + X, y, kHoleColour);
@@ -93,27 +108,41 @@ struct EyeScratch {
   std::vector<unsigned long long> keys;
 };
 
-// Warps one eye row by row; scratch (when not null) receives the holes and,
-// if its key array is sized, the keys.
-long long warp_eye(const WarpJob &j, const Eye &eye, EyeScratch *scratch) {
-  std::atomic<long long> holes{0};
+// Warps both eyes row by row (a row task converts its source row once);
+// an eye with shift 0 is the source row copied. scratch[e] (when its mask
+// is sized) receives eye e's holes and, if its key array is sized, the keys.
+// holes[e]: eye e's hole count.
+void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch scratch[2], long long holes[2]) {
+  std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
+    SourceRow src(j.width);
     std::vector<unsigned long long> keys(j.width);
     std::vector<int> right(j.width);
-    long long local = 0;
+    long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
-      scatter_row(j, eye, y, keys);
-      const long long h = resolve_row(j, eye, y, keys);
-      local += h;
-      if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, right);
-      if (!scratch) continue;
-      const size_t base = static_cast<size_t>(y) * j.width;
-      for (int X = 0; X < j.width; ++X) scratch->mask[base + X] = keys[X] == 0;
-      if (!scratch->keys.empty()) std::copy(keys.begin(), keys.end(), scratch->keys.begin() + base);
+      src.load(j, y);
+      for (int e = 0; e < 2; ++e) {
+        const Eye &eye = eyes[e];
+        if (eye.shift == 0.f) {
+          for (int x = 0; x < j.width; ++x) store_rgba(j.out, eye.col0 + x, y, src.rgba[x]);
+          continue;
+        }
+        scatter_row(j, eye, y, keys);
+        const long long h = resolve_row(j, eye, y, src, keys);
+        local[e] += h;
+        if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, right);
+        EyeScratch &s = scratch[e];
+        if (s.mask.empty()) continue;
+        const size_t base = static_cast<size_t>(y) * j.width;
+        for (int X = 0; X < j.width; ++X) s.mask[base + X] = keys[X] == 0;
+        if (!s.keys.empty()) std::copy(keys.begin(), keys.end(), s.keys.begin() + base);
+      }
     }
-    holes += local;
+    total[0] += local[0];
+    total[1] += local[1];
   });
-  return holes.load();
+  holes[0] = total[0].load();
+  holes[1] = total[1].load();
 }
 
 // BackgroundSmooth, pass 1 (rows): the fill region F (holes and ring pixels)
@@ -283,25 +312,23 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   if (!warp_frames_fit(src, depth, out)) return -1;
   WarpJob j{warp_sanitize(params), src, m, depth, out, 0.f, src.width, src.height};
   j.D = disparity_scale(j.params, j.width);
-  long long holes = 0;
+  const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
+  const bool average = j.params.fill == HoleFill::NeighborAverage;
+  const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
+  EyeScratch scratch[2];
+  const size_t n = static_cast<size_t>(j.width) * j.height;
   for (int e = 0; e < 2; ++e) {
-    const Eye eye{warp_eye_shift(j.params, j.D, e), e * j.width};
-    if (eye.shift == 0.f) {
-      copy_rows(j, eye);
-      continue;
-    }
-    const bool average = j.params.fill == HoleFill::NeighborAverage;
-    const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
-    EyeScratch scratch;
-    const size_t n = static_cast<size_t>(j.width) * j.height;
-    if (average || smooth) scratch.mask.resize(n);
-    if (smooth) scratch.keys.resize(n);
-    const long long h = warp_eye(j, eye, average || smooth ? &scratch : nullptr);
-    if (average && h > 0) neighbour_average_fill(j, eye, scratch.mask, h);
-    if (smooth && h > 0) background_smooth_fill(j, eye, scratch);
-    holes += h;
+    if (eyes[e].shift == 0.f) continue;
+    if (average || smooth) scratch[e].mask.resize(n);
+    if (smooth) scratch[e].keys.resize(n);
   }
-  return holes;
+  long long holes[2] = {0, 0};
+  warp_eyes(j, eyes, scratch, holes);
+  for (int e = 0; e < 2; ++e) {
+    if (average && holes[e] > 0) neighbour_average_fill(j, eyes[e], scratch[e].mask, holes[e]);
+    if (smooth && holes[e] > 0) background_smooth_fill(j, eyes[e], scratch[e]);
+  }
+  return holes[0] + holes[1];
 }
 
 }  // namespace p3d

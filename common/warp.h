@@ -105,10 +105,11 @@ struct WarpParams {
   float convergence = 0.5f;    // depth that lands on the screen plane, 0..1
   StereoView view = StereoView::Both;
   // Background stays the default: BackgroundSmooth scores better (Aloe 24.56
-  // against 22.97 dB) but costs 2.0 ms more at 4K on an H100 (three more
-  // kernels, one thread per column), which would take the chain from 0.83
-  // to 2.85 ms; it becomes the default once its kernels meet the fill
-  // budget (0.1 ms at 4K).
+  // against 22.97 dB) but costs 0.34 ms more at 4K on an H100 (three more
+  // kernels: anchors 0.18, column sums 0.15, row means 0.08 ms, ncu), which
+  // takes the chain from 0.84 to 1.18 ms, and doubles the CPU warp (1080p,
+  // 2 cores: 60 -> 140 ms); it becomes the default once its kernels meet
+  // the fill budget (0.1 ms at 4K).
   HoleFill fill = HoleFill::Background;
 };
 

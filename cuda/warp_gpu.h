@@ -16,10 +16,10 @@
 //    pixel; then one block per row and eye finds the anchors (the 3x3 ring
 //    from the hole flags of rows y-1..y+1 in shared memory, nearest clean /
 //    non-hole pixels by chunk ballots as for Background), one thread per
-//    column and eye slides the +-R window down each run of F (column sums
-//    V), and one thread per hole sums V over +-Rx along its row run. No host
-//    sync. Scratch: kSmoothBytesPerPixel per pixel and eye. NOT YET RUN ON A
-//    GPU (written and compiled on a machine without one).
+//    column segment (about 2R rows) and eye slides the +-R window down the
+//    runs of F (column sums V), and one thread per hole sums V over +-Rx
+//    along its row run. No host sync. Scratch: kSmoothBytesPerPixel per
+//    pixel and eye.
 //  * NeighborAverage: afterwards, Jacobi steps ping-ponging two hole masks,
 //    in batches of kWarpFillBatch steps; after each batch the host reads the
 //    per-step fill counts (a stream sync) to stop when no hole is left or a

@@ -74,28 +74,56 @@ for size in 1920x1080 3840x2160; do
   fi
 done
 
-# 4K H.264: make a 10 s clip, then decode on the GPU, convert, encode, mux.
-if [ $have_gpu = 1 ] && gst-inspect-1.0 nvh264dec >/dev/null 2>&1; then
-  clip=$out/clip-4k.mp4 res=$out/clip-4k-sbs.mp4
+# Files decoded by NVDEC (issue 11, item 2): the same decode measured alone
+# (decode-only: nvh264dec ! fakesink) and with the conversion (convert:
+# nvh264dec ! pseudo3dconvert ! fakesink), one 4K stream and 16 1080p streams
+# in one process, so the table shows the conversion's share of the decode
+# rate; then the 4K clip converted, encoded by x264 and muxed.
+time_launch() {  # case streams frames-per-stream clip_s launch...
+  local name=$1 streams=$2 n=$3 clip_s=$4
+  shift 4
+  local t0 t1 rc
+  t0=$(date +%s.%N)
+  gst-launch-1.0 -q "$@" >"$out/$name.log" 2>&1
+  rc=$?
+  t1=$(date +%s.%N)
+  [ $rc -ne 0 ] && tail -5 "$out/$name.log" >&2
+  python3 -c "import json,sys; w=float(sys.argv[2])-float(sys.argv[1]); f=int(sys.argv[4])*int(sys.argv[5]); print(json.dumps({'bench':'file','case':sys.argv[3],'streams':int(sys.argv[4]),'frames':f,'clip_s':float(sys.argv[6]),'wall_s':round(w,3),'fps':round(f/w,1),'realtime_factor':round(float(sys.argv[6])/w,2),'exit_code':int(sys.argv[7])}))" \
+    "$t0" "$t1" "$name" "$streams" "$n" "$clip_s" "$rc" >>"$jsonl"
+}
+make_clip() {  # file width height frames
   # 4:2:0, as NVDEC decodes (x264 would take 4:4:4 from videotestsrc otherwise).
-  gst-launch-1.0 -q videotestsrc num-buffers=300 pattern=ball ! video/x-raw,format=I420,width=3840,height=2160,framerate=30/1 ! \
-    x264enc speed-preset=ultrafast tune=zerolatency ! h264parse ! mp4mux ! filesink location="$clip" >/dev/null 2>&1
-  for enc in encode decode-only; do
-    if [ $enc = encode ]; then
-      tail="cudadownload ! videoconvert n-threads=8 ! video/x-raw,format=I420 ! x264enc speed-preset=ultrafast threads=12 frame-packing=auto ! h264parse ! mp4mux ! filesink location=$res"
-    else
-      tail="cudadownload ! fakesink sync=false"
-    fi
-    t0=$(date +%s.%N)
-    # shellcheck disable=SC2086
-    gst-launch-1.0 -q filesrc location="$clip" ! qtdemux ! h264parse ! nvh264dec ! \
-      pseudo3dconvert layout=side-by-side-half ! $tail >"$out/file-4k-$enc.log" 2>&1
-    rc=$?
-    t1=$(date +%s.%N)
-    [ $rc -ne 0 ] && tail -5 "$out/file-4k-$enc.log" >&2
-    python3 -c "import json,sys; w=float(sys.argv[2])-float(sys.argv[1]); print(json.dumps({'bench':'file','case':'h264-4k-'+sys.argv[3],'clip_s':10.0,'frames':300,'wall_s':round(w,3),'fps':round(300/w,1),'realtime_factor':round(10.0/w,2),'exit_code':int(sys.argv[4])}))" \
-      "$t0" "$t1" "$enc" "$rc" >>"$jsonl"
+  [ -s "$1" ] || gst-launch-1.0 -q videotestsrc num-buffers="$4" pattern=ball ! \
+    video/x-raw,format=I420,width="$2",height="$3",framerate=30/1 ! \
+    x264enc speed-preset=ultrafast tune=zerolatency ! h264parse ! mp4mux ! filesink location="$1" >/dev/null 2>&1
+}
+# P3D_H264_DEC picks another decoder (e.g. avdec_h264 to try the script
+# without a GPU), P3D_BENCH_FILE_FRAMES the clips' length (default 300).
+dec=${P3D_H264_DEC:-nvh264dec}
+fn=${P3D_BENCH_FILE_FRAMES:-300}
+clip_s=$(python3 -c "print($fn / 30)")
+if { [ $have_gpu = 1 ] || [ "$dec" != nvh264dec ]; } && gst-inspect-1.0 "$dec" >/dev/null 2>&1; then
+  clip=$out/clip-4k-$fn.mp4 clip_hd=$out/clip-1080p-$fn.mp4 res=$out/clip-4k-sbs.mp4
+  make_clip "$clip" 3840 2160 "$fn"
+  make_clip "$clip_hd" 1920 1080 "$fn"
+  decode="filesrc location=$clip ! qtdemux ! h264parse ! $dec"
+  # shellcheck disable=SC2086
+  time_launch h264-4k-decode-only 1 "$fn" "$clip_s" $decode ! fakesink sync=false
+  # shellcheck disable=SC2086
+  time_launch h264-4k-convert 1 "$fn" "$clip_s" $decode ! pseudo3dconvert layout=side-by-side-half ! fakesink sync=false
+  for what in decode-only convert; do
+    branches=()
+    for _ in $(seq 16); do
+      branches+=(filesrc location="$clip_hd" ! qtdemux ! h264parse ! "$dec" !)
+      [ $what = convert ] && branches+=(pseudo3dconvert layout=side-by-side-half !)
+      branches+=(fakesink sync=false)
+    done
+    time_launch "h264-1080p-x16-$what" 16 "$fn" "$clip_s" "${branches[@]}"
   done
+  # shellcheck disable=SC2086
+  time_launch h264-4k-convert-x264 1 "$fn" "$clip_s" $decode ! pseudo3dconvert layout=side-by-side-half ! cudadownload ! \
+    videoconvert n-threads=8 ! video/x-raw,format=I420 ! x264enc speed-preset=ultrafast threads=12 frame-packing=auto ! \
+    h264parse ! mp4mux ! filesink location="$res"
 fi
 
 python3 - "$jsonl" <<'PY'
@@ -108,6 +136,11 @@ for l in open(sys.argv[1]):
         print(f"{r['case']:<22}{r['mode']:<14}{str(r['width'])+'x'+str(r['height']):<11}{r['fps']:>8}"
               f"{str(r['pipeline_latency_ms_median']):>12}  {el}  rc={r['exit_code']}")
     else:
-        print(f"{r['case']:<22}{'nvh264dec':<14}{'3840x2160':<11}{r['fps']:>8}{'':>12}  wall {r['wall_s']} s for a "
-              f"{r['clip_s']} s clip ({r['realtime_factor']}x real time) rc={r['exit_code']}")
+        print(f"{r['case']:<22}{'nvh264dec':<14}{str(r['streams'])+' stream(s)':<11}{r['fps']:>8}{'':>12}  wall "
+              f"{r['wall_s']} s for {r['frames']} frames ({r['realtime_factor']}x real time per stream) rc={r['exit_code']}")
+rows = {r["case"]: r for r in map(json.loads, open(sys.argv[1])) if r["bench"] == "file"}
+for base in ("h264-4k", "h264-1080p-x16"):
+    d, c = rows.get(base + "-decode-only"), rows.get(base + "-convert")
+    if d and c and d["fps"]:
+        print(f"{base}: converting runs at {100 * c['fps'] / d['fps']:.1f} % of the decode-only rate")
 PY

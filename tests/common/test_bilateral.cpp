@@ -399,5 +399,49 @@ TEST(BilateralSeparable, RadiusZeroInPlaceThreadsAndSanitise) {
   EXPECT_EQ(bilateral_sanitize(p).mode, BilateralMode::Separable);
 }
 
+// The CPU filter runs the Separable column pass as row sweeps (for speed);
+// the GPU kernels run the per-pixel functions of common/bilateral.h. Both
+// must give the same bits, so the CPU filter is pinned here to
+// bilateral_pixel() and bilateral_pass_pixel() on the same tables, in both
+// modes: sizes narrower and shorter than the window, several radii, random
+// guides.
+TEST(BilateralCpu, RowSweepsEqualThePerPixelFunctionsBitForBit) {
+  for (const cv::Size sz : {cv::Size(67, 45), cv::Size(1, 1), cv::Size(4, 3), cv::Size(1, 30), cv::Size(30, 1)})
+    for (int r : {0, 1, 5, 16})
+      for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
+        SCOPED_TRACE(::testing::Message() << sz << " r=" << r << " mode=" << static_cast<int>(mode));
+        HostFrame guide(PixelFormat::I420, sz.width, sz.height, 2);
+        guide.fill_random(90 + r);
+        const cv::Mat depth = random_depth(sz.width, sz.height, 91 + r);
+        BilateralParams p{r, 0.6f * r + 0.5f, 14.f};
+        p.mode = mode;
+        const BilateralParams s = bilateral_sanitize(p);
+        std::vector<float> space(bilateral_space_table_size(s.radius)), range(kBilateralRangeTableSize);
+        bilateral_tables(s, space.data(), range.data());
+        const cv::Mat luma = bilateral_guide_luma(guide.view());
+        auto guide_at = [&](int x, int y) { return luma.at<uint8_t>(y, x); };
+        auto depth_at = [&](int x, int y) { return depth.at<float>(y, x); };
+        cv::Mat expected(depth.size(), CV_32FC1);
+        if (mode == BilateralMode::Exact) {
+          for (int y = 0; y < depth.rows; ++y)
+            for (int x = 0; x < depth.cols; ++x)
+              expected.at<float>(y, x) = bilateral_pixel(x, y, depth.cols, depth.rows, s.radius, space.data(),
+                                                         range.data(), guide_at, depth_at);
+        } else {
+          cv::Mat mid(depth.size(), CV_32FC1);
+          auto mid_at = [&](int x, int y) { return mid.at<float>(y, x); };
+          for (int y = 0; y < depth.rows; ++y)
+            for (int x = 0; x < depth.cols; ++x)
+              mid.at<float>(y, x) = bilateral_pass_pixel(x, y, 1, 0, depth.cols, s.radius, space.data(),
+                                                         range.data(), guide_at, depth_at);
+          for (int y = 0; y < depth.rows; ++y)
+            for (int x = 0; x < depth.cols; ++x)
+              expected.at<float>(y, x) = bilateral_pass_pixel(x, y, 0, 1, depth.rows, s.radius, space.data(),
+                                                              range.data(), guide_at, mid_at);
+        }
+        EXPECT_TRUE(bit_equal(filter(p, guide, depth), expected));
+      }
+}
+
 }  // namespace
 }  // namespace p3d
