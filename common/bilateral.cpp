@@ -2,7 +2,9 @@
 #include "bilateral.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -59,6 +61,32 @@ class ColumnPassSums {
   std::vector<float> w_, wd_;
 };
 
+// The Separable row pass of one row at the pixels whose window needs no
+// clipping (x0 <= x < x1, x0 >= R, x1 <= width - R), with the radius a
+// compile-time constant so the tap loop unrolls: the taps, their order and
+// the arithmetic of bilateral_pass_pixel(), so the same bits.
+template <int R>
+void row_pass_interior(const uint8_t *guide, const float *depth, const float *space_1d, const float *range, int x0,
+                       int x1, float *out) {
+  for (int x = x0; x < x1; ++x) {
+    const int centre = guide[x];
+    float sum_w = 0.f, sum_wd = 0.f;
+    for (int d = -R; d <= R; ++d) {
+      const int g = static_cast<int>(guide[x + d]) - centre;
+      bilateral_accumulate(space_1d[d], range[g < 0 ? -g : g], depth[x + d], sum_w, sum_wd);
+    }
+    out[x] = sum_wd / sum_w;
+  }
+}
+
+using RowPassInterior = void (*)(const uint8_t *, const float *, const float *, const float *, int, int, float *);
+template <int... Rs>
+constexpr std::array<RowPassInterior, sizeof...(Rs)> row_pass_table(std::integer_sequence<int, Rs...>) {
+  return {&row_pass_interior<Rs>...};
+}
+// row_pass_interior<r> for every radius 0..kMaxBilateralRadius.
+constexpr auto kRowPassInterior = row_pass_table(std::make_integer_sequence<int, kMaxBilateralRadius + 1>());
+
 }  // namespace
 
 void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
@@ -90,11 +118,14 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
     // for both as sweeps.
     cv::Mat mid(h, w, CV_32FC1);
     const float *space_1d = space.data() + r * side + r;  // space(d, 0), index by d
+    const int x0 = std::min(r, w), x1 = std::max(x0, w - r);  // [x0, x1): no clipping
     cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
       for (int y = rows.start; y < rows.end; ++y) {
         float *out = mid.ptr<float>(y);
+        kRowPassInterior[r](luma.ptr<uint8_t>(y), depth_in.row(y), space_1d, range.data(), x0, x1, out);
         for (int x = 0; x < w; ++x)
-          out[x] = bilateral_pass_pixel(x, y, 1, 0, w, r, space.data(), range.data(), guide_at, depth_at);
+          if (x < x0 || x >= x1)
+            out[x] = bilateral_pass_pixel(x, y, 1, 0, w, r, space.data(), range.data(), guide_at, depth_at);
       }
     });
     cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {

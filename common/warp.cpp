@@ -31,20 +31,12 @@ struct Eye {
   int col0;
 };
 
-// The source row y converted once to RGBA (load_rgba), as the GPU does in
-// shared memory: both eyes sample it, so a pixel is converted once instead
-// of twice per eye (sample_row reads two of them), and sample_row on this
-// copy reads exactly the load_rgba() values it would read on the source.
+// The source row y converted once to R'G'B'A (load_rgba), as the GPU does
+// in shared memory: both eyes sample it (sample_row), so a pixel is
+// converted once instead of twice per eye.
 struct SourceRow {
   std::vector<Rgba> rgba;
-  FrameView view;  // RGBA, width x 1, over rgba
-  explicit SourceRow(int width) : rgba(static_cast<size_t>(width)) {
-    view.format = PixelFormat::RGBA;
-    view.width = width;
-    view.height = 1;
-    view.plane[0] = reinterpret_cast<uint8_t *>(rgba.data());
-    view.stride[0] = 4 * width;
-  }
+  explicit SourceRow(int width) : rgba(static_cast<size_t>(width)) {}
   void load(const WarpJob &j, int y) {
     for (int x = 0; x < j.width; ++x) rgba[x] = load_rgba(j.src, x, y, j.m);
   }
@@ -66,11 +58,10 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, std::vector<unsigned l
 // Returns the row's hole count.
 long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &src,
                       const std::vector<unsigned long long> &keys) {
-  const YuvToRgb packed;  // src is RGBA
   long long holes = 0;
   for (int X = 0; X < j.width; ++X) {
     if (keys[X] != 0) {
-      store_rgba(j.out, eye.col0 + X, y, sample_row(src.view, warp_key_u(keys[X]), 0, packed));
+      store_rgba(j.out, eye.col0 + X, y, sample_row(src.rgba.data(), j.width, warp_key_u(keys[X])));
     } else {
       ++holes;
       if (j.params.fill == HoleFill::None) store_rgba(j.out, eye.col0 + X, y, kHoleColour);

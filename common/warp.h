@@ -23,7 +23,7 @@
 //    Key 0 = nothing landed = hole. The max is order independent, so the
 //    GPU's atomicMax and the CPU's sequential max agree exactly.
 //  * Colour: bilinear along the row between floor(u) and floor(u)+1 of the
-//    source (load_rgba), per channel to_u8(a + (b - a) * f).
+//    source (load_rgba), per channel to_u8(a + (b - a) * f) (sample_row).
 // All float maths is written once in the P3D_HD helpers below; cuda/ is
 // compiled with -fmad=false so the host and the device round identically.
 //
@@ -105,9 +105,9 @@ struct WarpParams {
   float convergence = 0.5f;    // depth that lands on the screen plane, 0..1
   StereoView view = StereoView::Both;
   // Background stays the default: BackgroundSmooth scores better (Aloe 24.56
-  // against 22.97 dB) but costs 0.34 ms more at 4K on an H100 (three more
-  // kernels: anchors 0.18, column sums 0.15, row means 0.08 ms, ncu), which
-  // takes the chain from 0.84 to 1.18 ms, and doubles the CPU warp (1080p,
+  // against 22.97 dB) but costs 0.27 ms more at 4K on an H100 (three more
+  // kernels after the warp's rows: anchors, column sums, row means), which
+  // takes the chain from 0.83 to 1.10 ms, and doubles the CPU warp (1080p,
   // 2 cores: 60 -> 140 ms); it becomes the default once its kernels meet
   // the fill budget (0.1 ms at 4K).
   HoleFill fill = HoleFill::Background;
@@ -151,13 +151,15 @@ P3D_HD float warp_key_u(unsigned long long key) {
   return static_cast<float>(static_cast<unsigned int>(key & 0xffffffffu) - 1u) / 256.f;
 }
 
-// Bilinear colour at source position u of row y.
-P3D_HD Rgba sample_row(const FrameView &src, float u, int y, const YuvToRgb &m) {
+// Bilinear colour at source position u of a source row already converted
+// to R'G'B'A (load_rgba of each pixel): both the CPU and the GPU convert the
+// row once and render both eyes from it.
+P3D_HD Rgba sample_row(const Rgba *row, int width, float u) {
   int x0 = static_cast<int>(floorf(u));
-  x0 = clamp_value(x0, 0, src.width - 1);
-  const int x1 = x0 + 1 < src.width ? x0 + 1 : x0;
+  x0 = clamp_value(x0, 0, width - 1);
+  const int x1 = x0 + 1 < width ? x0 + 1 : x0;
   const float f = u - static_cast<float>(x0);
-  const Rgba a = load_rgba(src, x0, y, m), b = load_rgba(src, x1, y, m);
+  const Rgba a = row[x0], b = row[x1];
   Rgba o;
   o.r = to_u8(a.r + (static_cast<float>(b.r) - a.r) * f);
   o.g = to_u8(a.g + (static_cast<float>(b.g) - a.g) * f);

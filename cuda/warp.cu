@@ -151,13 +151,13 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
   }
   __syncthreads();
 
-  // sample_row on the RGBA copy reads exactly the load_rgba() values of the
-  // source that the CPU's sample_row reads.
+  // j.row holds the load_rgba() values of the source row, as the CPU's
+  // SourceRow does; sample_row reads them as Rgba.
   int holes = 0;
   for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
     const unsigned long long key = j.keys[X];
     if (key != 0) {
-      store_rgba(j.out, col0 + X, j.y, sample_row(j.row, warp_key_u(key), 0, packed));
+      store_rgba(j.out, col0 + X, j.y, sample_row(reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, warp_key_u(key)));
     } else {
       ++holes;
       if (j.fill == HoleFill::None) store_rgba(j.out, col0 + X, j.y, kHoleColour);
@@ -351,10 +351,12 @@ __global__ void smooth_anchor_kernel(FrameView out, int W, int H, EyeShifts eyes
 // window [max(a, y - R), min(b, y + R)] down its segment, a..b being the run
 // of F that holds y. A segment starts by walking up to R rows back to find
 // where the window begins, so a pixel costs about 2 + (2R + 1) / segment
-// loads, and the columns are split into H / segment independent threads
-// (one thread per whole column walked 2160 rows one after another: 1.7 ms
-// at 4K, latency bound).
-int smooth_column_segment(int R) { return R < 16 ? 32 : 2 * R; }
+// loads, and the columns are split into H / segment independent threads.
+// The walk is latency bound, so short segments (more threads) win although
+// they load more: at 4K, 3 % (R = 29) on an H100 the whole warp took 1.7 ms
+// with one thread per column, 0.623 with segments of 2R rows and 0.565 with
+// R / 2 (a thread per pixel, walking its own window: 0.565 too).
+int smooth_column_segment(int R) { return R < 32 ? 16 : R / 2; }
 __global__ void smooth_column_kernel(int W, int H, int segment, EyeShifts eyes, int2 radius, const uint8_t *state,
                                      const Rgba *anchor, SmoothSum *column) {
   const int X = blockIdx.x * blockDim.x + threadIdx.x, eye = blockIdx.z;
@@ -513,7 +515,9 @@ CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H
   if (smem > 48 * 1024)
     P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_anchor_kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
                                       static_cast<int>(smem)));
-  smooth_anchor_kernel<<<dim3(H, 2), W > 1024 ? 512 : 256, smem, stream>>>(out, W, H, eyes, zbits, state, anchor);
+  // 256 threads: twice the resident blocks of 512 for this latency-bound
+  // kernel (4K on an H100: 0.623 against 0.643 ms for the whole warp).
+  smooth_anchor_kernel<<<dim3(H, 2), 256, smem, stream>>>(out, W, H, eyes, zbits, state, anchor);
   P3D_CUDA_TRY_LAUNCH(smooth_anchor_kernel);
   constexpr int kColumnThreads = 128;
   // Both eyes share the grid; the smaller radius of a warped eye sets the

@@ -345,6 +345,21 @@ TEST(Filter, RadiusZeroIsPassthrough) {
 
 TEST(Filter, WithoutDepthIsAnError) { expect_error_without_depth("pseudo3dfilter radius=2"); }
 
+// The element runs the project's default mode (separable) unless told
+// otherwise, and says so in its property's default.
+TEST(Filter, DefaultModeIsTheProjectDefault) {
+  GstElement *f = gst_element_factory_make("pseudo3dfilter", nullptr);
+  ASSERT_NE(f, nullptr);
+  gint mode = -1;
+  g_object_get(f, "mode", &mode, nullptr);
+  EXPECT_EQ(mode, static_cast<gint>(kDefaultFilterMode));
+  EXPECT_EQ(kDefaultFilterMode, BilateralMode::Separable);
+  GParamSpec *spec = g_object_class_find_property(G_OBJECT_GET_CLASS(f), "mode");
+  ASSERT_NE(spec, nullptr);
+  EXPECT_EQ(G_PARAM_SPEC_ENUM(spec)->default_value, static_cast<gint>(kDefaultFilterMode));
+  gst_object_unref(f);
+}
+
 class FilterFormats : public ::testing::TestWithParam<std::tuple<PixelFormat, Size>> {};
 
 // The element's filtered depth is bilateral_filter_cpu of the depth it was

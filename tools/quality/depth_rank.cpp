@@ -77,7 +77,7 @@ std::vector<RankCase> rank_cases() {
   return cases;
 }
 
-void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs) {
+void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs, const BilateralParams &filter) {
   const std::vector<int> sample = rank_sample(a.gt);
   std::vector<double> gt_values(sample.size()), est_values(sample.size());
   for (size_t i = 0; i < sample.size(); ++i) gt_values[i] = a.gt.ptr<uint8_t>()[sample[i]];
@@ -88,7 +88,7 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs) {
   for (size_t k = 0; k < cases.size(); ++k)
     jobs.push_back([&, k] {
       depths[k] = estimated_depth(cases[k].depth, frame);
-      if (cases[k].radius > 0) depths[k] = filter_depth(BilateralParams(), frame, depths[k]);  // element defaults
+      if (cases[k].radius > 0) depths[k] = filter_depth(filter, frame, depths[k]);
     });
   const std::vector<Timing> t = time_interleaved(runs, jobs);
   for (size_t k = 0; k < cases.size(); ++k) {
@@ -108,6 +108,7 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs) {
     j.str("hypothesis", hypothesis_name(c.depth.hypothesis)).integer("block_size", c.depth.block_size);
     j.num("edge_threshold", c.depth.edge_threshold).num("region_weight", c.depth.region_weight);
     j.num("ground_contact", c.depth.ground_contact).integer("filter_radius", c.radius);
+    j.str("filter_mode", filter.mode == BilateralMode::Separable ? "separable" : "exact");
     j.integer("samples", static_cast<long long>(sample.size())).num("spearman", rho);
     j.num("time_ms", t[k].median_ms()).num("min_ms", t[k].min_ms());
     w.emit(j);
@@ -120,9 +121,11 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs) {
 
 }  // namespace
 
-void measure_depth_rank(Writer &w, const Aloe &full, const Aloe &half, int runs) {
-  measure_scale(w, full, "full", runs);
-  measure_scale(w, half, "half", runs);
+void measure_depth_rank(Writer &w, const Aloe &full, const Aloe &half, int runs, BilateralMode filter_mode) {
+  BilateralParams filter;  // the element's defaults in the given mode
+  filter.mode = filter_mode;
+  measure_scale(w, full, "full", runs, filter);
+  measure_scale(w, half, "half", runs, filter);
 }
 
 }  // namespace p3d::quality

@@ -143,7 +143,7 @@ std::vector<Setting> settings() {
 }
 
 void emit(Writer &w, const Setting &s, const FlickerTrack &t, int frames, double mask_fraction, const cv::Mat &mask,
-          const std::string &backend) {
+          const std::string &backend, BilateralMode filter_mode) {
   double mean = 0, worst = 0, mean_all = 0, spread = 0;
   for (const double v : t.frame_mean) {
     mean += v;
@@ -156,6 +156,7 @@ void emit(Writer &w, const Setting &s, const FlickerTrack &t, int frames, double
   JsonLine j;
   j.str("kind", "flicker").str("video", "vtest.avi").str("decoder", backend).str("stage", t.stage);
   j.str("setting", s.label).num("temporal_smoothing", p.temporal_smoothing).integer("block_size", p.block_size);
+  j.str("filter_mode", filter_mode == BilateralMode::Separable ? "separable" : "exact");
   j.num("region_weight", p.region_weight).num("ground_contact", p.ground_contact).integer("frames", frames);
   j.num("static_std_levels", kStaticLumaStd).num("mask_fraction", mask_fraction);
   j.num("mean_abs", mean / pairs).num("p95_abs", t.quantile(0.95)).num("worst_frame_mean_abs", worst);
@@ -173,7 +174,7 @@ void emit(Writer &w, const Setting &s, const FlickerTrack &t, int frames, double
 
 }  // namespace
 
-void measure_flicker(Writer &w, const std::string &path, int frames) {
+void measure_flicker(Writer &w, const std::string &path, int frames, BilateralMode filter_mode) {
   cv::Mat mask;
   std::string err;
   const int n = static_mask(path, frames, mask, err);
@@ -194,7 +195,8 @@ void measure_flicker(Writer &w, const std::string &path, int frames) {
   cv::VideoCapture cap(path);
   const std::string backend = cap.isOpened() ? cap.getBackendName() : "";
   cv::Mat bgr;
-  const BilateralParams bp;
+  BilateralParams bp;  // the element's defaults in the given mode
+  bp.mode = filter_mode;
   for (int f = 0; f < n && cap.read(bgr) && !bgr.empty(); ++f) {
     // Decoders hand GStreamer I420; the estimator groups regions in Y'UV then.
     const HostFrame frame = HostFrame::from_bgr(bgr, PixelFormat::I420);
@@ -212,7 +214,7 @@ void measure_flicker(Writer &w, const std::string &path, int frames) {
     }
   }
   for (const bool filtered : {false, true})
-    for (const Setting &s : all) emit(w, s, filtered ? s.filtered : s.raw, n, mask_fraction, mask, backend);
+    for (const Setting &s : all) emit(w, s, filtered ? s.filtered : s.raw, n, mask_fraction, mask, backend, filter_mode);
 }
 
 }  // namespace p3d::quality

@@ -26,6 +26,8 @@ void print_usage(std::ostream &os) {
         "  --frames N      vtest.avi frames for the flicker measurement (default 200)\n"
         "  --only LIST     comma separated subset of synthesis,filter,depth,flicker\n"
         "  --threads N     OpenCV worker threads (default: OpenCV's choice)\n"
+        "  --filter-mode M exact or separable: the depth filter of the depth and flicker\n"
+        "                  studies (default: pseudo3dfilter's default)\n"
         "  --quick         smoke test: --runs 1 --frames 20\n"
         "Exit status: 0 ok, 1 missing data or I/O error, 64 bad usage.\n";
 }
@@ -64,6 +66,9 @@ Options parse_args(int argc, char **argv) {
       o.threads = parse_int(a, v, 1, 1024);
     } else if (a == "--only") {
       o.parts = parse_parts(v);
+    } else if (a == "--filter-mode") {
+      if (v != "exact" && v != "separable") usage_error("--filter-mode wants exact or separable");
+      o.filter_mode = v == "exact" ? BilateralMode::Exact : BilateralMode::Separable;
     } else {
       usage_error("unknown option " + a);
     }
@@ -96,9 +101,9 @@ int run(const Options &o) {
       measure_synthesis(w, aloe, o.runs);
     }
     if (o.parts.count("filter")) measure_filter_variants(w, aloe, o.runs);
-    if (o.parts.count("depth")) measure_depth_rank(w, aloe, half, o.runs);
+    if (o.parts.count("depth")) measure_depth_rank(w, aloe, half, o.runs, o.filter_mode);
   }
-  if (o.parts.count("flicker")) measure_flicker(w, o.data_dir + "/vtest.avi", o.frames);
+  if (o.parts.count("flicker")) measure_flicker(w, o.data_dir + "/vtest.avi", o.frames, o.filter_mode);
   return rc;
 }
 

@@ -37,6 +37,9 @@ struct Options {
   int frames = 200;
   int threads = -1;  // -1: OpenCV's default
   std::set<std::string> parts = {"synthesis", "filter", "depth", "flicker"};
+  // The cross-bilateral filter's mode in the depth and flicker studies
+  // (what pseudo3dfilter runs; its other parameters are the defaults).
+  BilateralMode filter_mode = kDefaultFilterMode;
   std::string argv;
 };
 
@@ -112,7 +115,7 @@ void measure_synthesis(Writer &w, const Aloe &a, int runs);
 void measure_filter_variants(Writer &w, const Aloe &a, int runs);
 // full: Aloe as shipped; half: the same at half size (the cues must not
 // depend on the picture's resolution).
-void measure_depth_rank(Writer &w, const Aloe &full, const Aloe &half, int runs);
-void measure_flicker(Writer &w, const std::string &path, int frames);
+void measure_depth_rank(Writer &w, const Aloe &full, const Aloe &half, int runs, BilateralMode filter_mode);
+void measure_flicker(Writer &w, const std::string &path, int frames, BilateralMode filter_mode);
 
 }  // namespace p3d::quality
