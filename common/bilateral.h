@@ -64,6 +64,15 @@ struct BilateralParams {
   BilateralMode mode = BilateralMode::Exact;
 };
 
+// pseudo3dfilter's defaults: BilateralParams() in kDefaultFilterMode. The
+// element and the tools that stand for it (pseudo3d-depthmap,
+// pseudo3d-bench) start from these.
+inline BilateralParams default_filter_params() {
+  BilateralParams p;
+  p.mode = kDefaultFilterMode;
+  return p;
+}
+
 // The parameters the filter really runs with (see the header comment).
 inline BilateralParams bilateral_sanitize(const BilateralParams &p) {
   BilateralParams s = p;

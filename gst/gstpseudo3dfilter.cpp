@@ -129,18 +129,11 @@ static void gst_pseudo3d_filter_finalize(GObject *object) {
   G_OBJECT_CLASS(parent_class)->finalize(object);
 }
 
-// The element's defaults: the filter's, in the project's default mode.
-static p3d::BilateralParams element_defaults() {
-  p3d::BilateralParams p;
-  p.mode = p3d::kDefaultFilterMode;
-  return p;
-}
-
 static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
   GObjectClass *gobject_class = G_OBJECT_CLASS(klass);
   GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
   GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
-  const p3d::BilateralParams d = element_defaults();
+  const p3d::BilateralParams d = p3d::default_filter_params();
   const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
 
   gobject_class->set_property = gst_pseudo3d_filter_set_property;
@@ -185,7 +178,7 @@ static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
 }
 
 static void gst_pseudo3d_filter_init(GstPseudo3DFilter *self) {
-  self->params = element_defaults();
+  self->params = p3d::default_filter_params();
   self->state = new FilterState();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), TRUE);
 }

@@ -88,8 +88,8 @@ time_launch() {  # case streams frames-per-stream clip_s launch...
   rc=$?
   t1=$(date +%s.%N)
   [ $rc -ne 0 ] && tail -5 "$out/$name.log" >&2
-  python3 -c "import json,sys; w=float(sys.argv[2])-float(sys.argv[1]); f=int(sys.argv[4])*int(sys.argv[5]); print(json.dumps({'bench':'file','case':sys.argv[3],'streams':int(sys.argv[4]),'frames':f,'clip_s':float(sys.argv[6]),'wall_s':round(w,3),'fps':round(f/w,1),'realtime_factor':round(float(sys.argv[6])/w,2),'exit_code':int(sys.argv[7])}))" \
-    "$t0" "$t1" "$name" "$streams" "$n" "$clip_s" "$rc" >>"$jsonl"
+  python3 -c "import json,sys; w=float(sys.argv[2])-float(sys.argv[1]); f=int(sys.argv[4])*int(sys.argv[5]); print(json.dumps({'bench':'file','case':sys.argv[3],'decoder':sys.argv[8],'streams':int(sys.argv[4]),'frames':f,'clip_s':float(sys.argv[6]),'wall_s':round(w,3),'fps':round(f/w,1),'realtime_factor':round(float(sys.argv[6])/w,2),'exit_code':int(sys.argv[7])}))" \
+    "$t0" "$t1" "$name" "$streams" "$n" "$clip_s" "$rc" "$dec" >>"$jsonl"
 }
 make_clip() {  # file width height frames
   # 4:2:0, as NVDEC decodes (x264 would take 4:4:4 from videotestsrc otherwise).
@@ -120,23 +120,25 @@ if { [ $have_gpu = 1 ] || [ "$dec" != nvh264dec ]; } && gst-inspect-1.0 "$dec" >
     done
     time_launch "h264-1080p-x16-$what" 16 "$fn" "$clip_s" "${branches[@]}"
   done
+  download=""  # NVDEC's frames stay in CUDA memory through the conversion
+  [ "$dec" = nvh264dec ] && download="cudadownload !"
   # shellcheck disable=SC2086
-  time_launch h264-4k-convert-x264 1 "$fn" "$clip_s" $decode ! pseudo3dconvert layout=side-by-side-half ! cudadownload ! \
+  time_launch h264-4k-convert-x264 1 "$fn" "$clip_s" $decode ! pseudo3dconvert layout=side-by-side-half ! $download \
     videoconvert n-threads=8 ! video/x-raw,format=I420 ! x264enc speed-preset=ultrafast threads=12 frame-packing=auto ! \
     h264parse ! mp4mux ! filesink location="$res"
 fi
 
 python3 - "$jsonl" <<'PY'
 import json, sys
-print(f"{'case':<22}{'mode':<14}{'size':<11}{'fps':>8}{'latency ms':>12}  per-element latency ms (median)")
+print(f"{'case':<28}{'mode':<14}{'size':<11}{'fps':>8}{'latency ms':>12}  per-element latency ms (median)")
 for l in open(sys.argv[1]):
     r = json.loads(l)
     if r["bench"] == "pipeline":
         el = " ".join(f"{k.replace('pseudo3d','')}={v}" for k, v in r["element_latency_ms_median"].items())
-        print(f"{r['case']:<22}{r['mode']:<14}{str(r['width'])+'x'+str(r['height']):<11}{r['fps']:>8}"
+        print(f"{r['case']:<28}{r['mode']:<14}{str(r['width'])+'x'+str(r['height']):<11}{r['fps']:>8}"
               f"{str(r['pipeline_latency_ms_median']):>12}  {el}  rc={r['exit_code']}")
     else:
-        print(f"{r['case']:<22}{'nvh264dec':<14}{str(r['streams'])+' stream(s)':<11}{r['fps']:>8}{'':>12}  wall "
+        print(f"{r['case']:<28}{r.get('decoder', 'nvh264dec'):<14}{str(r['streams'])+' stream(s)':<11}{r['fps']:>8}{'':>12}  wall "
               f"{r['wall_s']} s for {r['frames']} frames ({r['realtime_factor']}x real time per stream) rc={r['exit_code']}")
 rows = {r["case"]: r for r in map(json.loads, open(sys.argv[1])) if r["bench"] == "file"}
 for base in ("h264-4k", "h264-1080p-x16"):

@@ -149,7 +149,7 @@ T parse_name(const std::string &opt, const std::string &v, const std::map<std::s
 
 Options parse_args(int argc, char **argv) {
   Options o;
-  o.params.filter.mode = kDefaultFilterMode;  // what pseudo3dfilter runs by default
+  o.params.filter = default_filter_params();  // what pseudo3dfilter runs by default
   bool quick = false;
   kCli.parse(argc, argv, "--quick", &o.argv, [&]() { quick = true; }, [&](const std::string &a, const std::string &v) {
     if (a == "--device") {

@@ -23,14 +23,7 @@ namespace {
 struct Options {
   std::string in, out;
   p3d::DepthParams depth;
-  p3d::BilateralParams filter = element_filter();
-
-  // pseudo3dfilter's defaults, its default mode included.
-  static p3d::BilateralParams element_filter() {
-    p3d::BilateralParams p;
-    p.mode = p3d::kDefaultFilterMode;
-    return p;
-  }
+  p3d::BilateralParams filter = p3d::default_filter_params();
 };
 
 void usage(FILE *f) {
