@@ -42,12 +42,33 @@ struct SourceRow {
   }
 };
 
+// Per-row scratch of a row task: the converted source row, every pixel's
+// read depth and target for the eye being scattered, the z-buffer keys and
+// the Background fill's nearest-right index.
+struct RowScratch {
+  SourceRow src;
+  std::vector<float> depth, target;
+  std::vector<unsigned long long> keys;
+  std::vector<int> right;
+  explicit RowScratch(int width)
+      : src(width), depth(width), target(width), keys(width), right(width) {}
+};
+
 // Z-buffer of row y: keys[X] = the largest key any source pixel offers X.
-void scatter_row(const WarpJob &j, const Eye &eye, int y, std::vector<unsigned long long> &keys) {
+// Each pixel's depth and target are computed once (warp_source would
+// compute them for x and again for x + 1) and linked with warp_link.
+void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
+  std::vector<unsigned long long> &keys = r.keys;
   std::fill(keys.begin(), keys.end(), 0ull);
   const float *drow = j.depth.row(y);
+  float *d = r.depth.data(), *t = r.target.data();
   for (int x = 0; x < j.width; ++x) {
-    const WarpSource s = warp_source(drow, x, j.width, eye.shift, j.D, j.params.convergence);
+    d[x] = warp_depth(drow[x]);
+    t[x] = warp_target(x, d[x], eye.shift, j.D, j.params.convergence);
+  }
+  for (int x = 0; x < j.width; ++x) {
+    const bool has_next = x + 1 < j.width;
+    const WarpSource s = warp_link(x, d[x], t[x], has_next ? d[x + 1] : d[x], has_next ? t[x + 1] : t[x], has_next);
     const WarpSpan span = warp_span(s, j.width);
     for (int X = span.first; X <= span.last; ++X) keys[X] = std::max(keys[X], warp_key_at(s, X, j.width));
   }
@@ -61,7 +82,7 @@ long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &
   long long holes = 0;
   for (int X = 0; X < j.width; ++X) {
     if (keys[X] != 0) {
-      store_rgba(j.out, eye.col0 + X, y, sample_row(src.rgba.data(), j.width, warp_key_u(keys[X])));
+      store_rgba(j.out, eye.col0 + X, y, sample_row(src.rgba.data(), j.width, keys[X]));
     } else {
       ++holes;
       if (j.params.fill == HoleFill::None) store_rgba(j.out, eye.col0 + X, y, kHoleColour);
@@ -106,22 +127,22 @@ struct EyeScratch {
 void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch scratch[2], long long holes[2]) {
   std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
-    SourceRow src(j.width);
-    std::vector<unsigned long long> keys(j.width);
-    std::vector<int> right(j.width);
+    RowScratch row(j.width);
+    const SourceRow &src = row.src;
+    const std::vector<unsigned long long> &keys = row.keys;
     long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
-      src.load(j, y);
+      row.src.load(j, y);
       for (int e = 0; e < 2; ++e) {
         const Eye &eye = eyes[e];
         if (eye.shift == 0.f) {
           for (int x = 0; x < j.width; ++x) store_rgba(j.out, eye.col0 + x, y, src.rgba[x]);
           continue;
         }
-        scatter_row(j, eye, y, keys);
+        scatter_row(j, eye, y, row);
         const long long h = resolve_row(j, eye, y, src, keys);
         local[e] += h;
-        if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, right);
+        if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, row.right);
         EyeScratch &s = scratch[e];
         if (s.mask.empty()) continue;
         const size_t base = static_cast<size_t>(y) * j.width;

@@ -23,7 +23,8 @@
 //    Key 0 = nothing landed = hole. The max is order independent, so the
 //    GPU's atomicMax and the CPU's sequential max agree exactly.
 //  * Colour: bilinear along the row between floor(u) and floor(u)+1 of the
-//    source (load_rgba), per channel to_u8(a + (b - a) * f) (sample_row).
+//    source (load_rgba), per channel to_u8(a + (b - a) * f) (sample_row, in
+//    exact integer arithmetic).
 // All float maths is written once in the P3D_HD helpers below; cuda/ is
 // compiled with -fmad=false so the host and the device round identically.
 //
@@ -151,20 +152,30 @@ P3D_HD float warp_key_u(unsigned long long key) {
   return static_cast<float>(static_cast<unsigned int>(key & 0xffffffffu) - 1u) / 256.f;
 }
 
-// Bilinear colour at source position u of a source row already converted
-// to R'G'B'A (load_rgba of each pixel): both the CPU and the GPU convert the
-// row once and render both eyes from it.
-P3D_HD Rgba sample_row(const Rgba *row, int width, float u) {
-  int x0 = static_cast<int>(floorf(u));
-  x0 = clamp_value(x0, 0, width - 1);
-  const int x1 = x0 + 1 < width ? x0 + 1 : x0;
-  const float f = u - static_cast<float>(x0);
-  const Rgba a = row[x0], b = row[x1];
+// Bilinear colour at the source position u a z-buffer key holds
+// (warp_key_u(key) = q / 256, q = (key & 0xffffffff) - 1), from a source row
+// already converted to R'G'B'A (load_rgba of each pixel): both the CPU and
+// the GPU convert the row once and render both eyes from it. Per channel the
+// colour is to_u8(a + (b - a) * f) between x0 = floor(u) and x0 + 1 (x0
+// alone at the row's end), f = u - x0. Because u is a multiple of 1/256 and
+// lies in [0, width - 1] (warp_key_at clamps it), f = k / 256 with k = q & 255,
+// and every float step of that formula is exact: (b - a) * k / 256 has at
+// most 16 significant bits, a plus it at most 17, so to_u8's floor(v + 0.5)
+// equals the integer (256 a + (b - a) k + 128) >> 8, which is what this
+// computes (tests/common/test_warp.cpp checks every a, b and k against the
+// float formula).
+P3D_HD int sample_channel(int a, int b, int k) { return (256 * a + (b - a) * k + 128) >> 8; }
+P3D_HD Rgba sample_row(const Rgba *row, int width, unsigned long long key) {
+  const unsigned int q = static_cast<unsigned int>(key & 0xffffffffu) - 1u;
+  const int x0 = static_cast<int>(q >> 8);
+  if (x0 >= width - 1) return row[width - 1];  // u = width - 1 exactly: k is 0
+  const int k = static_cast<int>(q & 255u);
+  const Rgba a = row[x0], b = row[x0 + 1];
   Rgba o;
-  o.r = to_u8(a.r + (static_cast<float>(b.r) - a.r) * f);
-  o.g = to_u8(a.g + (static_cast<float>(b.g) - a.g) * f);
-  o.b = to_u8(a.b + (static_cast<float>(b.b) - a.b) * f);
-  o.a = to_u8(a.a + (static_cast<float>(b.a) - a.a) * f);
+  o.r = static_cast<uint8_t>(sample_channel(a.r, b.r, k));
+  o.g = static_cast<uint8_t>(sample_channel(a.g, b.g, k));
+  o.b = static_cast<uint8_t>(sample_channel(a.b, b.b, k));
+  o.a = static_cast<uint8_t>(sample_channel(a.a, b.a, k));
   return o;
 }
 
@@ -198,21 +209,28 @@ struct WarpSource {
   bool connected;
 };
 
-P3D_HD WarpSource warp_source(const float *depth_row, int x, int width, float shift, float D, float convergence) {
+// The same from pixel x's and x+1's read depth (warp_depth) and target
+// (warp_target); has_next is x + 1 < width. Callers that already hold every
+// pixel's target (the CPU row) link neighbours without computing them twice.
+P3D_HD WarpSource warp_link(int x, float d0, float t0, float d1, float t1, bool has_next) {
   WarpSource s;
   s.x = x;
-  s.d0 = warp_depth(depth_row[x]);
-  s.t0 = warp_target(x, s.d0, shift, D, convergence);
-  s.t1 = s.t0;
-  s.d1 = s.d0;
-  s.connected = false;
-  if (x + 1 < width) {
-    s.d1 = warp_depth(depth_row[x + 1]);
-    s.t1 = warp_target(x + 1, s.d1, shift, D, convergence);
-    const float gap = s.t1 - s.t0;
-    s.connected = gap > 0.f && gap <= 1.f + kMaxStretch;
-  }
+  s.d0 = d0;
+  s.t0 = t0;
+  s.t1 = has_next ? t1 : t0;
+  s.d1 = has_next ? d1 : d0;
+  const float gap = t1 - t0;
+  s.connected = has_next && gap > 0.f && gap <= 1.f + kMaxStretch;
   return s;
+}
+
+P3D_HD WarpSource warp_source(const float *depth_row, int x, int width, float shift, float D, float convergence) {
+  const float d0 = warp_depth(depth_row[x]);
+  const float t0 = warp_target(x, d0, shift, D, convergence);
+  const bool has_next = x + 1 < width;
+  const float d1 = has_next ? warp_depth(depth_row[x + 1]) : d0;
+  const float t1 = has_next ? warp_target(x + 1, d1, shift, D, convergence) : t0;
+  return warp_link(x, d0, t0, d1, t1, has_next);
 }
 
 // Whether x covers target X (footprint or connected span). t0 +- 0.5f is
@@ -224,21 +242,25 @@ P3D_HD bool warp_covers(const WarpSource &s, int X) {
 }
 
 // The targets x covers, clipped to the view: first..last inclusive (empty
-// when first > last). The covered set is one run starting at the footprint's
-// integer ceil(t0 - 0.5) (the span starts inside the footprint), at most
-// 2 + 1 + kMaxStretch targets long, so callers loop over it directly.
+// when first > last). The footprint holds the one integer X0 = ceil(t0 - 0.5);
+// a connected span adds the integers X with t0 <= X < t1, which start at
+// ceil(t0) <= X0 + 1, so the covered set is the run from X0 to
+// max(X0, ceil(t1) - 1), at most 2 + 1 + kMaxStretch targets long
+// (tests/common/test_warp.cpp checks this against warp_covers()).
 struct WarpSpan {
   int first, last;
 };
 
 P3D_HD WarpSpan warp_span(const WarpSource &s, int width) {
-  int X = static_cast<int>(ceilf(s.t0 - 0.5f));
+  const int X0 = static_cast<int>(ceilf(s.t0 - 0.5f));
+  int last = X0;
+  if (s.connected) {
+    const int end = static_cast<int>(ceilf(s.t1)) - 1;
+    if (end > last) last = end;
+  }
   WarpSpan r;
-  r.first = X;
-  while (warp_covers(s, X + 1)) ++X;
-  r.last = X;
-  if (r.first < 0) r.first = 0;
-  if (r.last > width - 1) r.last = width - 1;
+  r.first = X0 < 0 ? 0 : X0;
+  r.last = last > width - 1 ? width - 1 : last;
   return r;
 }
 

@@ -157,7 +157,7 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
   for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
     const unsigned long long key = j.keys[X];
     if (key != 0) {
-      store_rgba(j.out, col0 + X, j.y, sample_row(reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, warp_key_u(key)));
+      store_rgba(j.out, col0 + X, j.y, sample_row(reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, key));
     } else {
       ++holes;
       if (j.fill == HoleFill::None) store_rgba(j.out, col0 + X, j.y, kHoleColour);

@@ -399,14 +399,16 @@ TEST(BilateralSeparable, RadiusZeroInPlaceThreadsAndSanitise) {
   EXPECT_EQ(bilateral_sanitize(p).mode, BilateralMode::Separable);
 }
 
-// The CPU filter runs the Separable column pass as row sweeps (for speed);
-// the GPU kernels run the per-pixel functions of common/bilateral.h. Both
-// must give the same bits, so the CPU filter is pinned here to
-// bilateral_pixel() and bilateral_pass_pixel() on the same tables, in both
-// modes: sizes narrower and shorter than the window, several radii, random
-// guides.
-TEST(BilateralCpu, RowSweepsEqualThePerPixelFunctionsBitForBit) {
-  for (const cv::Size sz : {cv::Size(67, 45), cv::Size(1, 1), cv::Size(4, 3), cv::Size(1, 30), cv::Size(30, 1)})
+// The CPU filter runs both modes in strips of 16 pixels (for speed; the
+// last strip of a row overlaps the one before it); the GPU kernels run the
+// per-pixel functions of common/bilateral.h. Both must give the same bits,
+// so the CPU filter is pinned here to bilateral_pixel() and
+// bilateral_pass_pixel() on the same tables, in both modes: sizes narrower
+// and shorter than the window or a strip, rows with and without a partial
+// last strip, several radii, random guides.
+TEST(BilateralCpu, StripsEqualThePerPixelFunctionsBitForBit) {
+  for (const cv::Size sz : {cv::Size(67, 45), cv::Size(1, 1), cv::Size(4, 3), cv::Size(1, 30), cv::Size(30, 1),
+                            cv::Size(48, 20), cv::Size(16, 17), cv::Size(15, 9)})
     for (int r : {0, 1, 5, 16})
       for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
         SCOPED_TRACE(::testing::Message() << sz << " r=" << r << " mode=" << static_cast<int>(mode));

@@ -295,6 +295,61 @@ TEST(WarpHelpers, StretchedSpanKeys) {
   EXPECT_EQ(out.first, 5);
 }
 
+// sample_row interpolates in integers; the specification is the float
+// to_u8(a + (b - a) * f) at f = k / 256. Every channel pair and every
+// 1/256 step must agree, or the CPU and GPU would both drift from it alike.
+TEST(WarpHelpers, IntegerSamplingEqualsTheFloatFormulaEverywhere) {
+  long long mismatches = 0;
+  for (int a = 0; a < 256; ++a)
+    for (int b = 0; b < 256; ++b)
+      for (int k = 0; k < 256; ++k) {
+        const float f = static_cast<float>(k) / 256.f;
+        const int want = to_u8(static_cast<float>(a) + (static_cast<float>(b) - static_cast<float>(a)) * f);
+        if (sample_channel(a, b, k) != want) ++mismatches;
+      }
+  EXPECT_EQ(mismatches, 0);
+  // Whole pixels through keys, the row's last pixel included (u = W - 1).
+  const Rgba row[3] = {{0, 255, 10, 255}, {255, 0, 200, 255}, {7, 9, 11, 13}};
+  for (int q = 0; q <= 2 * 256; ++q) {
+    const float u = static_cast<float>(q) / 256.f;
+    const int x0 = static_cast<int>(std::floor(u)), x1 = x0 + 1 < 3 ? x0 + 1 : x0;
+    const float f = u - static_cast<float>(x0);
+    const Rgba got = sample_row(row, 3, warp_key(0.5f, u));
+    auto lerp = [f](uint8_t a, uint8_t b) { return to_u8(a + (static_cast<float>(b) - a) * f); };
+    EXPECT_EQ(got.r, lerp(row[x0].r, row[x1].r)) << "q " << q;
+    EXPECT_EQ(got.g, lerp(row[x0].g, row[x1].g)) << "q " << q;
+    EXPECT_EQ(got.b, lerp(row[x0].b, row[x1].b)) << "q " << q;
+    EXPECT_EQ(got.a, lerp(row[x0].a, row[x1].a)) << "q " << q;
+  }
+}
+
+// warp_span is a closed form of "the run of targets warp_covers() accepts,
+// starting at the footprint": compare it with walking warp_covers() for
+// random, integer and half-integer targets, connected or not.
+TEST(WarpHelpers, SpanIsTheRunOfCoveredTargets) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> pos(-20.f, 120.f), gap(-1.f, 4.5f);
+  const int width = 100;
+  for (int i = 0; i < 200000; ++i) {
+    float t0 = pos(rng), t1 = t0 + gap(rng);
+    if (i % 4 == 1) t0 = std::round(t0 * 2.f) / 2.f;  // half-integers and integers
+    if (i % 4 == 2) t1 = std::round(t1 * 2.f) / 2.f;
+    const float d = 0.5f;
+    const WarpSource s = warp_link(40, d, t0, d, t1, i % 7 != 0);
+    int X = static_cast<int>(std::ceil(t0 - 0.5f));
+    ASSERT_TRUE(warp_covers(s, X));
+    while (warp_covers(s, X + 1)) ++X;
+    const int first = std::max(0, static_cast<int>(std::ceil(t0 - 0.5f))), last = std::min(width - 1, X);
+    const WarpSpan span = warp_span(s, width);
+    if (first > last) {
+      EXPECT_GT(span.first, span.last) << t0 << " " << t1;
+    } else {
+      EXPECT_EQ(span.first, first) << t0 << " " << t1;
+      EXPECT_EQ(span.last, last) << t0 << " " << t1;
+    }
+  }
+}
+
 TEST(WarpHelpers, KeysOrderByDepthThenPosition) {
   EXPECT_GT(warp_key(0.5f, 3.f), warp_key(0.25f, 60.f));
   EXPECT_GT(warp_key(0.5f, 3.5f), warp_key(0.5f, 3.f));
