@@ -29,7 +29,11 @@ struct FrameView {
   int stride[3] = {0, 0, 0};
 };
 
-struct Rgba {
+// 4-byte aligned, so that a whole pixel in shared memory or a host array
+// can move as one 32-bit word. (Global frame rows keep byte accesses: 32-bit
+// loads and stores there, behind an alignment check, measured slower on an
+// H100: 4K pack 0.056 -> 0.061 ms, warp 0.230 -> 0.236 ms.)
+struct alignas(4) Rgba {
   uint8_t r, g, b, a;
 };
 

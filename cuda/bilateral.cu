@@ -1,4 +1,5 @@
-// Cross-bilateral filter kernel. A block of 32x8 threads computes 32x32
+// Cross-bilateral filter kernels: bilateral_kernel (the exact window) and
+// separable_kernel (both Separable passes, further down). A block of 32x8 threads computes 32x32
 // outputs, each thread a column of kRowsPerThread vertically adjacent
 // pixels, so that a tap's shared-memory load serves all of them (the kernel
 // is bound by shared-memory bandwidth). Each block stages its tile of
@@ -52,6 +53,25 @@ static_assert(Geometry<kMaxBilateralRadius>::kSharedBytes <= 48 * 1024, "tile to
 
 // Device table layout for every radius: symmetric range table, then the space table.
 constexpr size_t kMaxTableFloats = Geometry<kMaxBilateralRadius>::kTables;
+
+// Stages the block's tables and its tile of (depth, luma) texels whose
+// origin is (ox, oy) in the image, row-major so a warp reads consecutive
+// pixels of a row. Texels outside the image stay unset: the clipped
+// windows never read them.
+template <int kTileW, int kTexels, int kTables>
+__device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageView<const float> &depth_in, int ox,
+                                           int oy, const float *__restrict__ tables, Texel *tile,
+                                           float *s_tables) {
+  const int tid = threadIdx.y * kBlockX + threadIdx.x;
+  for (int i = tid; i < kTables; i += kThreads) s_tables[i] = tables[i];
+  const int w = depth_in.width, h = depth_in.height;
+  for (int i = tid; i < kTexels; i += kThreads) {
+    const int ty = i / kTileW, tx = i - ty * kTileW;
+    const int gx = ox + tx, gy = oy + ty;
+    if (gx >= 0 && gx < w && gy >= 0 && gy < h) tile[i] = Texel{depth_in.row(gy)[gx], load_luma(guide, gx, gy)};
+  }
+  __syncthreads();
+}
 
 // Tile row t of the thread's window column holds tap row dy = t - j of its
 // output j. One row: each texel is loaded once and serves every output
@@ -126,19 +146,9 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
   const float *s_range_sym = s_tables;
   const float *s_space = s_tables + kRangeSym;
 
-  const int tid = threadIdx.y * kBlockX + threadIdx.x;
-  for (int i = tid; i < G::kTables; i += kThreads) s_tables[i] = tables[i];
-
   const int w = depth_in.width, h = depth_in.height;
   const int ox = blockIdx.x * kBlockX - R, oy = blockIdx.y * kOutY - R;  // tile origin in the image
-  // Row-major over the tile, so a warp reads consecutive pixels of a row.
-  // Texels outside the image stay unset: the clipped window never reads them.
-  for (int i = tid; i < G::kTexels; i += kThreads) {
-    const int ty = i / G::kTileW, tx = i - ty * G::kTileW;
-    const int gx = ox + tx, gy = oy + ty;
-    if (gx >= 0 && gx < w && gy >= 0 && gy < h) tile[i] = Texel{depth_in.row(gy)[gx], load_luma(guide, gx, gy)};
-  }
-  __syncthreads();
+  stage_tile<G::kTileW, G::kTexels, G::kTables>(guide, depth_in, ox, oy, tables, tile, s_tables);
 
   const int x = blockIdx.x * kBlockX + threadIdx.x;
   const int y0 = blockIdx.y * kOutY + threadIdx.y * kRowsPerThread;
@@ -158,19 +168,97 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
     depth_out.row(y)[x] = bilateral_pixel(x, y, w, h, R, s_space, s_range_sym + kRangeMid, guide_at, depth_at);
 }
 
-// Separable mode: one 1-D pass (along x when step_x, else along y), a
-// thread per pixel, bilateral_pass_pixel() straight from global memory (the
-// CPU reference's own function on the same tables: bit-identical).
-__global__ void separable_pass_kernel(FrameView guide, ImageView<const float> in, ImageView<float> out,
-                                      const float *tables, int radius, int step_x) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= in.width || y >= in.height) return;
-  const float *range = tables + kRangeMid;  // range[|g|], the centre of the symmetric table
-  const float *space = tables + kRangeSym;
-  auto guide_at = [&guide](int qx, int qy) { return load_luma(guide, qx, qy); };
-  auto depth_at = [&in](int qx, int qy) { return in.row(qy)[qx]; };
-  out.row(y)[x] = bilateral_pass_pixel(x, y, step_x, 1 - step_x, step_x ? in.width : in.height, radius, space, range,
-                                       guide_at, depth_at);
+// Separable mode, both passes in one kernel. The block stages the same
+// tile as bilateral_kernel (its 32 x 32 outputs with an apron of R), runs
+// the row pass for its 32 columns over every tile row into shared memory
+// (mid), then the column pass from mid: the intermediate plane never goes
+// through global memory, and each tap is a shared-memory load. Every
+// value is bilateral_pass_pixel()'s (the CPU reference's function, on the
+// same tables, taps in its order), so bit-identical; windows that need no
+// clipping take the same taps through a loop whose bounds are constants.
+template <int R>
+struct SeparableGeometry {
+  static constexpr int kSide = 2 * R + 1;
+  static constexpr int kTables = kRangeSym + kSide * kSide;  // as uploaded: range (symmetric), space
+  static constexpr int kTileW = kBlockX + 2 * R;
+  static constexpr int kTileH = kOutY + 2 * R;
+  static constexpr int kTexels = kTileW * kTileH;
+  static constexpr int kMid = kBlockX * kTileH;  // the row pass at the block's columns, every tile row
+  // R = 16: 32768 + 8192 + 6400 = 47360 bytes, inside the 48 KiB that need no opt-in.
+  static constexpr size_t kSharedBytes = sizeof(Texel) * kTexels + sizeof(float) * (kMid + kTables);
+};
+static_assert(SeparableGeometry<kMaxBilateralRadius>::kSharedBytes <= 48 * 1024,
+              "separable tile too large for default shared memory");
+
+// Taps d = -R..R of one unclipped 1-D window, ascending, as bilateral_pass_pixel.
+// luma(d) / depth(d) read the tap d away from the centre.
+template <int R, typename LumaFn, typename DepthFn>
+__device__ __forceinline__ float pass_unclipped(int centre, const float *space_1d, const float *range_sym,
+                                                const LumaFn &luma, const DepthFn &depth) {
+  float sum_w = 0.f, sum_wd = 0.f;
+  const float *range_c = range_sym + kRangeMid - centre;  // index by the tap's luma
+#pragma unroll
+  for (int d = -R; d <= R; ++d) bilateral_accumulate(space_1d[d], range_c[luma(d)], depth(d), sum_w, sum_wd);
+  return sum_wd / sum_w;
+}
+
+template <int R>
+__global__ void __launch_bounds__(kThreads) separable_kernel(FrameView guide, ImageView<const float> depth_in,
+                                                             ImageView<float> depth_out,
+                                                             const float *__restrict__ tables) {
+  using G = SeparableGeometry<R>;
+  extern __shared__ __align__(8) unsigned char smem[];
+  Texel *tile = reinterpret_cast<Texel *>(smem);
+  float *mid = reinterpret_cast<float *>(tile + G::kTexels);
+  float *s_tables = mid + G::kMid;
+  const float *s_range_sym = s_tables;
+  const float *s_space = s_tables + kRangeSym;
+  const float *space_1d = s_space + R * G::kSide + R;  // space(d, 0), index by d
+
+  const int w = depth_in.width, h = depth_in.height;
+  const int bx = blockIdx.x * kBlockX, by = blockIdx.y * kOutY;  // the block's first output
+  const int ox = bx - R, oy = by - R;                             // tile origin in the image
+  stage_tile<G::kTileW, G::kTexels, G::kTables>(guide, depth_in, ox, oy, tables, tile, s_tables);
+  const int tid = threadIdx.y * kBlockX + threadIdx.x;
+
+  auto at = [=](int qx, int qy) { return tile[(qy - oy) * G::kTileW + (qx - ox)]; };
+  auto guide_at = [=](int qx, int qy) { return at(qx, qy).luma; };
+  auto depth_at = [=](int qx, int qy) { return at(qx, qy).depth; };
+  const float *range = s_range_sym + kRangeMid;  // range[|g|]
+  const bool rows_unclipped = ox >= 0 && ox + G::kTileW <= w;   // every row window of the block
+  const bool cols_unclipped = oy >= 0 && oy + G::kTileH <= h;   // every column window
+  // Row pass: mid(x, y) for the block's columns x and every tile row y in the image.
+  for (int i = tid; i < G::kMid; i += kThreads) {
+    const int ty = i / kBlockX, tx = i - ty * kBlockX;
+    const int gx = bx + tx, gy = oy + ty;
+    if (gx >= w || gy < 0 || gy >= h) continue;
+    if (rows_unclipped) {
+      const Texel *c = tile + ty * G::kTileW + R + tx;
+      mid[i] = pass_unclipped<R>(c->luma, space_1d, s_range_sym, [c](int d) { return c[d].luma; },
+                                 [c](int d) { return c[d].depth; });
+    } else {
+      mid[i] = bilateral_pass_pixel(gx, gy, 1, 0, w, R, s_space, range, guide_at, depth_at);
+    }
+  }
+  __syncthreads();
+
+  // Column pass: the thread's kRowsPerThread outputs down its column.
+  const int x = bx + threadIdx.x;
+  if (x >= w) return;
+  auto mid_at = [=](int qx, int qy) { return mid[(qy - oy) * kBlockX + (qx - bx)]; };
+  for (int j = 0; j < kRowsPerThread; ++j) {
+    const int ly = threadIdx.y * kRowsPerThread + j, y = by + ly;
+    if (y >= h) return;
+    if (cols_unclipped) {
+      const Texel *c = tile + (ly + R) * G::kTileW + R + threadIdx.x;
+      const float *m = mid + (ly + R) * kBlockX + threadIdx.x;
+      depth_out.row(y)[x] = pass_unclipped<R>(c->luma, space_1d, s_range_sym,
+                                              [c](int d) { return c[d * G::kTileW].luma; },
+                                              [m](int d) { return m[d * kBlockX]; });
+    } else {
+      depth_out.row(y)[x] = bilateral_pass_pixel(x, y, 0, 1, h, R, s_space, range, guide_at, mid_at);
+    }
+  }
 }
 
 using KernelFn = void (*)(FrameView, ImageView<const float>, ImageView<float>, const float *);
@@ -183,8 +271,14 @@ template <int... R>
 constexpr auto make_kernels(std::integer_sequence<int, R...>) {
   return std::array<KernelEntry, sizeof...(R)>{KernelEntry{bilateral_kernel<R>, Geometry<R>::kSharedBytes}...};
 }
+template <int... R>
+constexpr auto make_separable_kernels(std::integer_sequence<int, R...>) {
+  return std::array<KernelEntry, sizeof...(R)>{
+      KernelEntry{separable_kernel<R>, SeparableGeometry<R>::kSharedBytes}...};
+}
 
 const auto kKernels = make_kernels(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
+const auto kSeparableKernels = make_separable_kernels(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
 
 CudaStatus invalid(const char *what, int line) { return CudaStatus{cudaErrorInvalidValue, what, __FILE__, line}; }
 
@@ -221,23 +315,12 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
       s.sigma_range != uploaded_.sigma_range)
     P3D_CUDA_TRY_STATUS(upload_tables(s, stream));
 
-  if (s.mode == BilateralMode::Separable) {
-    const int w = depth_in.width, h = depth_in.height;
-    P3D_CUDA_TRY_STATUS(mid_.ensure_2d(sizeof(float) * static_cast<size_t>(w), static_cast<size_t>(h)));
-    const ImageView<float> mid{mid_.as<float>(), w, h, mid_.pitch()};
-    const dim3 block(kBlockX, kBlockY), grid((w + kBlockX - 1) / kBlockX, (h + kBlockY - 1) / kBlockY);
-    separable_pass_kernel<<<grid, block, 0, stream>>>(guide, depth_in, mid, tables_.as<const float>(), s.radius, 1);
-    P3D_CUDA_TRY_LAUNCH(separable_pass_kernel);
-    separable_pass_kernel<<<grid, block, 0, stream>>>(guide, as_const(mid), depth_out, tables_.as<const float>(),
-                                                      s.radius, 0);
-    P3D_CUDA_TRY_LAUNCH(separable_pass_kernel);
-    return {};
-  }
-  const KernelEntry &k = kKernels[s.radius];
+  const bool separable = s.mode == BilateralMode::Separable;
+  const KernelEntry &k = separable ? kSeparableKernels[s.radius] : kKernels[s.radius];
   const dim3 block(kBlockX, kBlockY);
   const dim3 grid((depth_in.width + kBlockX - 1) / kBlockX, (depth_in.height + kOutY - 1) / kOutY);
   k.fn<<<grid, block, k.shared_bytes, stream>>>(guide, depth_in, depth_out, tables_.as<const float>());
-  P3D_CUDA_TRY_LAUNCH(bilateral_kernel);
+  P3D_CUDA_TRY_LAUNCH(separable ? "separable_kernel" : "bilateral_kernel");
   return {};
 }
 

@@ -1,6 +1,5 @@
-// GPU cross-bilateral filter: the function of common/bilateral.h (both
-// modes; the Separable passes are compile-checked only, never run on a GPU
-// yet).
+// GPU cross-bilateral filter: the function of common/bilateral.h, both
+// modes (cuda/bilateral.cu: one tiled kernel per mode and radius).
 //
 // One instance per stream: the weight tables live in this instance's device
 // memory and are rewritten (stream-ordered, cudaMemcpyAsync) only when the
@@ -30,7 +29,6 @@ class BilateralFilterGpu {
   CudaStatus upload_tables(const BilateralParams &sanitised, cudaStream_t stream);
 
   DeviceBuffer tables_;  // range (511, symmetric) then space ((2r+1)^2) weights, uploaded when params change
-  DeviceBuffer mid_;     // Separable mode: the row pass (pitched float plane)
   std::vector<float> host_tables_;  // source of the last upload; outlives the async copy
   BilateralParams uploaded_{-1, 0.f, 0.f};
 };

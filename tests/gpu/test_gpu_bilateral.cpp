@@ -112,7 +112,11 @@ TEST(GpuBilateral, AloeGuideBlockyDepth) {
   BilateralFilterGpu filter;
   for (PixelFormat f : test::kAllFormats)
     for (const BilateralParams p : {BilateralParams{5, 3.f, 12.f}, BilateralParams{9, 5.f, 25.f}})
-      expect_identical(filter, p, HostFrame::from_bgr(aloe, f, 5), depth, "aloe");
+      for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
+        BilateralParams pm = p;
+        pm.mode = mode;
+        expect_identical(filter, pm, HostFrame::from_bgr(aloe, f, 5), depth, "aloe");
+      }
 }
 
 class GpuBilateralFormats : public ::testing::TestWithParam<PixelFormat> {};
@@ -128,8 +132,9 @@ TEST_P(GpuBilateralFormats, OddSizesAndRadii) {
                        random_depth(sz.width, sz.height, seed ^ 0x9e3779b9u), "odd");
 }
 
-// The Separable mode: two 1-D passes, the CPU's bilateral_pass_pixel on the
-// same tables, so bit-identical too; odd sizes clip both passes.
+// The Separable mode: two 1-D passes in one tiled kernel, the CPU's
+// bilateral_pass_pixel on the same tables, so bit-identical too; odd sizes
+// clip both passes, and 161x83 has unclipped blocks up to radius 16.
 TEST_P(GpuBilateralFormats, SeparableOddSizesAndRadii) {
   BilateralFilterGpu filter;
   const uint32_t seed = fresh_seed();
@@ -146,15 +151,20 @@ TEST_P(GpuBilateralFormats, SeparableOddSizesAndRadii) {
 INSTANTIATE_TEST_SUITE_P(GpuBilateral, GpuBilateralFormats, ::testing::ValuesIn(test::kAllFormats),
                          [](const auto &info) { return std::string(test::format_name(info.param)); });
 
-// Each radius has its own kernel instantiation; 203x97 has both interior
-// (unrolled) and border (clipped) blocks at every radius.
+// Each radius has its own kernel instantiation per mode; 203x97 has both
+// interior (unrolled) and border (clipped) blocks at every radius.
 TEST(GpuBilateral, EveryRadius) {
   BilateralFilterGpu filter;
   const uint32_t seed = fresh_seed();
   SCOPED_TRACE("seed " + std::to_string(seed));
   const HostFrame guide = random_guide(PixelFormat::RGBx, 203, 97, seed);
   const cv::Mat depth = random_depth(203, 97, seed + 5);
-  for (int r = 0; r <= kMaxBilateralRadius; ++r) expect_identical(filter, {r, 0.5f * r + 0.3f, 18.f}, guide, depth, "radius");
+  for (int r = 0; r <= kMaxBilateralRadius; ++r)
+    for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
+      BilateralParams p{r, 0.5f * r + 0.3f, 18.f};
+      p.mode = mode;
+      expect_identical(filter, p, guide, depth, "radius");
+    }
 }
 
 TEST(GpuBilateral, DegenerateParameters) {
