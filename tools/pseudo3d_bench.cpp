@@ -33,6 +33,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "build_version.h"
 #include "bench_gpu.h"  // types only unless P3D_BENCH_GPU
 #include "cli_args.h"
 #include "json_line.h"
@@ -512,21 +513,10 @@ std::string utc_now(const char *fmt) {
   return buf;
 }
 
-// The source tree's commit (with -dirty), or "" when git or the tree is not there.
-std::string git_version() {
-#ifdef P3D_SOURCE_DIR
-  const std::string cmd = std::string("git -C '") + P3D_SOURCE_DIR + "' describe --always --dirty --abbrev=12 2>/dev/null";
-  FILE *p = popen(cmd.c_str(), "r");
-  if (!p) return "";
-  char buf[128] = {0};
-  std::string out = std::fgets(buf, sizeof buf, p) ? buf : "";
-  pclose(p);
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out;
-#else
-  return "";
-#endif
-}
+// The commit the binary was built from (with -dirty), or "" when it was not
+// built from a git checkout. Recorded at build time: on the GPU machine the
+// checkout beside the binary need not be the code that was built.
+std::string git_version() { return P3D_BUILD_GIT; }
 
 // Decides which devices run; returns a process exit status, or -1 to go on.
 int resolve_devices(Options &o) {
