@@ -49,11 +49,11 @@ constexpr int kBilateralRangeTableSize = 256;  // |guide difference| 0..255
 enum class BilateralMode : int { Exact = 0, Separable = 1 };
 
 // The mode pseudo3dfilter and the tools run by default. Separable: on 2 CPU
-// cores at 1080p the filter takes 76 ms against 435-474 for Exact, and the
-// measured quality moves within noise (Aloe right view through the warp
-// +0.01 dB, depth rank rho 0.7469 -> 0.7468, vtest.avi static-background
-// flicker 0.0562 -> 0.0572 levels; docs/quality.md); on the GPU it costs
-// a little more (4K chain 0.859 against 0.834 ms, H100). BilateralParams() itself
+// cores at 1080p the filter takes 17-21 ms against 115 ms for Exact, on an
+// H100 at 4K 0.135 against 0.350 ms (docs/benchmarks.md), and the measured
+// quality moves within noise (Aloe right view through the warp +0.01 dB,
+// depth rank rho 0.7469 -> 0.7468, vtest.avi static-background flicker
+// 0.0562 -> 0.0572 levels; docs/quality.md). BilateralParams() itself
 // stays Exact: the definition the references and their tests start from.
 constexpr BilateralMode kDefaultFilterMode = BilateralMode::Separable;
 

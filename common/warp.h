@@ -108,8 +108,8 @@ struct WarpParams {
   // Background stays the default: BackgroundSmooth scores better (Aloe 24.56
   // against 22.97 dB) but costs 0.27 ms more at 4K on an H100 (three more
   // kernels after the warp's rows: anchors, column sums, row means), which
-  // takes the chain from 0.83 to 1.10 ms, and doubles the CPU warp (1080p,
-  // 2 cores: 60 -> 140 ms); it becomes the default once its kernels meet
+  // takes the chain from 0.56 to 0.83 ms, and triples the CPU warp (1080p,
+  // 2 cores: 39 -> 114 ms); it becomes the default once its kernels meet
   // the fill budget (0.1 ms at 4K).
   HoleFill fill = HoleFill::Background;
 };
