@@ -276,11 +276,35 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
 }
 
 // ---------------------------------------------------------------- step 6 ---
+// Each thread writes kExpandPixels consecutive pixels of a row: one
+// division by the (run-time) block size for all of them, and one 16-byte
+// store where the row allows it. Measured per pixel (a division each,
+// 4-byte stores): 32 us at 4K under Nsight Compute, compute bound.
+constexpr int kExpandPixels = 4;  // the float4 below
+static_assert(kExpandPixels == 4, "expand_kernel stores a float4");
 __global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int B, int width, int height,
                               ImageView<float> depth) {
-  const int x = blockIdx.x * kExpandX + threadIdx.x, y = blockIdx.y * kExpandY + threadIdx.y;
-  if (x >= width || y >= height) return;
-  depth.at(x, y) = block_depth[static_cast<size_t>(y / B) * bx + x / B];
+  const int x0 = (blockIdx.x * kExpandX + threadIdx.x) * kExpandPixels, y = blockIdx.y * kExpandY + threadIdx.y;
+  if (x0 >= width || y >= height) return;
+  const float *src = block_depth + static_cast<size_t>(y / B) * bx;
+  int q = x0 / B, r = x0 - q * B;  // pixel x is in block q, r pixels in
+  float v[kExpandPixels];
+#pragma unroll
+  for (int k = 0; k < kExpandPixels; ++k) {
+    v[k] = src[q < bx ? q : bx - 1];  // q >= bx only past `width`: never stored
+    if (++r == B) {
+      r = 0;
+      ++q;
+    }
+  }
+  float *dst = depth.row(y) + x0;
+  if (x0 + kExpandPixels <= width && (reinterpret_cast<uintptr_t>(dst) & 15u) == 0) {
+    *reinterpret_cast<float4 *>(dst) = make_float4(v[0], v[1], v[2], v[3]);
+    return;
+  }
+#pragma unroll
+  for (int k = 0; k < kExpandPixels; ++k)
+    if (x0 + k < width) dst[k] = v[k];
 }
 
 __global__ void depth_from_grey_kernel(FrameView grey, YuvToRgb m, int width, int height, ImageView<float> depth) {
@@ -356,7 +380,8 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   // Step 6.
   const int ew = depth.width < bx * B ? depth.width : bx * B, eh = depth.height < by * B ? depth.height : by * B;
   if (!depth.empty()) {
-    expand_kernel<<<dim3(grid_for(ew, kExpandX), grid_for(eh, kExpandY)), dim3(kExpandX, kExpandY), 0, stream>>>(
+    expand_kernel<<<dim3(grid_for(grid_for(ew, kExpandPixels), kExpandX), grid_for(eh, kExpandY)),
+                    dim3(kExpandX, kExpandY), 0, stream>>>(
         block_depth_.as<float>(), bx, B, ew, eh, depth);
     P3D_CUDA_TRY_LAUNCH(expand_kernel);
   }
