@@ -36,8 +36,9 @@ cv::Mat copy_of(ImageView<const float> v) {
 // is dy and dx over -r..r, the Separable row pass dy = 0, its column pass
 // dx = 0. tap_guide / tap_depth point at the strip's first pixel; a row down
 // is guide_step and depth_step_bytes bytes away; space_centre points at
-// space(0, 0) of the (2r+1)^2 table, `side` = 2r+1 per row; range_of_diff[g]
-// = range[|g|] for g in -255..255, so no branch on the sign. The strip keeps
+// space(0, 0) of the (2r+1)^2 table, `side` = 2r+1 per row; `range` is
+// the mirrored table's centre, indexed by the signed guide difference, so no
+// branch on its sign. The strip keeps
 // kStrip independent sums in registers, which the compiler vectorises,
 // instead of one pixel's chain of dependent additions at a time.
 // Measured on 2 cores at 1080p, r 5: separable filter 17-19 ms against
@@ -46,7 +47,7 @@ constexpr int kStrip = 16;
 
 inline void window_strip(const uint8_t *tap_guide, ptrdiff_t guide_step, const float *tap_depth,
                          ptrdiff_t depth_step_bytes, int dy0, int dy1, int dx0, int dx1, const float *space_centre,
-                         int side, const float *range_of_diff, float *out) {
+                         int side, const float *range, float *out) {
   float sum_w[kStrip] = {}, sum_wd[kStrip] = {};
   for (int dy = dy0; dy <= dy1; ++dy)
     for (int dx = dx0; dx <= dx1; ++dx) {
@@ -57,7 +58,7 @@ inline void window_strip(const uint8_t *tap_guide, ptrdiff_t guide_step, const f
 #pragma GCC unroll 16
       for (int k = 0; k < kStrip; ++k) {
         const int g = static_cast<int>(tg[k]) - static_cast<int>(tap_guide[k]);
-        bilateral_accumulate(space_w, range_of_diff[g], td[k], sum_w[k], sum_wd[k]);
+        bilateral_accumulate(space_w, range[g], td[k], sum_w[k], sum_wd[k]);
       }
     }
   for (int k = 0; k < kStrip; ++k) out[k] = sum_wd[k] / sum_w[k];
@@ -86,24 +87,25 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
   }
 
   const BilateralParams p = bilateral_sanitize(params);
-  std::vector<float> space(bilateral_space_table_size(p.radius)), range(kBilateralRangeTableSize);
-  bilateral_tables(p, space.data(), range.data());
+  // The range table mirrored (bilateral_mirror_range): `range` points at its
+  // centre, so range[g] is the weight of a guide difference g in -255..255,
+  // and range[|g|] (what bilateral_pixel reads) the same value.
+  std::vector<float> space(bilateral_space_table_size(p.radius)), signed_range(kBilateralSignedRangeSize);
+  float *range = signed_range.data() + kBilateralRangeTableSize - 1;
+  bilateral_tables(p, space.data(), range);
+  bilateral_mirror_range(signed_range.data());
   const cv::Mat luma = bilateral_guide_luma(guide);
 
   const int w = depth_in.width, h = depth_in.height;
   const int r = p.radius, side = 2 * r + 1;
   const float *space_centre = space.data() + r * side + r;  // space(0, 0)
-  std::vector<float> signed_range(2 * kBilateralRangeTableSize - 1);  // range[|g|] at g + 255
-  for (int g = 0; g < kBilateralRangeTableSize; ++g)
-    signed_range[kBilateralRangeTableSize - 1 + g] = signed_range[kBilateralRangeTableSize - 1 - g] = range[g];
-  const float *range_of_diff = signed_range.data() + kBilateralRangeTableSize - 1;
   const int x0 = std::min(r, w), x1 = std::max(x0, w - r);  // [x0, x1): the window needs no clipping in x
   const bool strips_in_row = x1 - x0 >= kStrip;
   const ptrdiff_t luma_step = static_cast<ptrdiff_t>(luma.step[0]);
   auto guide_at = [&luma](int qx, int qy) { return luma.ptr<uint8_t>(qy)[qx]; };
   auto depth_at = [&depth_in](int qx, int qy) { return depth_in.row(qy)[qx]; };
   if (p.mode == BilateralMode::Separable) {
-    // Both passes in strips of kStrip pixels (pass_strip) where the row is
+    // Both passes in strips of kStrip pixels (window_strip) where the row is
     // long enough: along the row at the pixels whose window needs no
     // clipping, down the columns everywhere (a row's taps are clipped alike
     // for all its pixels). The other pixels take bilateral_pass_pixel().
@@ -116,11 +118,11 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
         float *out = mid.ptr<float>(y);
         if (strips_in_row)
           for_each_strip(x0, x1, [&](int x) {
-            window_strip(g + x, luma_step, dep + x, 0, 0, 0, -r, r, space_centre, side, range_of_diff, out + x);
+            window_strip(g + x, luma_step, dep + x, 0, 0, 0, -r, r, space_centre, side, range, out + x);
           });
         for (int x = 0; x < w; ++x)
           if (!strips_in_row || x < x0 || x >= x1)
-            out[x] = bilateral_pass_pixel(x, y, 1, 0, w, r, space.data(), range.data(), guide_at, depth_at);
+            out[x] = bilateral_pass_pixel(x, y, 1, 0, w, r, space.data(), range, guide_at, depth_at);
       }
     });
     auto mid_at = [&mid](int qx, int qy) { return mid.ptr<float>(qy)[qx]; };
@@ -129,14 +131,14 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
         float *out = depth_out.row(y);
         if (!strips_down) {
           for (int x = 0; x < w; ++x)
-            out[x] = bilateral_pass_pixel(x, y, 0, 1, h, r, space.data(), range.data(), guide_at, mid_at);
+            out[x] = bilateral_pass_pixel(x, y, 0, 1, h, r, space.data(), range, guide_at, mid_at);
           continue;
         }
         const int d0 = std::max(-r, -y), d1 = std::min(r, h - 1 - y);
         for_each_strip(0, w, [&](int x) {
           const uint8_t *g = luma.ptr<uint8_t>(y) + x;
           window_strip(g, luma_step, mid.ptr<float>(y) + x, static_cast<ptrdiff_t>(mid.step[0]), d0,
-                       d1, 0, 0, space_centre, side, range_of_diff, out + x);
+                       d1, 0, 0, space_centre, side, range, out + x);
         });
       }
     });
@@ -152,11 +154,11 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
       if (strips_in_row)
         for_each_strip(x0, x1, [&](int x) {
           window_strip(g + x, luma_step, depth_in.row(y) + x, static_cast<ptrdiff_t>(depth_in.pitch),
-                       dy0, dy1, -r, r, space_centre, side, range_of_diff, out + x);
+                       dy0, dy1, -r, r, space_centre, side, range, out + x);
         });
       for (int x = 0; x < w; ++x)
         if (!strips_in_row || x < x0 || x >= x1)
-          out[x] = bilateral_pixel(x, y, w, h, r, space.data(), range.data(), guide_at, depth_at);
+          out[x] = bilateral_pixel(x, y, w, h, r, space.data(), range, guide_at, depth_at);
     }
   });
 }

@@ -115,6 +115,19 @@ inline float bilateral_range_weight(const BilateralParams &p, int absdiff) {
 // bilateral_space_table_size(r) floats, range kBilateralRangeTableSize).
 void bilateral_tables(const BilateralParams &p, float *space, float *range);
 
+// The range table mirrored, so that a lookup by the signed guide difference
+// g in -255..255 needs no |g| (no branch on its sign): the
+// kBilateralSignedRangeSize floats at signed_range hold range[|g|] at index
+// g + kBilateralRangeTableSize - 1. Fill the upper half, from that index on,
+// with the 256-entry range table (bilateral_tables writes it there), then
+// call this to mirror it into the lower half. Both the CPU strips and the
+// GPU kernels look the weights up this way.
+constexpr int kBilateralSignedRangeSize = 2 * kBilateralRangeTableSize - 1;
+inline void bilateral_mirror_range(float *signed_range) {
+  float *centre = signed_range + kBilateralRangeTableSize - 1;
+  for (int g = 1; g < kBilateralRangeTableSize; ++g) centre[-g] = centre[g];
+}
+
 // One tap of the window: the float operations every path performs, in this
 // order, so that all of them round alike.
 P3D_HD void bilateral_accumulate(float space_w, float range_w, float depth, float &sum_w, float &sum_wd) {

@@ -28,7 +28,7 @@ constexpr int kRowsPerThread = 4;
 constexpr int kOutY = kBlockY * kRowsPerThread;  // output rows per block
 // Range weights indexed by g_q - g_p + 255 (symmetric copy of the 256-entry
 // table): the fast loop then needs no |.| per tap.
-constexpr int kRangeSym = 2 * kBilateralRangeTableSize - 1;
+constexpr int kRangeSym = kBilateralSignedRangeSize;
 constexpr int kRangeMid = kBilateralRangeTableSize - 1;
 
 // Depth and luma of one pixel side by side: one 64-bit shared load per tap.
@@ -292,7 +292,7 @@ CudaStatus BilateralFilterGpu::upload_tables(const BilateralParams &s, cudaStrea
   float *range_sym = host_tables_.data();
   // The reference's range table at the centre of the symmetric one, space after it.
   bilateral_tables(s, range_sym + kRangeSym, range_sym + kRangeMid);
-  for (int g = 1; g <= kRangeMid; ++g) range_sym[kRangeMid - g] = range_sym[kRangeMid + g];
+  bilateral_mirror_range(range_sym);
   P3D_CUDA_TRY(cudaMemcpyAsync(tables_.get(), host_tables_.data(), sizeof(float) * host_tables_.size(),
                                cudaMemcpyHostToDevice, stream));
   uploaded_ = s;
