@@ -129,7 +129,7 @@ void DepthEstimatorCpu::reset() { have_state_ = false; }
 
 TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const FrameView &frame,
                                              ImageView<float> depth) {
-  const int B = effective_block_size(params), W = frame.width, H = frame.height;
+  const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
   if (W <= 0 || H <= 0) {
     reset();
     return TemporalDecision::Cut;
@@ -138,9 +138,6 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
   const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;
 
   block_features_cpu(frame, B, features_);
-  region_labels_cpu(features_, bx, by, params.edge_threshold, labels_);
-  block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
-
   float diff = 0.f;
   if (same_grid) {
     uint64_t fixed_sum = 0;
@@ -149,6 +146,14 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
   }
   const TemporalDecision decision = temporal_decision(same_grid, diff, params);
   if (decision != TemporalDecision::Reuse) ref_features_ = features_;
+
+  const bool cut = decision == TemporalDecision::Cut;
+  smoothed_.resize(features_.size());  // a cut never reads the (then stale) old values
+  for (size_t k = 0; k < features_.size(); k += 3)
+    smooth_block_feature(cut, params.feature_smoothing, &features_[k], &smoothed_[k]);
+  region_labels_cpu(smoothed_, bx, by, params.edge_threshold, labels_);
+  block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
+
   block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values
   for (size_t k = 0; k < fresh_depth_.size(); ++k)
     block_depth_[k] = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);

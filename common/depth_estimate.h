@@ -4,12 +4,16 @@
 // computes the same function on the GPU.
 //
 // The function, exactly (both implementations follow these steps):
-//  1. Blocks. The frame is cut into block_size x block_size blocks (the last
-//     row/column of blocks may be partial). Each block's feature is the mean
-//     of load_native3() over its pixels: integer sums per channel, then
-//     mean = (float)sum / (float)count.
+//  1. Blocks. The frame is cut into B x B blocks, B = effective_block_size()
+//     (block_size, or with block_size 0 one block per 1/540 of the shorter
+//     side; the last row/column of blocks may be partial). Each block's
+//     feature f is the mean of load_native3() over its pixels: integer sums
+//     per channel, then mean = (float)sum / (float)count.
 //  2. Edges. Two 4-connected blocks belong to one region when
-//     |dc0| + |dc1| + |dc2| (L1 of the mean features) < edge_threshold.
+//     |ds0| + |ds1| + |ds2| < edge_threshold, s being the blocks' smoothed
+//     features (step 5's smooth_block_feature(): s = f on a still picture, a
+//     cut and with feature_smoothing 0; otherwise f averaged over the frames
+//     since the block last moved, so that camera noise does not flip edges).
 //     Regions are the connected components of that graph. A component's label
 //     is the smallest block index (by * blocks_x + bx) in it, so any correct
 //     connected-components algorithm (sequential union-find, parallel
@@ -33,7 +37,10 @@
 //                                   unchanged, keep the reference;
 //       diff >= cut_threshold    -> cut: output b, reset the state;
 //       otherwise                -> out = temporal_smoothing * prev + (1 - temporal_smoothing) * b.
-//     A first frame or a size change behaves as a cut.
+//     A first frame or a size change behaves as a cut. The decision is taken
+//     from the features alone, before step 2, whose smoothed features restart
+//     from f at a cut and otherwise (reused frames included) follow
+//     smooth_block_feature().
 //     (The mean is taken in fixed point, see temporal_diff_fixed(); a change
 //     of block_size is a size change of the block grid, so also a cut.)
 //     Steps 1-4 run on every frame, reused or not, so labels() always
@@ -59,11 +66,12 @@ enum class Hypothesis : int {
 
 struct DepthParams {
   Hypothesis hypothesis = Hypothesis::TopBottom;
-  int block_size = 4;              // pixels, 2..64
+  int block_size = 0;              // pixels, 2..64; 0 = auto (effective_block_size())
   float edge_threshold = 24.f;     // L1 of 8-bit channel means; 0 = every block its own region
   float region_weight = 0.9f;      // 0..1: share of the region's depth in a block's depth
   float ground_contact = 1.f;      // 0..1: share of the region's nearest block (vs its mean), step 4
   float temporal_smoothing = 0.5f; // 0..0.99: weight of the previous depth (0 = none)
+  float feature_smoothing = 0.9f;  // 0..0.99: weight of the past in the features edges compare (step 2)
   float static_threshold = 0.5f;   // mean |difference| (8-bit levels) under which depth is reused
   float cut_threshold = 30.f;      // mean |difference| at or over which the history is dropped
 };
@@ -92,8 +100,18 @@ enum class TemporalDecision : int { Cut = 0, Smooth = 1, Reuse = 2 };
 // -ffp-contract=off and cuda/ with -fmad=false, division and sqrtf are IEEE on
 // both sides, so the results are bitwise identical).
 
-// block_size outside 2..64 is clamped (the kernels size shared memory for 64).
-P3D_HD int effective_block_size(const DepthParams &p) { return clamp_value(p.block_size, 2, 64); }
+// With block_size 0 (auto), one block per kAutoBlockDivisor pixels of the
+// picture's shorter side: 2 up to 1079 rows, 2 at 1080p, 4 at 4K, 8 at 8K. The
+// blocks then cover the same share of the scene at every resolution, so a
+// film gives the same regions at 1080p and at 4K; and at 2 pixels a block
+// (every picture up to 1080p) thin objects stay whole at sizes where 4-pixel
+// blocks break them up (docs/quality.md: Aloe at half size). Any other value
+// outside 2..64 is clamped (the kernels size shared memory for 64).
+constexpr int kAutoBlockDivisor = 540;
+P3D_HD int effective_block_size(const DepthParams &p, int width, int height) {
+  if (p.block_size == 0) return clamp_value((width < height ? width : height) / kAutoBlockDivisor, 2, 64);
+  return clamp_value(p.block_size, 2, 64);
+}
 
 // Pixels of block number b along an axis of `pixels` (the last block may be partial).
 P3D_HD int block_extent(int b, int block, int pixels) {
@@ -155,6 +173,23 @@ P3D_HD TemporalDecision temporal_decision(bool have_state, float diff, const Dep
   return TemporalDecision::Smooth;
 }
 
+// Step 2's smoothed feature s of one block (3 channels), updated in place
+// from this frame's feature f. On a cut s restarts from f; otherwise s moves
+// towards f by (1 - feature_smoothing), unless the block moved (L1 distance
+// from s of kFeatureMotionGate 8-bit levels or more, several times the noise
+// of a 2x2 block mean of decoded video), when it takes f at once: smoothing
+// removes the noise that flips edges on a static background without making
+// the regions of moving objects lag. Measured in docs/quality.md (flicker).
+constexpr float kFeatureMotionGate = 8.f;
+P3D_HD void smooth_block_feature(bool cut, float feature_smoothing, const float *f, float *s) {
+  const float w = clamp_value(feature_smoothing, 0.f, 0.99f);
+  if (!cut && w > 0.f && fabsf(s[0] - f[0]) + fabsf(s[1] - f[1]) + fabsf(s[2] - f[2]) < kFeatureMotionGate) {
+    for (int c = 0; c < 3; ++c) s[c] = w * s[c] + (1.f - w) * f[c];
+    return;
+  }
+  for (int c = 0; c < 3; ++c) s[c] = f[c];
+}
+
 // Step 5, the output block depth given the decision (prev: last output, fresh: b).
 P3D_HD float temporal_output(TemporalDecision d, float prev, float fresh, float temporal_smoothing) {
   switch (d) {
@@ -174,6 +209,7 @@ class DepthEstimatorCpu {
 
   // Block-level results of the last call, for tests.
   const std::vector<int> &labels() const { return labels_; }
+  const std::vector<float> &smoothed_features() const { return smoothed_; }  // step 2's s, 3 per block
   const std::vector<float> &block_depth() const { return block_depth_; }
   int blocks_x() const { return bx_; }
   int blocks_y() const { return by_; }
@@ -184,6 +220,7 @@ class DepthEstimatorCpu {
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   std::vector<float> features_;      // 3 per block, this frame
   std::vector<float> ref_features_;  // 3 per block, last computed frame
+  std::vector<float> smoothed_;      // 3 per block, step 2's s
   std::vector<int> labels_;
   std::vector<float> block_depth_;   // output of the last frame
   std::vector<float> fresh_depth_;   // b of this frame (step 4), before step 5

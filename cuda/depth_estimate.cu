@@ -126,21 +126,41 @@ __device__ void load_feature(const float *__restrict__ features, int k, float ou
   out[2] = features[static_cast<size_t>(k) * 3 + 2];
 }
 
+// The decision of step 5, from the difference sum the features kernel left
+// (every thread of the later kernels derives it: same input, same function).
+__device__ TemporalDecision device_decision(const DepthDeviceState *state, const DepthParams &params, bool have_state,
+                                            int n, float *diff_out = nullptr) {
+  const float diff = have_state ? temporal_mean_diff(state->diff_sum, 3LL * n) : 0.f;
+  if (diff_out) *diff_out = diff;
+  return temporal_decision(have_state, diff, params);
+}
+
 // Tile pass: components inside one 32x32 tile of blocks, in shared memory.
 // The local index ly*32+lx orders a tile's blocks as the global index does, so
-// the local root maps to the tile-local smallest global index. Also clears the
-// region sums, counts and maxima that the resolve pass accumulates into.
-__global__ void tile_labels_kernel(const float *__restrict__ features, int bx, int by, float edge_threshold,
-                                   int *labels, unsigned long long *region_sums, uint32_t *region_counts,
-                                   uint32_t *region_max) {
+// the local root maps to the tile-local smallest global index. Each block's
+// smoothed feature (step 2) is updated here, by the one thread that loads
+// it, and left in `smoothed` for the border pass. Also clears the region
+// sums, counts and maxima that the resolve pass accumulates into.
+__global__ void tile_labels_kernel(const float *__restrict__ features, float *__restrict__ smoothed, int bx, int by,
+                                   DepthParams params, bool have_state, const DepthDeviceState *state, int *labels,
+                                   unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
   __shared__ int parent[kTile * kTile];
   __shared__ float feat[kTile * kTile][3];
   const int lx = threadIdx.x, x0 = blockIdx.x * kTile, y0 = blockIdx.y * kTile;
   const int gx = x0 + lx;
+  const float edge_threshold = params.edge_threshold;
+  const bool cut = device_decision(state, params, have_state, bx * by) == TemporalDecision::Cut;
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
     const int l = ly * kTile + lx, gy = y0 + ly;
     parent[l] = l;
-    if (gx < bx && gy < by) load_feature(features, gy * bx + gx, feat[l]);
+    if (gx < bx && gy < by) {
+      const int g = gy * bx + gx;
+      float f[3];
+      load_feature(features, g, f);
+      if (!cut) load_feature(smoothed, g, feat[l]);  // a cut never reads stale (or unset) memory
+      smooth_block_feature(cut, params.feature_smoothing, f, feat[l]);
+      for (int c = 0; c < 3; ++c) smoothed[static_cast<size_t>(g) * 3 + c] = feat[l][c];
+    }
   }
   __syncthreads();
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
@@ -164,7 +184,7 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, int bx, i
 
 // Border pass: one thread per 4-neighbour pair that crosses a tile border
 // (first the vertical borders, row-major, then the horizontal ones).
-__global__ void border_labels_kernel(const float *__restrict__ features, int bx, int by, float edge_threshold,
+__global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx, int by, float edge_threshold,
                                      int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
   const long long e = static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (e >= pairs) return;
@@ -182,8 +202,8 @@ __global__ void border_labels_kernel(const float *__restrict__ features, int bx,
     a = b - bx;
   }
   float fa[3], fb[3];
-  load_feature(features, a, fa);
-  load_feature(features, b, fb);
+  load_feature(smoothed, a, fa);
+  load_feature(smoothed, b, fb);
   if (blocks_joined(fa, fb, edge_threshold)) unite(labels, a, b);
 }
 
@@ -260,8 +280,8 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
                                    DepthParams params, bool have_state, int n, int bx, int B, int width, int height) {
   const int i = blockIdx.x * kThreads + threadIdx.x;
   if (i >= n) return;
-  const float diff = have_state ? temporal_mean_diff(state->diff_sum, 3LL * n) : 0.f;
-  const TemporalDecision decision = temporal_decision(have_state, diff, params);
+  float diff;
+  const TemporalDecision decision = device_decision(state, params, have_state, n, &diff);
   if (i == 0) {
     state->diff = diff;
     state->decision = static_cast<int>(decision);
@@ -319,7 +339,7 @@ void DepthEstimatorGpu::reset() { have_state_ = false; }
 
 CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, ImageView<float> depth,
                                        cudaStream_t stream) {
-  const int B = effective_block_size(params), W = frame.width, H = frame.height;
+  const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
   if (W <= 0 || H <= 0) {
     reset();
     return {};
@@ -333,6 +353,7 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   const size_t nb = static_cast<size_t>(n);
   P3D_CUDA_TRY_STATUS(features_.ensure(nb * 3 * sizeof(float)));
   P3D_CUDA_TRY_STATUS(ref_features_.ensure(nb * 3 * sizeof(float)));
+  P3D_CUDA_TRY_STATUS(smoothed_features_.ensure(nb * 3 * sizeof(float)));
   P3D_CUDA_TRY_STATUS(labels_.ensure(nb * sizeof(int)));
   P3D_CUDA_TRY_STATUS(region_sums_.ensure(nb * sizeof(unsigned long long)));
   P3D_CUDA_TRY_STATUS(region_counts_.ensure(nb * sizeof(uint32_t)));
@@ -352,14 +373,15 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   // Step 2.
   const int tiles_x = blocks_along(bx, kTile), tiles_y = blocks_along(by, kTile);
   tile_labels_kernel<<<dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream>>>(
-      features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(),
+      features_.as<float>(), smoothed_features_.as<float>(), bx, by, params, same_grid, state, labels_.as<int>(),
       region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(), region_max_.as<uint32_t>());
   P3D_CUDA_TRY_LAUNCH(tile_labels_kernel);
   const long long vertical_pairs = static_cast<long long>(tiles_x - 1) * by;
   const long long pairs = vertical_pairs + static_cast<long long>(tiles_y - 1) * bx;
   if (pairs > 0) {
     border_labels_kernel<<<grid_for(pairs, kThreads), kThreads, 0, stream>>>(
-        features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(), tiles_x, vertical_pairs, pairs);
+        smoothed_features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(), tiles_x, vertical_pairs,
+        pairs);
     P3D_CUDA_TRY_LAUNCH(border_labels_kernel);
   }
 
@@ -408,6 +430,15 @@ CudaStatus DepthEstimatorGpu::download_block_depth(std::vector<float> &block_dep
   block_depth.resize(static_cast<size_t>(bx_) * by_);
   if (!block_depth.empty())
     P3D_CUDA_TRY(cudaMemcpy(block_depth.data(), block_depth_.get(), block_depth.size() * sizeof(float),
+                            cudaMemcpyDeviceToHost));
+  return {};
+}
+
+CudaStatus DepthEstimatorGpu::download_smoothed_features(std::vector<float> &smoothed, cudaStream_t stream) const {
+  P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+  smoothed.resize(static_cast<size_t>(bx_) * by_ * 3);
+  if (!smoothed.empty())
+    P3D_CUDA_TRY(cudaMemcpy(smoothed.data(), smoothed_features_.get(), smoothed.size() * sizeof(float),
                             cudaMemcpyDeviceToHost));
   return {};
 }

@@ -6,7 +6,9 @@
 //   memset    the fixed-point |difference| sum in the device state
 //   features  block sums in integers -> means (step 1), and each block's
 //             |feature - reference| added to the device sum (step 5)
-//   labels    union-find in shared memory per 32x32 tile of blocks, then
+//   labels    the smoothed features of step 2 (the decision of step 5 is
+//             derived from the device sum first: a cut restarts them), then
+//             union-find in shared memory per 32x32 tile of blocks, then
 //             across tile borders (atomicCAS hooking: a root only ever points
 //             to a smaller index, so roots are the smallest index, step 2)
 //   resolve   every block's root, and the region sums of hq (64-bit), block
@@ -37,6 +39,8 @@ class DepthEstimatorGpu {
   // For tests (synchronise the stream, copy to host).
   CudaStatus download_labels(std::vector<int> &labels, cudaStream_t stream) const;
   CudaStatus download_block_depth(std::vector<float> &block_depth, cudaStream_t stream) const;
+  // Step 2's smoothed features, 3 per block (as DepthEstimatorCpu::smoothed_features()).
+  CudaStatus download_smoothed_features(std::vector<float> &smoothed, cudaStream_t stream) const;
   CudaStatus last_decision(TemporalDecision *decision, cudaStream_t stream) const;
   // Mean |feature difference| of the last frame (as DepthEstimatorCpu::last_diff()).
   CudaStatus last_diff(float *diff, cudaStream_t stream) const;
@@ -45,11 +49,11 @@ class DepthEstimatorGpu {
   int blocks_y() const { return by_; }
 
  private:
-  // features_/ref_features_: 3 floats a block; labels_: int a block (the
+  // features_/ref_features_/smoothed_features_: 3 floats a block; labels_: int a block (the
   // union-find forest, then the labels); region_sums_: uint64 a block;
   // region_counts_, region_max_: uint32 a block; block_depth_: float a block, the output
   // of the last frame; state_: DepthDeviceState (depth_estimate.cu).
-  DeviceBuffer features_, ref_features_, labels_, region_sums_, region_counts_, region_max_, block_depth_, state_;
+  DeviceBuffer features_, ref_features_, smoothed_features_, labels_, region_sums_, region_counts_, region_max_, block_depth_, state_;
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   bool have_state_ = false;
 };

@@ -44,6 +44,7 @@ enum {
   PROP_REGION_WEIGHT,
   PROP_GROUND_CONTACT,
   PROP_TEMPORAL_SMOOTHING,
+  PROP_FEATURE_SMOOTHING,
   PROP_STATIC_THRESHOLD,
   PROP_CUT_THRESHOLD,
 };
@@ -251,6 +252,7 @@ static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, cons
     case PROP_REGION_WEIGHT: self->params.region_weight = g_value_get_float(value); break;
     case PROP_GROUND_CONTACT: self->params.ground_contact = g_value_get_float(value); break;
     case PROP_TEMPORAL_SMOOTHING: self->params.temporal_smoothing = g_value_get_float(value); break;
+    case PROP_FEATURE_SMOOTHING: self->params.feature_smoothing = g_value_get_float(value); break;
     case PROP_STATIC_THRESHOLD: self->params.static_threshold = g_value_get_float(value); break;
     case PROP_CUT_THRESHOLD: self->params.cut_threshold = g_value_get_float(value); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
@@ -270,6 +272,7 @@ static void gst_pseudo3d_depth_get_property(GObject *object, guint prop_id, GVal
     case PROP_REGION_WEIGHT: g_value_set_float(value, self->params.region_weight); break;
     case PROP_GROUND_CONTACT: g_value_set_float(value, self->params.ground_contact); break;
     case PROP_TEMPORAL_SMOOTHING: g_value_set_float(value, self->params.temporal_smoothing); break;
+    case PROP_FEATURE_SMOOTHING: g_value_set_float(value, self->params.feature_smoothing); break;
     case PROP_STATIC_THRESHOLD: g_value_set_float(value, self->params.static_threshold); break;
     case PROP_CUT_THRESHOLD: g_value_set_float(value, self->params.cut_threshold); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
@@ -309,8 +312,10 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
   g_object_class_install_property(
       gobject_class, PROP_BLOCK_SIZE,
       g_param_spec_int("block-size", "Block size",
-                       "Side in pixels of the blocks that are grouped into regions (smaller: finer regions, slower)",
-                       2, 64, d.block_size, flags));
+                       "Side in pixels of the blocks that are grouped into regions (smaller: finer regions, slower); "
+                       "0 = auto: one block per 540 pixels of the picture's shorter side, at least 2 (2 up to "
+                       "1080p, 4 at 4K); 1 acts as 2",
+                       0, 64, d.block_size, flags));
   g_object_class_install_property(
       gobject_class, PROP_EDGE_THRESHOLD,
       g_param_spec_float("edge-threshold", "Edge threshold",
@@ -335,6 +340,14 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
       g_param_spec_float("temporal-smoothing", "Temporal smoothing",
                          "Weight of the previous frame's depth in video (0 = none); reset at scene cuts",
                          0.f, 0.99f, d.temporal_smoothing, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_FEATURE_SMOOTHING,
+      g_param_spec_float("feature-smoothing", "Feature smoothing",
+                         "Weight of the past frames in the block colours that edges compare (0 = this frame's "
+                         "alone): averages out the noise that flips region edges on a static background; a "
+                         "block whose colour moves by 8 levels or more starts afresh, as does every block at a "
+                         "scene cut",
+                         0.f, 0.99f, d.feature_smoothing, flags));
   g_object_class_install_property(
       gobject_class, PROP_STATIC_THRESHOLD,
       g_param_spec_float("static-threshold", "Static threshold",

@@ -247,37 +247,47 @@ def depth_section(rows):
         if r.get("scale") != "full":
             continue
         h = half.get(key(r))
-        lines.append([r["cue"], r["hypothesis"], r["block_size"], fmt(r["edge_threshold"], 0),
+        lines.append([r["cue"], r["hypothesis"], block_label(r), fmt(r["edge_threshold"], 0),
                       fmt(r["region_weight"], 2), fmt(r["ground_contact"], 2), r["filter_radius"],
                       fmt(r["spearman"], 3), fmt(h["spearman"], 3) if h else "-", fmt(r["time_ms"], 1)])
     full0 = next((r for r in ranks if r.get("scale") == "full"), {})
     half0 = next((r for r in ranks if r.get("scale") == "half"), {})
     out = [f"Full size {full0.get('width', '?')}x{full0.get('height', '?')}, half size "
            f"{half0.get('width', '?')}x{half0.get('height', '?')}; each row moves one cue away from the defaults "
-           f"(`previous`: the defaults before the ground-contact cue, ground_contact 0 and region_weight 0.75).", "",
+           f"(`previous`: the defaults before the ground-contact cue and the automatic block size: block_size 4, "
+           f"ground_contact 0, region_weight 0.75; block_size `auto (n)`: the automatic size and what it came to).",
+           "",
            table(["cue", "hypothesis", "block_size", "edge_threshold", "region_weight", "ground_contact",
                   "filter radius", "rho full", "rho half", "ms (full)"], lines)]
-    get = {(r["scale"], r["cue"], r["block_size"], r["ground_contact"], r["region_weight"], r["edge_threshold"]): r
-           for r in ranks if r["hypothesis"] == "top-bottom" and r["filter_radius"] == 5}
-    d = {s: next((r for r in ranks if r.get("scale") == s and r["cue"] == "defaults"), None) for s in ("full", "half")}
-    p = {s: next((r for r in ranks if r.get("scale") == s and r["cue"] == "previous"), None) for s in ("full", "half")}
-    b2 = {s: next((r for r in ranks if r.get("scale") == s and r["cue"] == "block_size" and r["block_size"] == 2),
-                  None) for s in ("full", "half")}
+
+    def find(scale, cue, **kv):
+        return next((r for r in ranks if r.get("scale") == scale and r["cue"] == cue
+                     and all(r.get(k) == v for k, v in kv.items())), None)
+    d = {s: find(s, "defaults") for s in ("full", "half")}
+    p = {s: find(s, "previous") for s in ("full", "half")}
+    b4 = {s: find(s, "block_size", block_size=4) for s in ("full", "half")}
+    g0 = {s: find(s, "ground_contact", ground_contact=0.0) for s in ("full", "half")}
     notes = []
-    if d["full"] and p["full"] and d["half"] and p["half"]:
+    if all(d.values()) and all(p.values()) and all(b4.values()):
+        notes.append(f"With the defaults rho is {fmt(d['full']['spearman'], 3)} at full size and "
+                     f"{fmt(d['half']['spearman'], 3)} at half size, against {fmt(b4['full']['spearman'], 3)} and "
+                     f"{fmt(b4['half']['spearman'], 3)} with 4-pixel blocks (the default until 2026-11-23) and "
+                     f"{fmt(p['full']['spearman'], 3)} and {fmt(p['half']['spearman'], 3)} before the ground-contact "
+                     f"cue.")
+    if all(d.values()) and all(g0.values()):
         notes.append(f"Ground contact (a region takes the hypothesis of its nearest block: for top-bottom its lowest "
                      f"one, where an object stands on the ground) with region_weight 0.9 raises rho from "
-                     f"{fmt(p['full']['spearman'], 3)} to {fmt(d['full']['spearman'], 3)} at full size and from "
-                     f"{fmt(p['half']['spearman'], 3)} to {fmt(d['half']['spearman'], 3)} at half size. The cue "
-                     f"depends on regions staying whole: at half size the 4-pixel blocks are twice as coarse "
-                     f"relative to the picture, thin leaves break away from the plant and each takes its own "
-                     f"contact.")
-    if b2["full"] and b2["half"]:
-        notes.append(f"Block size 2 keeps them whole at half size too (rho {fmt(b2['half']['spearman'], 3)}, "
-                     f"{fmt(b2['full']['spearman'], 3)} at full size), but doubles the static-background flicker on "
-                     f"vtest.avi (below): 2x2 blocks of 4:2:0 video carry one chroma sample and twice the noise of "
-                     f"4x4 ones, so region edges flip from frame to frame and fewer frames are reused. The default "
-                     f"stays 4.")
+                     f"{fmt(g0['full']['spearman'], 3)} to {fmt(d['full']['spearman'], 3)} at full size and from "
+                     f"{fmt(g0['half']['spearman'], 3)} to {fmt(d['half']['spearman'], 3)} at half size. The cue "
+                     f"depends on regions staying whole: with 4-pixel blocks at half size, twice as coarse relative "
+                     f"to the picture, thin leaves break away from the plant and each takes its own contact.")
+    if all(d.values()):
+        notes.append(f"The automatic block size (block_size 0, the default since 2026-11-23: one block per 540 pixels "
+                     f"of the picture's shorter side, at least 2) comes to {d['full'].get('effective_block_size')} "
+                     f"at both of Aloe's sizes, which keeps the leaves whole, and to 2 up to 1080p, 4 at 4K, 8 at 8K: "
+                     f"blocks cover the same share of the scene at every resolution, and 4K runs as before. Without "
+                     f"the feature smoothing that came with it, 2-pixel blocks doubled the static-background flicker "
+                     f"of vtest.avi (below).")
     notes.append("The other cues: region_weight moves rho monotonically (the more a block takes its region's value, "
                  "the more the ground contact counts); edge_threshold has a broad optimum around 24-32 and collapses "
                  "at 48, where the backdrop merges with the floor and one region spans the picture; the filter "
@@ -287,6 +297,13 @@ def depth_section(rows):
                  "is one region reaching the bottom of the picture gets that whole region near (vtest.avi's lawn "
                  "and road), the depth then separates objects from the ground less by height in the picture.")
     return out + [""] + notes
+
+
+def block_label(r):
+    """block_size as set, with the size it came to for block_size 0 (auto)."""
+    if r.get("block_size") == 0:
+        return f"auto ({r.get('effective_block_size', '?')})"
+    return r.get("block_size")
 
 
 def flicker_section(rows):
@@ -314,29 +331,32 @@ def flicker_section(rows):
                   "ms/frame"], lines)]
     get = {(r.get("setting", "defaults"), r["stage"], r["temporal_smoothing"]): r for r in flick}
     on, off = get.get(("defaults", "filtered", 0.5)), get.get(("defaults", "filtered", 0.0))
-    prev, fine = get.get(("previous", "filtered", 0.5)), get.get(("block_size 2", "filtered", 0.5))
+    old, prev = get.get(("2026-11-22", "filtered", 0.5)), get.get(("previous", "filtered", 0.5))
+    fine = get.get(("block_size 2, no feature smoothing", "filtered", 0.5))
+    coarse, light = get.get(("block_size 4", "filtered", 0.5)), get.get(("feature_smoothing 0.5", "filtered", 0.5))
     notes = []
-    if on and prev:
-        notes.append(f"With the default smoothing (0.5) the depth the warp receives changes by "
-                     f"{fmt(on['mean_abs'] * LEVEL, 3)} levels per frame on the static background, against "
-                     f"{fmt(prev['mean_abs'] * LEVEL, 3)} before the ground-contact cue; 95 % of the changes are under "
-                     f"{fmt(on['p95_abs'] * LEVEL, 2)} levels (before: {fmt(prev['p95_abs'] * LEVEL, 2)}) and "
-                     f"{fmt(100 * on['share_over_1_level'], 2)} % reach one level (before: "
-                     f"{fmt(100 * prev['share_over_1_level'], 2)} %). The cue changes the kind of flicker: a region's "
-                     f"depth no longer follows its mean, which moved a little with every block that joined or left it, "
-                     f"but its nearest block, which holds still until a block joins below it and then jumps. The "
-                     f"maps also use more of the depth range (std {fmt(on['depth_std'] * LEVEL, 1)} levels against "
-                     f"{fmt(prev['depth_std'] * LEVEL, 1)}). Over all pixels, walkers included, the change grows "
-                     f"from {fmt(prev['mean_abs_all_pixels'] * LEVEL, 2)} to "
-                     f"{fmt(on['mean_abs_all_pixels'] * LEVEL, 2)} levels per frame: a walker now takes the depth of "
-                     f"its feet and stands out from the ground behind it, so the pixels it passes change depth; that "
-                     f"is depth contrast on moving objects, not flicker of static ones, but it is more motion in the "
-                     f"depth.")
-    if fine:
-        notes.append(f"Block size 2 (which keeps Aloe's regions whole at half size) flickers by "
-                     f"{fmt(fine['mean_abs'] * LEVEL, 3)} levels per frame, {fmt(100 * fine['share_over_1_level'], 2)} % "
-                     f"of the changes reaching one level, and reuses {fine['reused']} frames against "
-                     f"{on['reused'] if on else '?'} (noisier block means).")
+    if on and old and prev:
+        notes.append(f"With the defaults (automatic block size, here {on.get('effective_block_size', '?')} pixels; "
+                     f"feature smoothing {fmt(on.get('feature_smoothing', float('nan')), 2)}; temporal smoothing 0.5) "
+                     f"the depth the warp receives changes by {fmt(on['mean_abs'] * LEVEL, 3)} levels per frame on "
+                     f"the static background, against {fmt(old['mean_abs'] * LEVEL, 3)} with the defaults of "
+                     f"2026-11-22 (4-pixel blocks, no feature smoothing) and {fmt(prev['mean_abs'] * LEVEL, 3)} "
+                     f"before the ground-contact cue; {fmt(100 * on['share_over_1_level'], 2)} % of the changes "
+                     f"reach one level (2026-11-22: {fmt(100 * old['share_over_1_level'], 2)} %). Over all pixels, "
+                     f"walkers included, the change is {fmt(on['mean_abs_all_pixels'] * LEVEL, 2)} levels per frame "
+                     f"(2026-11-22: {fmt(old['mean_abs_all_pixels'] * LEVEL, 2)}). The maps use less of the depth "
+                     f"range on this video (std {fmt(on['depth_std'] * LEVEL, 1)} levels against "
+                     f"{fmt(old['depth_std'] * LEVEL, 1)}): finer blocks make more, smaller regions.")
+    if fine and coarse and light and old:
+        notes.append(f"Each change alone: 2-pixel blocks without feature smoothing flicker by "
+                     f"{fmt(fine['mean_abs'] * LEVEL, 3)} levels per frame ({fmt(100 * fine['share_over_1_level'], 2)} "
+                     f"% of the changes reaching one level) and reuse {fine['reused']} frames against {old['reused']}: "
+                     f"a 2x2 block of 4:2:0 video carries one chroma sample and twice the noise of a 4x4 block mean, "
+                     f"so edges near the threshold flip from frame to frame. Feature smoothing (edges compare block "
+                     f"colours averaged over the frames since the block last moved by 8 levels) removes that: "
+                     f"{fmt(coarse['mean_abs'] * LEVEL, 3)} levels with 4-pixel blocks (against "
+                     f"{fmt(old['mean_abs'] * LEVEL, 3)} without), {fmt(on['mean_abs'] * LEVEL, 3)} with the automatic "
+                     f"size; a weight of 0.5 is too little ({fmt(light['mean_abs'] * LEVEL, 3)}).")
     if on and off and off["mean_abs"] > 0:
         notes.append(f"Temporal smoothing still halves the flicker ({fmt(off['mean_abs'] * LEVEL, 3)} levels without, "
                      f"{fmt(on['mean_abs'] * LEVEL, 3)} with 0.5); its cost is lag on moving objects, which this "
@@ -389,8 +409,9 @@ def report(rows, md, png_rel, data_rel):
         "mean |depth(t) - depth(t-1)| over the static-background mask, per frame pair, averaged; p95 of all those "
         "per-pixel changes. `estimate` is the estimator's output, `filtered` what the warp receives. "
         "temporal_smoothing 0 still reuses the depth of frames that hardly change (static_threshold 0.5). "
-        "Settings: the defaults at three smoothings, `previous` (the defaults before the ground-contact cue) and "
-        "block_size 2.",
+        "Settings: the defaults at three smoothings; `2026-11-22`, the defaults before the automatic block size "
+        "and the feature smoothing; `previous`, those before the ground-contact cue; and each of the two new "
+        "defaults alone.",
         "",
         "## View synthesis (Aloe right view)",
         "",

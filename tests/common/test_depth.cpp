@@ -542,6 +542,140 @@ TEST(DepthEdgeSizes, OutOfRangeBlockSizeIsClamped) {
   EXPECT_EQ(est.blocks_x(), 3);  // block 64
 }
 
+// block_size 0: one block per 540 pixels of the shorter side, 2 to 64.
+TEST(DepthEdgeSizes, AutoBlockSizeFollowsTheShorterSide) {
+  DepthParams p;
+  EXPECT_EQ(p.block_size, 0);  // the default is auto
+  const int cases[][3] = {{1, 1, 2},       {768, 576, 2},     {1282, 1110, 2},   {1920, 1080, 2}, {1080, 1920, 2},
+                          {2560, 1440, 2}, {3840, 2160, 4},   {2160, 3840, 4},   {5120, 2880, 5}, {7680, 4320, 8},
+                          {40000, 40000, 64}};
+  for (const auto &c : cases) EXPECT_EQ(effective_block_size(p, c[0], c[1]), c[2]) << c[0] << "x" << c[1];
+  DepthEstimatorCpu est;
+  estimate(est, p, solid(1620, 1200, cv::Scalar(1, 2, 3)));
+  EXPECT_EQ(est.blocks_x(), 1620 / 2);
+  p.block_size = 4;  // an explicit size is kept whatever the picture
+  EXPECT_EQ(effective_block_size(p, 7680, 4320), 4);
+}
+
+// ------------------------------------------------- feature smoothing ---
+
+// Two flat halves whose colours differ by about the edge threshold, with
+// camera-like noise in the right half: one frame +/-2 around a difference
+// of 22 (edge_threshold 24), so raw features flip between joined (20) and
+// split (24) every frame.
+HostFrame noisy_halves(int frame) {
+  cv::Mat bgr(16, 32, CV_8UC3, cv::Scalar(100, 100, 100));
+  bgr.colRange(16, 32).setTo(cv::Scalar(100, 100, frame % 2 ? 124 : 120));
+  return HostFrame::from_bgr(bgr, PixelFormat::RGBA, kPad);
+}
+
+DepthParams feature_params(float feature_smoothing) {
+  DepthParams p = temporal_params();
+  p.feature_smoothing = feature_smoothing;
+  return p;
+}
+
+int regions(const std::vector<int> &labels) { return static_cast<int>(std::set<int>(labels.begin(), labels.end()).size()); }
+
+TEST(DepthFeatureSmoothing, NoiseNoLongerFlipsEdges) {
+  for (const float w : {0.f, 0.9f}) {
+    DepthEstimatorCpu est;
+    std::set<int> counts;
+    for (int t = 0; t < 20; ++t) {
+      TemporalDecision d;
+      estimate(est, feature_params(w), noisy_halves(t), &d);
+      if (t > 0) {
+        ASSERT_NE(d, TemporalDecision::Cut);  // diff 4 / 2 / 3 levels: smooth
+      }
+      if (t >= 1) counts.insert(regions(est.labels()));
+    }
+    if (w == 0.f)
+      EXPECT_EQ(counts, (std::set<int>{1, 2})) << "without smoothing the edge flips";
+    else
+      EXPECT_EQ(counts, (std::set<int>{1})) << "smoothed, the halves (22 apart on average) stay one region";
+  }
+}
+
+// Every frame but a cut moves s towards f by the formula, reused frames too;
+// a cut restarts s from f.
+TEST(DepthFeatureSmoothing, FollowsTheFormulaAndRestartsAtCuts) {
+  const DepthParams p = feature_params(0.75f);
+  DepthEstimatorCpu est;
+  TemporalDecision d;
+  estimate(est, p, noisy_halves(0), &d);
+  ASSERT_EQ(d, TemporalDecision::Cut);
+  std::vector<float> f;
+  block_features_cpu(noisy_halves(0).view(), 4, f);
+  EXPECT_EQ(est.smoothed_features(), f);  // a first frame is a cut: s = f
+  std::vector<float> s = est.smoothed_features();
+  for (int t = 1; t < 4; ++t) {
+    const HostFrame frame = noisy_halves(t);
+    block_features_cpu(frame.view(), 4, f);
+    estimate(est, p, frame, &d);
+    ASSERT_NE(d, TemporalDecision::Cut);
+    for (size_t k = 0; k < s.size(); ++k) s[k] = 0.75f * s[k] + (1.f - 0.75f) * f[k];
+    ASSERT_EQ(est.smoothed_features(), s) << "frame " << t;
+  }
+  // A reused frame (the same picture again) still moves s.
+  estimate(est, p, noisy_halves(3), &d);
+  ASSERT_EQ(d, TemporalDecision::Reuse);
+  for (size_t k = 0; k < s.size(); ++k) s[k] = 0.75f * s[k] + (1.f - 0.75f) * f[k];
+  EXPECT_EQ(est.smoothed_features(), s);
+  // A cut: s is this frame's features, nothing of the past.
+  const HostFrame other = solid(32, 16, cv::Scalar(10, 200, 60));
+  estimate(est, p, other, &d);
+  ASSERT_EQ(d, TemporalDecision::Cut);
+  block_features_cpu(other.view(), 4, f);
+  EXPECT_EQ(est.smoothed_features(), f);
+}
+
+// A block whose colour moves by 8 levels (L1) or more takes its new feature
+// at once, so the regions of a moving object do not lag behind it.
+TEST(DepthFeatureSmoothing, MovedBlocksStartAfresh) {
+  const DepthParams p = feature_params(0.9f);
+  cv::Mat bgr(16, 32, CV_8UC3, cv::Scalar(100, 100, 100));
+  DepthEstimatorCpu est;
+  TemporalDecision d;
+  estimate(est, p, HostFrame::from_bgr(bgr, PixelFormat::RGBA, kPad), &d);
+  EXPECT_EQ(regions(est.labels()), 1);
+  // The right half brightens by 30 in one channel: diff 30 / 2 / 3 = 5, a smooth frame.
+  bgr.colRange(16, 32).setTo(cv::Scalar(100, 100, 130));
+  const HostFrame moved = HostFrame::from_bgr(bgr, PixelFormat::RGBA, kPad);
+  estimate(est, p, moved, &d);
+  ASSERT_EQ(d, TemporalDecision::Smooth);
+  std::vector<float> f;
+  block_features_cpu(moved.view(), 4, f);
+  EXPECT_EQ(est.smoothed_features(), f);  // left unchanged (s == f), right moved: both f
+  EXPECT_EQ(regions(est.labels()), 2) << "the new edge is seen in the frame it appears";
+  // Under the gate (L1 7), s moves by the formula; at it (L1 8), s = f.
+  float s[3] = {100.f, 100.f, 100.f};
+  const float g[3] = {100.f, 104.f, 103.f};
+  smooth_block_feature(false, 0.5f, g, s);
+  EXPECT_EQ(s[1], 102.f);
+  EXPECT_EQ(s[2], 101.5f);
+  const float h[3] = {108.f, 102.f, 101.5f};
+  smooth_block_feature(false, 0.5f, h, s);
+  EXPECT_EQ(s[0], 108.f);
+}
+
+// feature_smoothing 0 is the estimator before the smoothing: labels of the
+// frame's own features, frame after frame.
+TEST(DepthFeatureSmoothing, ZeroIsTheFrameAlone) {
+  DepthEstimatorCpu est;
+  std::mt19937 rng(7);
+  std::vector<float> f;
+  std::vector<int> labels;
+  HostFrame frame(PixelFormat::I420, 61, 37, kPad);
+  for (int t = 0; t < 6; ++t) {
+    frame.fill_random(rng());
+    estimate(est, feature_params(0.f), frame);
+    block_features_cpu(frame.view(), 4, f);
+    EXPECT_EQ(est.smoothed_features(), f);
+    region_labels_cpu(f, est.blocks_x(), est.blocks_y(), 24.f, labels);
+    EXPECT_EQ(est.labels(), labels);
+  }
+}
+
 TEST(DepthFormats, FlatColoursGiveSameLabelsInEveryFormat) {
   // Four flat rectangles on an 8-pixel grid (block and chroma aligned), in
   // colours far apart in R'G'B' and in Y'CbCr alike.

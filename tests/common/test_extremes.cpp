@@ -261,7 +261,7 @@ constexpr Hypothesis kAllHypotheses[] = {Hypothesis::TopBottom, Hypothesis::Left
 // region_weight * r + (1 - region_weight) * its own hq, r the ground-contact
 // blend of the largest and the mean hq of all blocks.
 std::vector<float> one_region_block_depth(const DepthParams &p, int w, int h) {
-  const int B = effective_block_size(p), bx = blocks_along(w, B), by = blocks_along(h, B);
+  const int B = effective_block_size(p, w, h), bx = blocks_along(w, B), by = blocks_along(h, B);
   std::vector<uint32_t> hq(static_cast<size_t>(bx) * by);
   uint64_t sum = 0;
   uint32_t max = 0;
@@ -320,7 +320,7 @@ TEST(ExtremeDepth, ConstantFramesAreOneRegion) {
               const DepthResult r = estimate(p, frame);
               ASSERT_TRUE(depth_ok(r.depth));
               EXPECT_TRUE(all_labels(r.labels, 0));
-              EXPECT_TRUE(depth_is_blocks(r.depth, one_region_block_depth(p, s.w, s.h), effective_block_size(p)));
+              EXPECT_TRUE(depth_is_blocks(r.depth, one_region_block_depth(p, s.w, s.h), effective_block_size(p, s.w, s.h)));
               if (rw == 1.f) {
                 double lo = 1, hi = 0;
                 cv::minMaxLoc(r.depth, &lo, &hi);
@@ -458,15 +458,18 @@ TEST(ExtremeDepth, TemporalExtremes) {
 }
 
 // One 8K frame (the largest size the plugin is meant for): a uniform grey is
-// one region of 1920 x 1080 blocks. TopBottom with region_weight 1 gives the
-// mean of the block centres, 0.5 (quantisation aside), everywhere with
-// ground_contact 0 and the lowest block row's centre with ground_contact 1;
-// with region_weight 0 every pixel gets its block row's centre.
+// one region of 960 x 540 blocks (the automatic block size is 8 at 8K).
+// TopBottom with region_weight 1 gives the mean of the block centres, 0.5
+// (quantisation aside), everywhere with ground_contact 0 and the lowest block
+// row's centre with ground_contact 1; with region_weight 0 every pixel gets
+// its block row's centre.
 TEST(ExtremeDepth, Frame8K) {
   const int W = 7680, H = 4320;
   HostFrame frame(PixelFormat::RGBA, W, H);
   frame.fill(128);
   DepthParams p;
+  const int B = effective_block_size(p, W, H);
+  ASSERT_EQ(B, 8);
   p.hypothesis = Hypothesis::TopBottom;
   p.region_weight = 1.f;
   p.ground_contact = 0.f;
@@ -482,13 +485,13 @@ TEST(ExtremeDepth, Frame8K) {
   const DepthResult nearest = estimate(p, frame);
   cv::minMaxLoc(nearest.depth, &lo, &hi);
   EXPECT_EQ(lo, hi);
-  EXPECT_NEAR(lo, (H - 2.0) / H, 0.5 / 65535 + 1e-6);
+  EXPECT_NEAR(lo, (H - B / 2.0) / H, 0.5 / 65535 + 1e-6);
 
   p.region_weight = 0.f;
   const DepthResult own = estimate(p, frame);
   ASSERT_TRUE(depth_ok(own.depth));
   for (int y = 0; y < H; ++y) {
-    const double centre = ((y / 4) * 4 + 2.0) / H;
+    const double centre = ((y / B) * B + B / 2.0) / H;
     const float *row = own.depth.ptr<float>(y);
     for (int x = 0; x < W; ++x) ASSERT_NEAR(row[x], centre, 0.5 / 65535 + 1e-6) << "(" << x << "," << y << ")";
   }

@@ -12,6 +12,7 @@
 // unwritten pixel counts as non-finite and fails.
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <string>
 
@@ -41,6 +42,7 @@ struct Result {
   cv::Mat depth;
   std::vector<int> labels;
   std::vector<float> block_depth;
+  std::vector<float> smoothed;  // step 2's smoothed features
   TemporalDecision decision = TemporalDecision::Cut;
   float diff = -1.f;
 };
@@ -51,6 +53,7 @@ Result run_cpu(DepthEstimatorCpu &est, const DepthParams &p, const HostFrame &f)
   r.decision = est.estimate(p, f.view(), depth_view_of(r.depth));
   r.labels = est.labels();
   r.block_depth = est.block_depth();
+  r.smoothed = est.smoothed_features();
   r.diff = est.last_diff();
   return r;
 }
@@ -70,6 +73,7 @@ class GpuRunner {
     check_cuda(est_.estimate(p, frame.view(), depth.view(), stream_));
     check_cuda(est_.download_labels(r.labels, stream_));
     check_cuda(est_.download_block_depth(r.block_depth, stream_));
+    check_cuda(est_.download_smoothed_features(r.smoothed, stream_));
     check_cuda(est_.last_decision(&r.decision, stream_));
     check_cuda(est_.last_diff(&r.diff, stream_));
     r.depth = depth.download();
@@ -84,6 +88,10 @@ class GpuRunner {
 };
 
 void expect_same(const Result &cpu, const Result &gpu, const std::string &what) {
+  // The smoothed features decide the labels: one shared P3D_HD formula, bit for bit.
+  ASSERT_EQ(cpu.smoothed.size(), gpu.smoothed.size()) << what;
+  EXPECT_EQ(std::memcmp(cpu.smoothed.data(), gpu.smoothed.data(), cpu.smoothed.size() * sizeof(float)), 0)
+      << what << ": smoothed features differ";
   ASSERT_EQ(cpu.labels.size(), gpu.labels.size()) << what;
   long long label_mismatch = 0;
   size_t first = 0;
@@ -324,6 +332,55 @@ TEST(GpuDepth, TemporalSequenceMatches) {
       expect_same(c, g, what);
     }
   }
+}
+
+// Step 2's feature smoothing over a stream: Aloe with fresh noise of a few
+// levels in every frame (what flips edges on a static background), a square
+// that moves (blocks past the motion gate take their new feature at once), a
+// repeated frame (reused, smoothing still moves) and a scene cut. The
+// automatic block size (2 here) and two smoothing weights; the test also
+// checks that the smoothing changed the labels somewhere, so that it proves
+// something about the smoothing.
+TEST(GpuDepth, FeatureSmoothingSequenceMatches) {
+  const cv::Mat aloe = test::load_data_image("aloeL.jpg");
+  ASSERT_FALSE(aloe.empty());
+  std::mt19937 rng(fresh_seed());
+  std::vector<cv::Mat> pictures;
+  for (int i = 0; i < 10; ++i) {
+    cv::Mat noise(aloe.size(), CV_16SC3), frame;
+    cv::randu(noise, cv::Scalar::all(-3), cv::Scalar::all(4));
+    aloe.convertTo(frame, CV_16SC3);
+    frame += noise;
+    frame.convertTo(frame, CV_8UC3);
+    cv::rectangle(frame, cv::Rect(100 + 40 * i, 300, 120, 120), cv::Scalar(20, 240, 250), cv::FILLED);
+    pictures.push_back(frame);
+  }
+  pictures.insert(pictures.begin() + 5, pictures[4]);              // reused
+  pictures.push_back(cv::Scalar(255, 255, 255) - pictures.back());  // cut
+  int smoothing_mattered = 0;
+  for (PixelFormat fmt : {PixelFormat::I420, PixelFormat::NV12, PixelFormat::RGBA})
+    for (const float w : {0.9f, 0.5f}) {
+      DepthEstimatorCpu cpu;
+      GpuRunner gpu;
+      DepthParams p;
+      p.feature_smoothing = w;
+      for (size_t i = 0; i < pictures.size(); ++i) {
+        const HostFrame f = HostFrame::from_bgr(pictures[i], fmt, 3);
+        const std::string what =
+            std::string(format_name(fmt)) + " smoothing " + std::to_string(w) + " frame " + std::to_string(i);
+        const Result c = run_cpu(cpu, p, f);
+        expect_same(c, gpu.run(p, f), what);
+        std::vector<float> raw;
+        std::vector<int> raw_labels;
+        block_features_cpu(f.view(), effective_block_size(p, f.width(), f.height()), raw);
+        region_labels_cpu(raw, cpu.blocks_x(), cpu.blocks_y(), p.edge_threshold, raw_labels);
+        smoothing_mattered += raw_labels != c.labels;
+        if (i == 5 || i + 1 == pictures.size()) {
+          EXPECT_EQ(c.decision, i == 5 ? TemporalDecision::Reuse : TemporalDecision::Cut) << what;
+        }
+      }
+    }
+  EXPECT_GT(smoothing_mattered, 0) << "no frame where smoothing changed the regions: the test proves nothing";
 }
 
 TEST(GpuDepth, TemporalRandomSequenceAndReset) {

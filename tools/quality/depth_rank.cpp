@@ -44,7 +44,8 @@ struct RankCase {
 std::vector<RankCase> rank_cases() {
   std::vector<RankCase> cases;
   cases.push_back({"defaults", DepthParams(), 5});
-  RankCase previous{"previous", DepthParams(), 5};  // before the ground-contact cue
+  RankCase previous{"previous", DepthParams(), 5};  // before the ground-contact cue (and the automatic block size)
+  previous.depth.block_size = 4;
   previous.depth.ground_contact = 0.f;
   previous.depth.region_weight = 0.75f;
   cases.push_back(previous);
@@ -64,7 +65,7 @@ std::vector<RankCase> rank_cases() {
     c.depth.region_weight = rw;
     cases.push_back(c);
   }
-  for (const int b : {2, 3, 8}) {
+  for (const int b : {2, 3, 4, 8}) {  // 4: the default before the automatic block size
     RankCase c{"block_size", DepthParams(), 5};
     c.depth.block_size = b;
     cases.push_back(c);
@@ -106,14 +107,16 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs, const 
     j.str("kind", "depth_rank").str("scale", scale).str("cue", c.cue);
     j.integer("width", a.left.cols).integer("height", a.left.rows);
     j.str("hypothesis", hypothesis_name(c.depth.hypothesis)).integer("block_size", c.depth.block_size);
+    j.integer("effective_block_size", effective_block_size(c.depth, a.left.cols, a.left.rows));
     j.num("edge_threshold", c.depth.edge_threshold).num("region_weight", c.depth.region_weight);
     j.num("ground_contact", c.depth.ground_contact).integer("filter_radius", c.radius);
     j.str("filter_mode", filter.mode == BilateralMode::Separable ? "separable" : "exact");
     j.integer("samples", static_cast<long long>(sample.size())).num("spearman", rho);
     j.num("time_ms", t[k].median_ms()).num("min_ms", t[k].min_ms());
     w.emit(j);
-    std::printf("depth %-4s %-14s %-11s B %2d edge %4.1f rw %.2f gc %.2f radius %d  rho %+.4f  %7.1f ms\n", scale,
-                c.cue, hypothesis_name(c.depth.hypothesis), c.depth.block_size, c.depth.edge_threshold,
+    std::printf("depth %-4s %-14s %-11s B %2d (%d) edge %4.1f rw %.2f gc %.2f radius %d  rho %+.4f  %7.1f ms\n", scale,
+                c.cue, hypothesis_name(c.depth.hypothesis), c.depth.block_size,
+                effective_block_size(c.depth, a.left.cols, a.left.rows), c.depth.edge_threshold,
                 c.depth.region_weight, c.depth.ground_contact, c.radius, rho, t[k].median_ms());
     std::fflush(stdout);
   }

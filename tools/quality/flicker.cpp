@@ -115,7 +115,7 @@ struct FlickerTrack {
 
 // One estimator setting: its estimator and the estimate / filtered tracks.
 struct Setting {
-  const char *label;  // "defaults", "previous" (before the ground-contact cue), "block_size 2"
+  const char *label;  // "defaults", or what differs from them (see settings())
   DepthParams params;
   DepthEstimatorCpu estimator;
   FlickerTrack raw, filtered;
@@ -130,15 +130,27 @@ std::vector<Setting> settings() {
     d.params.temporal_smoothing = smoothing;
     s.push_back(std::move(d));
   }
-  Setting previous;
+  // The defaults of 2026-11-22: 4-pixel blocks, no feature smoothing; then
+  // the same before the ground-contact cue ("previous").
+  Setting before;
+  before.label = "2026-11-22";
+  before.params.block_size = 4;
+  before.params.feature_smoothing = 0.f;
+  Setting previous = before;
   previous.label = "previous";
   previous.params.ground_contact = 0.f;
   previous.params.region_weight = 0.75f;
-  s.push_back(std::move(previous));
-  Setting fine;
-  fine.label = "block_size 2";
+  // Each of this default's two changes alone.
+  Setting fine = before;
+  fine.label = "block_size 2, no feature smoothing";
   fine.params.block_size = 2;
-  s.push_back(std::move(fine));
+  Setting coarse;
+  coarse.label = "block_size 4";
+  coarse.params.block_size = 4;
+  Setting light;
+  light.label = "feature_smoothing 0.5";
+  light.params.feature_smoothing = 0.5f;
+  for (Setting *x : {&before, &previous, &fine, &coarse, &light}) s.push_back(std::move(*x));
   return s;
 }
 
@@ -156,6 +168,8 @@ void emit(Writer &w, const Setting &s, const FlickerTrack &t, int frames, double
   JsonLine j;
   j.str("kind", "flicker").str("video", "vtest.avi").str("decoder", backend).str("stage", t.stage);
   j.str("setting", s.label).num("temporal_smoothing", p.temporal_smoothing).integer("block_size", p.block_size);
+  j.integer("effective_block_size", effective_block_size(p, mask.cols, mask.rows));
+  j.num("feature_smoothing", p.feature_smoothing);
   j.str("filter_mode", filter_mode == BilateralMode::Separable ? "separable" : "exact");
   j.num("region_weight", p.region_weight).num("ground_contact", p.ground_contact).integer("frames", frames);
   j.num("static_std_levels", kStaticLumaStd).num("mask_fraction", mask_fraction);
@@ -166,7 +180,7 @@ void emit(Writer &w, const Setting &s, const FlickerTrack &t, int frames, double
   j.integer("cuts", s.decisions[0]).integer("smoothed", s.decisions[1]).integer("reused", s.decisions[2]);
   j.num("time_ms", median(t.ms)).integer("width", mask.cols).integer("height", mask.rows);
   w.emit(j);
-  std::printf("flicker    %-12s %-8s smoothing %.2f  mean %.5f  p95 %.5f  >=1 level %.2f%%  std %.3f  %6.1f ms/frame\n",
+  std::printf("flicker    %-34s %-8s smoothing %.2f  mean %.5f  p95 %.5f  >=1 level %.2f%%  std %.3f  %6.1f ms/frame\n",
               s.label, t.stage, p.temporal_smoothing, mean / pairs, t.quantile(0.95),
               100 * t.share_at_least(1.0 / 255.0), spread / static_cast<double>(t.spread.size()), median(t.ms));
   std::fflush(stdout);
