@@ -18,23 +18,21 @@ void block_features_cpu(const FrameView &frame, int block_size, std::vector<floa
   // One task per block row: every block's pixels are then summed by one
   // thread, in integers, so the result does not depend on the split.
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
-    std::vector<uint32_t> sums(static_cast<size_t>(bx) * 3);
     for (int j = range.start; j < range.end; ++j) {
-      std::fill(sums.begin(), sums.end(), 0u);
       const int rows = block_extent(j, B, H);
-      for (int y = j * B; y < j * B + rows; ++y)
-        for (int x = 0; x < W; ++x) {
-          int c[3];
-          load_native3(frame, x, y, c);
-          uint32_t *s = &sums[static_cast<size_t>(x / B) * 3];
-          s[0] += c[0];
-          s[1] += c[1];
-          s[2] += c[2];
-        }
       float *f = &features[static_cast<size_t>(j) * bx * 3];
       for (int i = 0; i < bx; ++i) {
-        const int count = block_extent(i, B, W) * rows;
-        for (int c = 0; c < 3; ++c) f[i * 3 + c] = block_mean(sums[static_cast<size_t>(i) * 3 + c], count);
+        const int cols = block_extent(i, B, W);
+        uint32_t sum[3] = {0, 0, 0};
+        for (int y = j * B; y < j * B + rows; ++y)
+          for (int x = i * B; x < i * B + cols; ++x) {
+            int c[3];
+            load_native3(frame, x, y, c);
+            sum[0] += c[0];
+            sum[1] += c[1];
+            sum[2] += c[2];
+          }
+        for (int c = 0; c < 3; ++c) f[i * 3 + c] = block_mean(sum[c], cols * rows);
       }
     }
   });
@@ -84,15 +82,19 @@ void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y,
   const size_t n = static_cast<size_t>(blocks_x) * blocks_y;
   std::vector<uint32_t> hq(n), count(n, 0), max(n, 0);
   std::vector<uint64_t> sum(n, 0);
-  for (int j = 0; j < blocks_y; ++j)
+  std::vector<float> cx(blocks_x);  // block_centre() once per column, not per block
+  for (int i = 0; i < blocks_x; ++i) cx[i] = block_centre(i, block_size, width);
+  for (int j = 0; j < blocks_y; ++j) {
+    const float cy = block_centre(j, block_size, height);
     for (int i = 0; i < blocks_x; ++i) {
       const size_t k = static_cast<size_t>(j) * blocks_x + i;
       const int r = labels[k];
-      hq[k] = block_hypothesis_q(params.hypothesis, i, j, block_size, width, height);
+      hq[k] = hypothesis_q(params.hypothesis, cx[i], cy);
       sum[r] += hq[k];
       ++count[r];
       max[r] = std::max(max[r], hq[k]);
     }
+  }
   block_depth.resize(n);
   for (size_t k = 0; k < n; ++k) {
     const int r = labels[k];
@@ -109,7 +111,7 @@ void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x,
     for (int y = range.start; y < range.end; ++y) {
       const float *src = &block_depth[static_cast<size_t>(y / block_size) * blocks_x];
       float *dst = depth.row(y);
-      for (int x = 0; x < w; ++x) dst[x] = src[x / block_size];
+      for (int x0 = 0, i = 0; x0 < w; x0 += block_size, ++i) std::fill(dst + x0, dst + std::min(w, x0 + block_size), src[i]);
     }
   });
 }
@@ -138,25 +140,41 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
   const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;
 
   block_features_cpu(frame, B, features_);
+  const size_t row_values = static_cast<size_t>(bx) * 3;
   float diff = 0.f;
   if (same_grid) {
+    // Integer partial sums per block row: exact, so the split does not matter.
+    row_diff_.resize(by);
+    cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
+      for (int j = range.start; j < range.end; ++j) {
+        uint64_t s = 0;
+        for (size_t k = static_cast<size_t>(j) * row_values; k < static_cast<size_t>(j + 1) * row_values; ++k)
+          s += temporal_diff_fixed(features_[k], ref_features_[k]);
+        row_diff_[j] = s;
+      }
+    });
     uint64_t fixed_sum = 0;
-    for (size_t k = 0; k < features_.size(); ++k) fixed_sum += temporal_diff_fixed(features_[k], ref_features_[k]);
+    for (const uint64_t s : row_diff_) fixed_sum += s;
     diff = temporal_mean_diff(fixed_sum, static_cast<long long>(features_.size()));
   }
   const TemporalDecision decision = temporal_decision(same_grid, diff, params);
-  if (decision != TemporalDecision::Reuse) ref_features_ = features_;
+  if (decision != TemporalDecision::Reuse) ref_features_.swap(features_);  // features_ is rewritten next frame
+  const std::vector<float> &features = decision != TemporalDecision::Reuse ? ref_features_ : features_;
 
   const bool cut = decision == TemporalDecision::Cut;
-  smoothed_.resize(features_.size());  // a cut never reads the (then stale) old values
-  for (size_t k = 0; k < features_.size(); k += 3)
-    smooth_block_feature(cut, params.feature_smoothing, &features_[k], &smoothed_[k]);
+  smoothed_.resize(features.size());  // a cut never reads the (then stale) old values
+  cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
+    for (size_t k = static_cast<size_t>(range.start) * row_values; k < static_cast<size_t>(range.end) * row_values; k += 3)
+      smooth_block_feature(cut, params.feature_smoothing, &features[k], &smoothed_[k]);
+  });
   region_labels_cpu(smoothed_, bx, by, params.edge_threshold, labels_);
   block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
 
   block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values
-  for (size_t k = 0; k < fresh_depth_.size(); ++k)
-    block_depth_[k] = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);
+  cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
+    for (size_t k = static_cast<size_t>(range.start) * bx; k < static_cast<size_t>(range.end) * bx; ++k)
+      block_depth_[k] = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);
+  });
 
   have_state_ = true;
   bx_ = bx;

@@ -133,10 +133,14 @@ P3D_HD float block_centre(int b, int block, int pixels) {
   return static_cast<float>((b * block + block_extent(b, block, pixels) / 2.0) / pixels);
 }
 
+// Step 3: the quantised hypothesis at block centre (cx, cy) (block_centre()
+// of the block's column and row, which loops may compute once per column).
+P3D_HD uint32_t hypothesis_q(Hypothesis h, float cx, float cy) {
+  return static_cast<uint32_t>(hypothesis_depth(h, cx, cy) * 65535.f + 0.5f);
+}
 // Step 3: the quantised hypothesis of block (bx, by).
 P3D_HD uint32_t block_hypothesis_q(Hypothesis h, int bx, int by, int block, int width, int height) {
-  const float v = hypothesis_depth(h, block_centre(bx, block, width), block_centre(by, block, height));
-  return static_cast<uint32_t>(v * 65535.f + 0.5f);
+  return hypothesis_q(h, block_centre(bx, block, width), block_centre(by, block, height));
 }
 
 // Step 4: a region's depth from its hq sum, block count and largest hq.
@@ -221,6 +225,7 @@ class DepthEstimatorCpu {
   std::vector<float> features_;      // 3 per block, this frame
   std::vector<float> ref_features_;  // 3 per block, last computed frame
   std::vector<float> smoothed_;      // 3 per block, step 2's s
+  std::vector<uint64_t> row_diff_;   // step 5's fixed-point sum, per block row
   std::vector<int> labels_;
   std::vector<float> block_depth_;   // output of the last frame
   std::vector<float> fresh_depth_;   // b of this frame (step 4), before step 5
