@@ -2,7 +2,8 @@
 // the warp and the Background fill, so each row is scattered, resolved and
 // filled by one cv::parallel_for_ task with its own key array; the
 // NeighborAverage fill is an image-wide Jacobi iteration, and BackgroundSmooth
-// a row pass (anchors) and a column pass (run means), run afterwards.
+// a row pass (anchors), a column pass and a row pass (run sums), run
+// afterwards.
 #include "warp.h"
 
 #include <algorithm>
@@ -157,37 +158,32 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch scratch[2], long 
   holes[1] = total[1].load();
 }
 
-// BackgroundSmooth, pass 1 (rows): the fill region F (holes and ring pixels)
-// and every F pixel's anchor. state: 0 = not in F, 1 = in F without an
-// anchor, 2 = in F with anchor[i].
+// BackgroundSmooth, pass 1 (rows): every hole's anchor. state: 0 = not a
+// hole, 1 = a hole without an anchor, 2 = a hole with anchor[i].
 void smooth_anchor_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, std::vector<uint8_t> &state,
                         std::vector<Rgba> &anchor) {
   const YuvToRgb packed;
   const int W = j.width, H = j.height;
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &rows) {
-    std::vector<uint8_t> ring(W);
+    std::vector<uint8_t> clean(W);
     std::vector<int> right_clean(W), right_any(W);
     for (int y = rows.start; y < rows.end; ++y) {
       const size_t base = static_cast<size_t>(y) * W;
       const uint8_t *row = &s.mask[base];
-      const uint8_t *up = y > 0 ? row - W : nullptr, *down = y + 1 < H ? row + W : nullptr;
-      for (int X = 0; X < W; ++X) ring[X] = smooth_is_ring(up, row, down, X, W);
-      int clean = -1, any = -1;
+      for (int X = 0; X < W; ++X) clean[X] = smooth_is_clean(row, X, W);
+      int near_clean = -1, near_any = -1;
       for (int X = W - 1; X >= 0; --X) {  // nearest clean / non-hole pixel right of X
-        right_clean[X] = clean;
-        right_any[X] = any;
-        if (!row[X]) {
-          any = X;
-          if (!ring[X]) clean = X;
-        }
+        right_clean[X] = near_clean;
+        right_any[X] = near_any;
+        if (!row[X]) near_any = X;
+        if (clean[X]) near_clean = X;
       }
-      clean = -1;
-      any = -1;
+      near_clean = -1;
+      near_any = -1;
       for (int X = 0; X < W; ++X) {
-        const bool in_f = row[X] || ring[X];
-        state[base + X] = in_f ? 1 : 0;
-        if (in_f) {
-          const int xl = smooth_side(clean, any), xr = smooth_side(right_clean[X], right_any[X]);
+        state[base + X] = row[X] ? 1 : 0;
+        if (row[X]) {
+          const int xl = smooth_side(near_clean, near_any), xr = smooth_side(right_clean[X], right_any[X]);
           const int pick = background_source(X, xl, xl >= 0 ? s.keys[base + xl] : 0ull, xr,
                                              xr >= 0 ? s.keys[base + xr] : 0ull);
           if (pick >= 0) {
@@ -195,17 +191,15 @@ void smooth_anchor_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, s
             anchor[base + X] = load_rgba(j.out, eye.col0 + pick, y, packed);
           }
         }
-        if (!row[X]) {
-          any = X;
-          if (!ring[X]) clean = X;
-        }
+        if (!row[X]) near_any = X;
+        if (clean[X]) near_clean = X;
       }
     }
   });
 }
 
-// BackgroundSmooth, pass 2 (columns): V of every F pixel, the anchors of its
-// column's run of F within +-R rows, from prefix sums over each run. Columns
+// BackgroundSmooth, pass 2 (columns): V of every hole, the anchors of its
+// column's run of holes within +-R rows, from prefix sums over each run. Columns
 // are independent; a task takes a range of them.
 void smooth_column_sums(const WarpJob &j, const std::vector<uint8_t> &state, const std::vector<Rgba> &anchor, int R,
                         std::vector<SmoothSum> &column) {
@@ -237,8 +231,8 @@ void smooth_column_sums(const WarpJob &j, const std::vector<uint8_t> &state, con
 }
 
 // BackgroundSmooth, pass 3 (rows): every hole becomes the mean of the column
-// sums over its row's run of F within +-Rx columns.
-void smooth_fill_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, const std::vector<uint8_t> &state,
+// sums over its row's run of holes within +-Rx columns.
+void smooth_fill_rows(const WarpJob &j, const Eye &eye, const std::vector<uint8_t> &state,
                       const std::vector<SmoothSum> &column, int Rx) {
   const int W = j.width, H = j.height;
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &rows) {
@@ -259,7 +253,6 @@ void smooth_fill_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, con
         }
         const int b = X - 1;
         for (int t = a; t <= b; ++t) {
-          if (!s.mask[base + t]) continue;
           const SmoothSum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
           store_rgba(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
         }
@@ -276,7 +269,7 @@ void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &
   const int R = smooth_fill_radius(eye.shift, j.D);
   smooth_anchor_rows(j, eye, s, state, anchor);
   smooth_column_sums(j, state, anchor, R, column);
-  smooth_fill_rows(j, eye, s, state, column, smooth_fill_radius_x(R));
+  smooth_fill_rows(j, eye, state, column, smooth_fill_radius_x(R));
 }
 
 // NeighborAverage: Jacobi steps ping-ponging between two hole masks (reads

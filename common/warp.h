@@ -42,34 +42,37 @@
 //    D == 0 both views are the source, copied.
 //
 // Hole filling (only pixels with key 0 are touched):
-//  * BackgroundSmooth: the background side of each row, averaged
-//    down the column. Per rendered view:
-//     - Ring: a non-hole pixel with a hole among its 8 neighbours (inside the
-//       view) is a ring pixel: the warp's boundary pixels mix the colours of
-//       both surfaces (bilinear sampling across the depth edge, the source's
-//       own anti-aliasing), so they are not copied into holes. Holes and ring
-//       pixels form the fill region F.
-//     - Anchor of every pixel X of F in row y: CL = the nearest pixel left of
-//       X that is neither hole nor ring, or, when the row has none left of X,
-//       the nearest non-hole left of X; CR likewise to the right (-1: none).
-//       The anchor is the colour (rendered view, before filling) of
-//       background_source(X, CL, key(CL), CR, key(CR)): the farther side, as
-//       for Background. No non-hole on either side: the pixel has no anchor.
-//     - Column sums: every pixel (X, y) of F gets V(X, y), the per-channel
-//       sums and the count of the anchors in its column's run of F: the
-//       pixels (X, y') with |y' - y| <= R such that every pixel from y to y'
-//       is in F. R = smooth_fill_radius(): 1 + floor(|s| D / 2) rows, where
-//       s is the eye's shift factor (holes are at most |s| D pixels wide, so
+//  * BackgroundSmooth: the background side of each row, averaged down the
+//    column, over the holes. Per rendered view:
+//     - Clean pixel: a non-hole with no hole within kSmoothClean pixels of it
+//       in its row (smooth_is_clean). The warp's pixels beside a hole mix the
+//       colours of both surfaces (bilinear sampling across the depth edge,
+//       the source's own anti-aliasing), so anchors are taken a few pixels
+//       into the surface (docs/quality.md: Aloe 24.30 / 24.45 / 24.51 /
+//       24.54 dB for 1 / 2 / 3 / 4 pixels).
+//     - Anchor of every hole X in row y: CL = the nearest clean pixel left of
+//       X, or, when the row has none left of X, the nearest non-hole left of
+//       X; CR likewise to the right (-1: none). The anchor is the colour
+//       (rendered view, before filling) of background_source(X, CL, key(CL),
+//       CR, key(CR)): the farther side, as for Background. No non-hole on
+//       either side: the hole has no anchor.
+//     - Column sums: every hole (X, y) gets V(X, y), the per-channel sums and
+//       the count of the anchors of its column's run of holes: the holes
+//       (X, y') with |y' - y| <= R such that every pixel from y to y' is a
+//       hole. R = smooth_fill_radius(): 1 + floor(|s| D / 2) rows, where s
+//       is the eye's shift factor (holes are at most |s| D pixels wide, so
 //       the averaging grows with them).
 //     - Every hole (X, y) becomes the per-channel rounded mean
-//       (sum + n/2) / n of the sums V(X', y) over its row's run of F: the
-//       pixels (X', y) with |X' - X| <= Rx = R / 4 (integer division) such
-//       that every pixel from X to X' is in F; n is the total count.
+//       (sum + n/2) / n of the sums V(X', y) over its row's run of holes: the
+//       holes (X', y) with |X' - X| <= Rx = R / 4 (integer division) such
+//       that every pixel from X to X' is a hole; n is the total count.
 //       n = 0: kFillBlack. Integer sums (uint32, no overflow for the
 //       largest R): the result does not depend on the order of summation.
-//    Ring pixels keep their own colour. Compared with Background, one noisy
-//    pixel no longer streaks along a row, and the colour of a disocclusion is
-//    the local mean of the background next to it (docs/quality.md).
+//    Compared with Background, one noisy pixel no longer streaks along a
+//    row, and the colour of a disocclusion is the local mean of the
+//    background next to it (docs/quality.md). Everything but the column
+//    and row sums is row-local, so the GPU finds the anchors in the warp's
+//    row kernel, where the row's keys are at hand.
 //  * Background (default): take the nearest non-hole pixel to the left (XL)
 //    and to the right (XR) in the same row of the rendered view; copy the
 //    colour of the farther one (smaller key depth; equal depth: the nearer in
@@ -105,12 +108,11 @@ struct WarpParams {
   float max_disparity = 3.f;   // percent of frame width, 0..kMaxDisparityPercent
   float convergence = 0.5f;    // depth that lands on the screen plane, 0..1
   StereoView view = StereoView::Both;
-  // Background stays the default: BackgroundSmooth scores better (Aloe 24.56
-  // against 22.97 dB) but costs 0.27 ms more at 4K on an H100 (three more
-  // kernels after the warp's rows: anchors, column sums, row means), which
-  // takes the chain from 0.56 to 0.83 ms, and triples the CPU warp (1080p,
-  // 2 cores: 39 -> 114 ms); it becomes the default once its kernels meet
-  // the fill budget (0.1 ms at 4K).
+  // Background stays the default: BackgroundSmooth scores better (Aloe 24.54
+  // against 22.97 dB) but its anchors in the warp's row kernel and one sums
+  // kernel cost 0.105 ms per 4K frame on an H100 against fill=none (0.085
+  // more than Background's 0.020), just past the 0.1 ms fill budget, and it
+  // slows the CPU warp (docs/benchmarks.md).
   HoleFill fill = HoleFill::Background;
 };
 
@@ -331,27 +333,16 @@ P3D_HD int smooth_fill_radius(float shift, float D) {
 }
 P3D_HD int smooth_fill_radius_x(int R) { return R / 4; }
 
-// Whether pixel X of a row is a ring pixel: not a hole, with a hole among its
-// 8 neighbours. up/row/down are the hole masks (non-zero = hole) of rows
-// y-1, y, y+1 of a view `width` wide; up/down are null outside the view.
-P3D_HD bool smooth_is_ring(const uint8_t *up, const uint8_t *row, const uint8_t *down, int X, int width) {
-  if (row[X]) return false;
-  const int x0 = X > 0 ? X - 1 : 0, x1 = X + 1 < width ? X + 1 : width - 1;
+// Whether pixel X of a row (hole mask `row`, non-zero = hole, `width`
+// pixels) is clean: not a hole, and no hole within kSmoothClean pixels.
+constexpr int kSmoothClean = 4;
+P3D_HD bool smooth_is_clean(const uint8_t *row, int X, int width) {
+  const int x0 = X > kSmoothClean ? X - kSmoothClean : 0;
+  const int x1 = X + kSmoothClean < width ? X + kSmoothClean : width - 1;
   for (int x = x0; x <= x1; ++x)
-    if ((up && up[x]) || row[x] || (down && down[x])) return true;
-  return false;
+    if (row[x]) return false;
+  return true;
 }
-
-// What the GPU keeps of a key for BackgroundSmooth: the depth bits
-// (key >> 32) of a covered pixel, or kSmoothHole for a hole (depth bits are
-// those of a float in [0, 1], never all ones). background_source() reads only
-// the depth of a key, so smooth_zbits_key() stands in for the full key.
-constexpr uint32_t kSmoothHole = 0xffffffffu;
-P3D_HD uint32_t smooth_zbits(unsigned long long key) {
-  return key == 0ull ? kSmoothHole : static_cast<uint32_t>(key >> 32);
-}
-P3D_HD bool smooth_zbits_hole(uint32_t z) { return z == kSmoothHole; }
-P3D_HD unsigned long long smooth_zbits_key(uint32_t z) { return (static_cast<unsigned long long>(z) << 32) | 1ull; }
 
 // Side of an anchor: the nearest clean pixel (neither hole nor ring) on that
 // side if there is one, else the nearest non-hole (-1: none).

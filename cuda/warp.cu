@@ -9,7 +9,6 @@
 // but the depth row, the source row and the output row touches DRAM.
 #include "warp_gpu.h"
 
-#include <climits>
 #include <utility>
 
 namespace p3d {
@@ -31,81 +30,62 @@ constexpr size_t kFilledOffset = sizeof(unsigned long long);
 constexpr size_t kCountersBytes = kFilledOffset + sizeof(unsigned) * kWarpFillBatch;
 
 // Dynamic shared memory of the row kernel: [keys: W x u64 when in shared
-// memory] [the source row, W x RGBA] [four int arrays of one entry per
-// 32-pixel chunk].
+// memory] [the source row, W x RGBA] [per 32-pixel chunk: its hole bits
+// (bit i: pixel 32 c + i is a hole) and its clean bits (BackgroundSmooth)].
 __host__ __device__ int row_chunks(int W) { return (W + 31) / 32; }
 size_t row_smem_bytes(int W, bool shared_keys) {
   return (shared_keys ? sizeof(unsigned long long) * W : 0) + 4 * static_cast<size_t>(W) +
-         4 * sizeof(int) * static_cast<size_t>(row_chunks(W));
+         2 * sizeof(unsigned) * static_cast<size_t>(row_chunks(W));
 }
 
-// Per-chunk first and last non-hole (INT_MAX / -1: none), one warp per chunk.
-__device__ void chunk_extremes(const unsigned long long *keys, int W, int chunks, int *first, int *last) {
-  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
-  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
-    const int X = c * 32 + lane;
-    const unsigned nonhole = __ballot_sync(kFullMask, X < W && keys[X] != 0);
-    if (lane == 0) {
-      first[c] = nonhole ? c * 32 + __ffs(nonhole) - 1 : INT_MAX;
-      last[c] = nonhole ? c * 32 + 31 - __clz(nonhole) : -1;
-    }
-  }
+// Pixels of chunk c that are in the row: the low W - 32 c bits of the last.
+__device__ unsigned chunk_valid_bits(int c, int W) {
+  const int n = W - c * 32;
+  return n >= 32 ? ~0u : (1u << n) - 1u;
 }
 
-// Warp 0: before[c] = last non-hole of the chunks left of c (-1: none),
-// after[c] = first non-hole of the chunks right of c (-1: none). Warp-wide
-// inclusive scans over 32 chunks at a time, carrying between them.
-__device__ void chunk_neighbours(int chunks, const int *first, const int *last, int *before, int *after) {
-  const int lane = threadIdx.x & 31;
-  int carry = -1;
-  for (int base = 0; base < chunks; base += 32) {
-    const int c = base + lane;
-    int v = c < chunks ? last[c] : -1;
-    for (int o = 1; o < 32; o <<= 1) {
-      const int n = __shfl_up_sync(kFullMask, v, o);
-      if (lane >= o) v = max(v, n);
-    }
-    v = max(v, carry);
-    int excl = __shfl_up_sync(kFullMask, v, 1);
-    if (lane == 0) excl = carry;
-    if (c < chunks) before[c] = excl;
-    carry = __shfl_sync(kFullMask, v, 31);
+// The nearest pixel left / right of pixel 32 c + bit whose bit is set in
+// `bits` (one word per chunk; `invert`: clear instead, within the row of W
+// pixels), or -1. Holes are narrow, so the search rarely leaves the chunk
+// or its neighbour; it needs no row-wide scan and no barrier.
+__device__ int nearest_left(const unsigned *bits, bool invert, int W, int c, int bit) {
+  auto word = [&](int k) { return invert ? chunk_valid_bits(k, W) & ~bits[k] : bits[k]; };
+  unsigned m = word(c) & ((1u << bit) - 1u);
+  while (!m) {
+    if (--c < 0) return -1;
+    m = word(c);
   }
-  carry = INT_MAX;
-  for (int top = chunks - 1; top >= 0; top -= 32) {
-    const int c = top - lane;
-    int v = c >= 0 ? first[c] : INT_MAX;
-    for (int o = 1; o < 32; o <<= 1) {
-      const int n = __shfl_up_sync(kFullMask, v, o);
-      if (lane >= o) v = min(v, n);
-    }
-    v = min(v, carry);
-    int excl = __shfl_up_sync(kFullMask, v, 1);
-    if (lane == 0) excl = carry;
-    if (c >= 0) after[c] = excl == INT_MAX ? -1 : excl;
-    carry = __shfl_sync(kFullMask, v, 31);
+  return c * 32 + 31 - __clz(m);
+}
+__device__ int nearest_right(const unsigned *bits, bool invert, int W, int chunks, int c, int bit) {
+  auto word = [&](int k) { return invert ? chunk_valid_bits(k, W) & ~bits[k] : bits[k]; };
+  unsigned m = word(c) & ~((2u << bit) - 1u);
+  while (!m) {
+    if (++c >= chunks) return -1;
+    m = word(c);
   }
+  return c * 32 + __ffs(m) - 1;
 }
 
-// Background fill of one row whose keys are final and whose non-hole
-// colours are in `out`: each hole's nearest non-holes come from its chunk's
-// ballot or, past the chunk, from before/after.
-__device__ void background_fill_row(const FrameView &out, int col0, int y, const unsigned long long *keys, int W,
-                                    int chunks, const int *before, const int *after) {
-  const YuvToRgb packed;
-  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
-  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
-    const int X = c * 32 + lane;
-    const bool in = X < W;
-    const unsigned long long key = in ? keys[X] : 0ull;
-    const unsigned nonhole = __ballot_sync(kFullMask, in && key != 0);
-    if (!in || key != 0) continue;
-    const unsigned below = nonhole & ((1u << lane) - 1u);
-    const unsigned above = nonhole & ~((2u << lane) - 1u);
-    const int xl = below ? c * 32 + 31 - __clz(below) : before[c];
-    const int xr = above ? c * 32 + __ffs(above) - 1 : after[c];
+// The colour a covered pixel with `key` has in the output, as load_rgba
+// would read it back: sampled again from the converted source row in shared
+// memory instead of read from global memory; RGBx/BGRx read back alpha 255.
+__device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W, unsigned long long key) {
+  Rgba c = sample_row(src_row, W, key);
+  if (out.format == PixelFormat::RGBx || out.format == PixelFormat::BGRx) c.a = 255;
+  return c;
+}
+
+// Background fill of one row whose keys are final and whose chunks' hole
+// bits are in hole_bits: each hole's nearest non-holes by bit search.
+__device__ void background_fill_row(const FrameView &out, const Rgba *src_row, int col0, int y,
+                                    const unsigned long long *keys, int W, int chunks, const unsigned *hole_bits) {
+  for (int X = threadIdx.x; X < W; X += blockDim.x) {
+    const int c = X >> 5, bit = X & 31;
+    if (!((hole_bits[c] >> bit) & 1u)) continue;
+    const int xl = nearest_left(hole_bits, true, W, c, bit), xr = nearest_right(hole_bits, true, W, chunks, c, bit);
     const int pick = background_source(X, xl, xl >= 0 ? keys[xl] : 0ull, xr, xr >= 0 ? keys[xr] : 0ull);
-    store_rgba(out, col0 + X, y, pick >= 0 ? load_rgba(out, col0 + pick, y, packed) : kFillBlack);
+    store_rgba(out, col0 + X, y, pick >= 0 ? rendered_colour(out, src_row, W, keys[pick]) : kFillBlack);
   }
 }
 
@@ -119,12 +99,59 @@ struct RowJob {
   HoleFill fill;
   const float *depth_row;
   unsigned long long *keys;
-  int *first, *last, *before, *after;
+  unsigned *hole_bits;   // per chunk (Background and BackgroundSmooth, else null)
+  unsigned *clean_bits;  // per chunk (BackgroundSmooth)
   uint8_t *mask;  // NeighborAverage masks (2 eyes x H x W), or null
-  uint32_t *zbits;  // BackgroundSmooth: smooth_zbits() of every pixel (2 eyes x H x W), or null
+  uint8_t *state;  // BackgroundSmooth: kState* flags of every pixel (2 eyes x H x W), or null
+  Rgba *anchor;    // BackgroundSmooth: every hole's anchor (2 eyes x H x W), or null
+  uint8_t *chunk_holes;  // BackgroundSmooth: whether each 32-pixel chunk of a row has a hole (2 eyes x H x chunks)
   unsigned long long *total;
   int y, W, H, chunks;
 };
+
+// ---- BackgroundSmooth (common/warp.h) ----------------------------------------
+// The row kernel finds every hole's anchor (the clean and non-hole pixels
+// are row-local, and the keys are in shared memory), then two kernels sum
+// the anchors down the column runs and along the row runs of holes
+// (smooth_tile_kernel). Scratch per eye (W x H each): state (uint8 flags
+// below), anchor (Rgba). Integer sums throughout, so every reduction order
+// gives the CPU's result.
+
+// State flags of a pixel: a hole (0: not one, so not summed), has an anchor.
+constexpr uint8_t kStateHole = 1, kStateAnchor = 2;
+static_assert(kSmoothClean >= 1 && kSmoothClean < 32, "the clean test reads the chunks on either side");
+
+
+// Anchors of one rendered eye row whose keys are final and whose chunks'
+// hole bits the resolve loop took by ballot: per chunk the clean bits (no
+// hole within kSmoothClean, read from the chunk and its neighbours' hole
+// bits), then each hole takes its nearest clean (else non-hole) pixel on
+// either side by bit search, and background_source() picks the anchor.
+// Adds kStateAnchor to the state of the holes that have one.
+__device__ void smooth_anchor_row(const RowJob &j, int eye) {
+  for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
+    const unsigned h = j.hole_bits[c], prev = c > 0 ? j.hole_bits[c - 1] : 0u,
+                   next = c + 1 < j.chunks ? j.hole_bits[c + 1] : 0u;
+    unsigned near = h;  // bit i: a hole within kSmoothClean of pixel 32 c + i
+    for (int d = 1; d <= kSmoothClean; ++d) near |= (h << d) | (prev >> (32 - d)) | (h >> d) | (next << (32 - d));
+    j.clean_bits[c] = chunk_valid_bits(c, j.W) & ~near;
+  }
+  __syncthreads();
+  const size_t row = (static_cast<size_t>(eye) * j.H + j.y) * j.W;
+  for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
+    const int c = X >> 5, bit = X & 31;
+    if (!((j.hole_bits[c] >> bit) & 1u)) continue;  // the resolve loop wrote its state
+    const int l_any = nearest_left(j.hole_bits, true, j.W, c, bit);
+    const int r_any = nearest_right(j.hole_bits, true, j.W, j.chunks, c, bit);
+    const int l_clean = l_any < 0 ? -1 : nearest_left(j.clean_bits, false, j.W, c, bit);
+    const int r_clean = r_any < 0 ? -1 : nearest_right(j.clean_bits, false, j.W, j.chunks, c, bit);
+    const int xl = smooth_side(l_clean, l_any), xr = smooth_side(r_clean, r_any);
+    const int pick = background_source(X, xl, xl >= 0 ? j.keys[xl] : 0ull, xr, xr >= 0 ? j.keys[xr] : 0ull);
+    if (pick < 0) continue;
+    j.state[row + X] = kStateHole | kStateAnchor;
+    j.anchor[row + X] = rendered_colour(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, j.keys[pick]);
+  }
+}
 
 // Renders one eye of the row; every thread of the block calls it.
 __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
@@ -153,30 +180,48 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
 
   // j.row holds the load_rgba() values of the source row, as the CPU's
   // SourceRow does; sample_row reads them as Rgba.
+  // The loop runs warp-uniformly (a warp covers one 32-pixel chunk per
+  // step) so that the fills take each chunk's hole bits by ballot;
+  // BackgroundSmooth writes the states of the chunks with holes only (the
+  // sums kernel reads no other), and every chunk's flag.
   int holes = 0;
-  for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
-    const unsigned long long key = j.keys[X];
-    if (key != 0) {
-      store_rgba(j.out, col0 + X, j.y, sample_row(reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, key));
-    } else {
-      ++holes;
-      if (j.fill == HoleFill::None) store_rgba(j.out, col0 + X, j.y, kHoleColour);
+  const int lane = threadIdx.x & 31;
+  const size_t row_state = (static_cast<size_t>(eye) * j.H + j.y) * j.W;
+  for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
+    const int X = base + lane;
+    const bool in = X < j.W;
+    const unsigned long long key = in ? j.keys[X] : 1ull;  // past the row: not a hole
+    if (in) {
+      if (key != 0) {
+        store_rgba(j.out, col0 + X, j.y, sample_row(reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, key));
+      } else {
+        ++holes;
+        if (j.fill == HoleFill::None) store_rgba(j.out, col0 + X, j.y, kHoleColour);
+      }
+      if (mask_row) mask_row[X] = key == 0 ? 1 : 0;
     }
-    if (mask_row) mask_row[X] = key == 0 ? 1 : 0;
-    if (j.zbits) j.zbits[(static_cast<size_t>(eye) * j.H + j.y) * j.W + X] = smooth_zbits(key);
+    if (j.hole_bits) {
+      const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0ull);
+      const int c = base >> 5;
+      if (lane == 0) j.hole_bits[c] = chunk_holes;
+      if (j.state) {
+        if (lane == 0) j.chunk_holes[(static_cast<size_t>(eye) * j.H + j.y) * j.chunks + c] = chunk_holes != 0u;
+        if (chunk_holes && in) j.state[row_state + X] = key == 0 ? kStateHole : 0;
+      }
+    }
   }
   if (holes) atomicAdd(row_holes, holes);
   __syncthreads();  // also publishes this row's colours to the fill below
   const int row_total = *row_holes;
   if (row_total == 0) return;  // block-uniform
   if (threadIdx.x == 0) atomicAdd(j.total, static_cast<unsigned long long>(row_total));
+  if (j.fill == HoleFill::BackgroundSmooth) {
+    smooth_anchor_row(j, eye);
+    return;
+  }
   if (j.fill != HoleFill::Background) return;
-
-  chunk_extremes(j.keys, j.W, j.chunks, j.first, j.last);
-  __syncthreads();
-  if (threadIdx.x < 32) chunk_neighbours(j.chunks, j.first, j.last, j.before, j.after);
-  __syncthreads();
-  background_fill_row(j.out, col0, j.y, j.keys, j.W, j.chunks, j.before, j.after);
+  background_fill_row(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), col0, j.y, j.keys, j.W, j.chunks,
+                      j.hole_bits);
 }
 
 // One block = output row blockIdx.x, both eyes one after the other, so the
@@ -192,8 +237,8 @@ constexpr int kRowThreadsMax = 512;
 template <bool kSharedKeys>
 __global__ void __launch_bounds__(kRowThreadsMax, 3) warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out,
                                 EyeShifts eyes, float D, float convergence, HoleFill fill,
-                                unsigned long long *global_keys, uint8_t *mask, uint32_t *zbits,
-                                unsigned long long *total) {
+                                unsigned long long *global_keys, uint8_t *mask, uint8_t *state, Rgba *anchor,
+                                uint8_t *chunk_holes, unsigned long long *total) {
   extern __shared__ unsigned long long smem[];
   __shared__ int row_holes;
   RowJob j;
@@ -209,12 +254,13 @@ __global__ void __launch_bounds__(kRowThreadsMax, 3) warp_row_kernel(FrameView s
   j.depth_row = depth.row(j.y);
   j.keys = kSharedKeys ? smem : global_keys + static_cast<size_t>(j.y) * j.W;
   uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? smem + j.W : smem);
-  j.first = reinterpret_cast<int *>(rgba + 4 * static_cast<size_t>(j.W));
-  j.last = j.first + j.chunks;
-  j.before = j.last + j.chunks;
-  j.after = j.before + j.chunks;
+  const bool bits = fill == HoleFill::Background || fill == HoleFill::BackgroundSmooth;
+  j.hole_bits = bits ? reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W)) : nullptr;
+  j.clean_bits = bits ? j.hole_bits + j.chunks : nullptr;
   j.mask = mask;
-  j.zbits = zbits;
+  j.state = state;
+  j.anchor = anchor;
+  j.chunk_holes = chunk_holes;
   j.total = total;
   j.row.format = PixelFormat::RGBA;
   j.row.width = j.W;
@@ -256,162 +302,134 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
   if ((threadIdx.x & 31) == 0 && ballot != 0) atomicAdd(filled, static_cast<unsigned>(__popc(ballot)));
 }
 
-// ---- BackgroundSmooth (common/warp.h): three kernels after the row kernel,
-// which wrote smooth_zbits() of every pixel of the warped eyes. Scratch per
-// eye (W x H each): zbits (uint32), state (uint8 flags below; 0: not in F),
-// anchor (Rgba), column sums V (SmoothSum). Integer sums throughout, so
-// every reduction order gives the CPU's result.
-
-// Predicate bits of a row pixel for the anchor search.
-constexpr uint8_t kNonHole = 1, kClean = 2;
-// State flags of a pixel: in F (hole or ring), has an anchor, is a hole (so
-// the row pass reads one byte per pixel instead of the zbits).
-constexpr uint8_t kStateInF = 1, kStateAnchor = 2, kStateHole = 4;
-
-// Per-chunk first and last pixel whose predicate has `bit` (INT_MAX / -1:
-// none), one warp per chunk.
-__device__ void chunk_extremes_bit(const uint8_t *pred, uint8_t bit, int W, int chunks, int *first, int *last) {
-  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
-  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
-    const int X = c * 32 + lane;
-    const unsigned set = __ballot_sync(kFullMask, X < W && (pred[X] & bit));
-    if (lane == 0) {
-      first[c] = set ? c * 32 + __ffs(set) - 1 : INT_MAX;
-      last[c] = set ? c * 32 + 31 - __clz(set) : -1;
-    }
-  }
-}
-
-// Anchors of one row of one eye (block = row blockIdx.x, eye blockIdx.y).
-// Dynamic shared memory: hole flags of rows y-1, y, y+1 (3 W bytes), the
-// predicate row (W bytes), then 8 int arrays of one entry per chunk; each
-// part starts 16-byte aligned (smooth_anchor_smem()).
+// Column and row sums in one kernel: a block takes a tile of one eye,
+// kSmoothTileW columns x S rows. It computes V of the tile's rows for the
+// tile's columns and Rx more on either side into shared memory (sliding
+// the +-R window down segments of kSmoothSub rows, as smooth_column_sums
+// does on the CPU), then every hole of the tile sums V along its row run.
+// The walks are serial, so they read a copy of the states and anchors of
+// rows y0 - R .. y0 + S + R - 1 in shared memory when it fits (global
+// memory otherwise: very wide windows only); a tile without a hole returns
+// at once.
+constexpr int kSmoothTileW = 32, kSmoothSub = 8, kSmoothTileThreads = 256, kSmoothTileRowsMax = 32;
+static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
 __host__ __device__ size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
-size_t smooth_anchor_smem(int W) {
-  return align16(3 * static_cast<size_t>(W)) + align16(W) + 8 * sizeof(int) * static_cast<size_t>(row_chunks(W));
+__host__ __device__ int smooth_tile_columns(int Rx) { return kSmoothTileW + 2 * Rx; }
+__host__ __device__ size_t smooth_tile_v_bytes(int Rx, int S) {
+  return align16(static_cast<size_t>(smooth_tile_columns(Rx)) * S * sizeof(SmoothSum));
 }
-__global__ void smooth_anchor_kernel(FrameView out, int W, int H, EyeShifts eyes, const uint32_t *zbits,
-                                     uint8_t *state, Rgba *anchor) {
+// The staged copy: anchors (Rgba), states (bytes), then the chunk flags of
+// its rows (at most 2 + (columns - 1) / 32 chunks a row).
+__host__ __device__ size_t smooth_tile_copy_pixels(int R, int Rx, int S) {
+  return static_cast<size_t>(smooth_tile_columns(Rx)) * (S + 2 * R);
+}
+__host__ __device__ size_t smooth_tile_copy_bytes(int R, int Rx, int S) {
+  const size_t flag_columns = 2 + (smooth_tile_columns(Rx) - 1) / 32;
+  return smooth_tile_copy_pixels(R, Rx, S) * (sizeof(Rgba) + 1) + flag_columns * (S + 2 * R);
+}
+__global__ void __launch_bounds__(kSmoothTileThreads) smooth_tile_kernel(FrameView out, int W, int H, EyeShifts eyes,
+                                                                         int2 radius, int S, bool staged,
+                                                                         const uint8_t *state, const Rgba *anchor,
+                                                                         const uint8_t *chunk_holes) {
   extern __shared__ unsigned char smem_bytes[];
-  const int y = blockIdx.x, eye = blockIdx.y;
+  const int eye = blockIdx.z;
   if (eyes.shift[eye] == 0.f) return;  // a copied eye has no holes
+  const int R = eye == 0 ? radius.x : radius.y, Rx = smooth_fill_radius_x(R);
+  const int x0 = blockIdx.x * kSmoothTileW, y0 = blockIdx.y * S;
   const size_t plane = static_cast<size_t>(W) * H;
-  const uint32_t *z = zbits + eye * plane;
-  uint8_t *rows = smem_bytes;  // [0, W): row y-1, [W, 2W): row y, [2W, 3W): row y+1
-  uint8_t *pred = rows + align16(3 * static_cast<size_t>(W));
+  const uint8_t *st_eye = state + eye * plane;
+  const Rgba *an_eye = anchor + eye * plane;
   const int chunks = row_chunks(W);
-  int *arrays = reinterpret_cast<int *>(pred + align16(W));
-  int *first_any = arrays, *last_any = arrays + chunks, *before_any = arrays + 2 * chunks,
-      *after_any = arrays + 3 * chunks;
-  int *first_clean = arrays + 4 * chunks, *last_clean = arrays + 5 * chunks, *before_clean = arrays + 6 * chunks,
-      *after_clean = arrays + 7 * chunks;
-  for (int X = threadIdx.x; X < W; X += blockDim.x)
-    for (int r = 0; r < 3; ++r) {
-      const int yy = y - 1 + r;
-      rows[r * W + X] = yy >= 0 && yy < H && smooth_zbits_hole(z[static_cast<size_t>(yy) * W + X]) ? 1 : 0;
-    }
-  __syncthreads();
-  const uint8_t *up = y > 0 ? rows : nullptr, *row = rows + W, *down = y + 1 < H ? rows + 2 * W : nullptr;
-  for (int X = threadIdx.x; X < W; X += blockDim.x) {
-    const bool ring = smooth_is_ring(up, row, down, X, W);
-    pred[X] = row[X] ? 0 : static_cast<uint8_t>(kNonHole | (ring ? 0 : kClean));
-  }
-  __syncthreads();
-  chunk_extremes_bit(pred, kNonHole, W, chunks, first_any, last_any);
-  chunk_extremes_bit(pred, kClean, W, chunks, first_clean, last_clean);
-  __syncthreads();
-  if (threadIdx.x < 32)
-    chunk_neighbours(chunks, first_any, last_any, before_any, after_any);
-  else if (threadIdx.x < 64)
-    chunk_neighbours(chunks, first_clean, last_clean, before_clean, after_clean);
-  __syncthreads();
-  const YuvToRgb packed;
-  const int lane = threadIdx.x & 31, warps = blockDim.x >> 5;
-  const uint32_t *zrow = z + static_cast<size_t>(y) * W;
-  for (int c = threadIdx.x >> 5; c < chunks; c += warps) {
-    const int X = c * 32 + lane;
-    const bool in = X < W;
-    const uint8_t p = in ? pred[X] : 0;
-    const unsigned any = __ballot_sync(kFullMask, in && (p & kNonHole));
-    const unsigned clean = __ballot_sync(kFullMask, in && (p & kClean));
-    if (!in) continue;
-    const size_t i = eye * plane + static_cast<size_t>(y) * W + X;
-    const bool in_f = row[X] || !(p & kClean);  // a hole or a ring pixel
-    if (!in_f) {
-      state[i] = 0;
-      continue;
-    }
-    const unsigned below = (1u << lane) - 1u, above = ~((2u << lane) - 1u);
-    const int l_any = (any & below) ? c * 32 + 31 - __clz(any & below) : before_any[c];
-    const int l_clean = (clean & below) ? c * 32 + 31 - __clz(clean & below) : before_clean[c];
-    const int r_any = (any & above) ? c * 32 + __ffs(any & above) - 1 : after_any[c];
-    const int r_clean = (clean & above) ? c * 32 + __ffs(clean & above) - 1 : after_clean[c];
-    const int xl = smooth_side(l_clean, l_any), xr = smooth_side(r_clean, r_any);
-    const int pick = background_source(X, xl, xl >= 0 ? smooth_zbits_key(zrow[xl]) : 0ull, xr,
-                                       xr >= 0 ? smooth_zbits_key(zrow[xr]) : 0ull);
-    state[i] = static_cast<uint8_t>(kStateInF | (pick >= 0 ? kStateAnchor : 0) | (row[X] ? kStateHole : 0));
-    if (pick >= 0) anchor[i] = load_rgba(out, eye * W + pick, y, packed);
-  }
-}
+  const uint8_t *ch_eye = chunk_holes + eye * static_cast<size_t>(H) * chunks;
+  bool tile_has_hole = false;  // the tile's columns are chunk blockIdx.x
+  for (int r = threadIdx.x; r < S; r += blockDim.x)
+    if (y0 + r < H && ch_eye[static_cast<size_t>(y0 + r) * chunks + blockIdx.x]) tile_has_hole = true;
+  if (!__syncthreads_or(tile_has_hole)) return;  // block-uniform
 
-// Column sums V: one thread per column, segment of rows and eye slides the
-// window [max(a, y - R), min(b, y + R)] down its segment, a..b being the run
-// of F that holds y. A segment starts by walking up to R rows back to find
-// where the window begins, so a pixel costs about 2 + (2R + 1) / segment
-// loads, and the columns are split into H / segment independent threads.
-// The walk is latency bound, so short segments (more threads) win although
-// they load more: at 4K, 3 % (R = 29) on an H100 the whole warp took 1.7 ms
-// with one thread per column, 0.623 with segments of 2R rows and 0.565 with
-// R / 2 (a thread per pixel, walking its own window: 0.565 too).
-int smooth_column_segment(int R) { return R < 32 ? 16 : R / 2; }
-__global__ void smooth_column_kernel(int W, int H, int segment, EyeShifts eyes, int2 radius, const uint8_t *state,
-                                     const Rgba *anchor, SmoothSum *column) {
-  const int X = blockIdx.x * blockDim.x + threadIdx.x, eye = blockIdx.z;
-  if (X >= W || eyes.shift[eye] == 0.f) return;
-  const int R = eye == 0 ? radius.x : radius.y;
-  const int y0 = blockIdx.y * segment;
-  const int y1 = min(H, y0 + segment);
-  const size_t plane = static_cast<size_t>(W) * H, base = eye * plane + X;
-  auto at = [&](int y) { return base + static_cast<size_t>(y) * W; };
-  int lo = y0;  // the first row of y0's window: its run's start, at most R rows up
-  while (lo > 0 && lo > y0 - R && state[at(lo - 1)]) --lo;
-  int hi = lo - 1;  // the window holds the F rows lo..hi of the current run
-  SmoothSum s = SmoothSum{0, 0, 0, 0, 0};
-  for (int y = y0; y < y1; ++y) {
-    if (!state[at(y)]) {
-      s = SmoothSum{0, 0, 0, 0, 0};
-      lo = y + 1;
-      hi = y;
-      continue;
+  const int nc = smooth_tile_columns(Rx), cx0 = x0 - Rx;  // V columns cx0 .. cx0 + nc - 1
+  SmoothSum *V = reinterpret_cast<SmoothSum *>(smem_bytes);  // row r of the tile: V[r * nc + column - cx0]
+  const uint8_t *st = st_eye;
+  const Rgba *an = an_eye;
+  size_t pitch = W;
+  int sy0 = 0, sx0 = 0;
+  if (staged) {
+    Rgba *an_copy = reinterpret_cast<Rgba *>(smem_bytes + smooth_tile_v_bytes(Rx, S));
+    uint8_t *st_copy = reinterpret_cast<uint8_t *>(an_copy + smooth_tile_copy_pixels(R, Rx, S));
+    uint8_t *flags = st_copy + smooth_tile_copy_pixels(R, Rx, S);
+    sy0 = max(0, y0 - R);
+    sx0 = max(0, cx0);
+    const int rows = min(H, y0 + S + R) - sy0, cols = min(W, cx0 + nc) - sx0;
+    // The chunk flags of the copied rows, then the states of the chunks
+    // with holes (zeros elsewhere, nothing read), then the anchors the
+    // states name: holes are sparse, so most of the copy costs no load.
+    const int fc0 = sx0 / 32, fcn = (sx0 + cols - 1) / 32 - fc0 + 1;
+    for (int i = threadIdx.x; i < rows * fcn; i += blockDim.x)
+      flags[i] = ch_eye[static_cast<size_t>(sy0 + i / fcn) * chunks + fc0 + i % fcn];
+    __syncthreads();
+    for (int i = threadIdx.x; i < rows * cols; i += blockDim.x) {
+      const int r = i / cols, c = i % cols;
+      st_copy[r * nc + c] = flags[r * fcn + (sx0 + c) / 32 - fc0] ? st_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c] : 0;
     }
-    while (hi < y + R && hi + 1 < H && state[at(hi + 1)]) {
-      ++hi;
-      if (state[at(hi)] & kStateAnchor) smooth_add(s, anchor[at(hi)]);
+    __syncthreads();
+    for (int i = threadIdx.x; i < rows * cols; i += blockDim.x) {
+      const int r = i / cols, c = i % cols;
+      if (st_copy[r * nc + c] & kStateAnchor) an_copy[r * nc + c] = an_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c];
     }
-    while (lo < y - R) {
-      if (state[at(lo)] & kStateAnchor) {
-        const Rgba c = anchor[at(lo)];
-        s = smooth_window(s, SmoothSum{c.r, c.g, c.b, c.a, 1u});
+    st = st_copy;
+    an = an_copy;
+    pitch = nc;
+    __syncthreads();
+  }
+  auto at = [&](int y, int X) { return static_cast<size_t>(y - sy0) * pitch + (X - sx0); };
+  // A pixel's state: the row kernel wrote the states of chunks with holes
+  // only, so outside the copy a chunk without a flag reads as no hole.
+  auto hole_state = [&](int y, int X) -> uint8_t {
+    if (staged) return st[at(y, X)];
+    return ch_eye[static_cast<size_t>(y) * chunks + (X >> 5)] ? st[at(y, X)] : 0;
+  };
+
+  const int subs = (S + kSmoothSub - 1) / kSmoothSub;
+  for (int item = threadIdx.x; item < nc * subs; item += blockDim.x) {
+    const int ci = item % nc, X = cx0 + ci;
+    if (X < 0 || X >= W) continue;
+    const int ya = y0 + (item / nc) * kSmoothSub, yb = min(min(H, y0 + S), ya + kSmoothSub);
+    if (ya >= yb) continue;  // a segment past the picture's last row (its walk would read row H)
+    int lo = ya;  // the first row of ya's window: its run's start, at most R rows up
+    while (lo > 0 && lo > ya - R && hole_state(lo - 1, X)) --lo;
+    int hi = lo - 1;  // the window holds the rows lo..hi of the current run
+    SmoothSum s = SmoothSum{0, 0, 0, 0, 0};
+    for (int y = ya; y < yb; ++y) {
+      if (!hole_state(y, X)) {
+        s = SmoothSum{0, 0, 0, 0, 0};
+        lo = y + 1;
+        hi = y;
+        continue;
       }
-      ++lo;
+      while (hi < y + R && hi + 1 < H && hole_state(hi + 1, X)) {
+        ++hi;
+        if (hole_state(hi, X) & kStateAnchor) smooth_add(s, an[at(hi, X)]);
+      }
+      while (lo < y - R) {
+        if (hole_state(lo, X) & kStateAnchor) {
+          const Rgba c = an[at(lo, X)];
+          s = smooth_window(s, SmoothSum{c.r, c.g, c.b, c.a, 1u});
+        }
+        ++lo;
+      }
+      V[(y - y0) * nc + ci] = s;
     }
-    column[at(y)] = s;
   }
-}
+  __syncthreads();
 
-// Every hole: the mean of V over its row's run of F within +-Rx.
-__global__ void smooth_row_kernel(FrameView out, int W, int H, EyeShifts eyes, int2 radius_x, const uint8_t *state,
-                                  const SmoothSum *column) {
-  const int X = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y, eye = blockIdx.z;
-  if (X >= W || eyes.shift[eye] == 0.f) return;
-  const size_t row = eye * static_cast<size_t>(W) * H + static_cast<size_t>(y) * W;
-  if (!(state[row + X] & kStateHole)) return;
-  const int Rx = eye == 0 ? radius_x.x : radius_x.y;
-  SmoothSum s = column[row + X];
-  for (int t = X - 1; t >= 0 && t >= X - Rx && state[row + t]; --t) smooth_add(s, column[row + t]);
-  for (int t = X + 1; t < W && t <= X + Rx && state[row + t]; ++t) smooth_add(s, column[row + t]);
-  store_rgba(out, eye * W + X, y, smooth_mean(s));
+  for (int i = threadIdx.x; i < kSmoothTileW * S; i += blockDim.x) {
+    const int X = x0 + i % kSmoothTileW, y = y0 + i / kSmoothTileW;
+    if (X >= W || y >= H || !hole_state(y, X)) continue;
+    const SmoothSum *v = V + (y - y0) * nc - cx0;  // v[t]: V of column t in row y
+    SmoothSum s = v[X];
+    for (int t = X - 1; t >= 0 && t >= X - Rx && hole_state(y, t); --t) smooth_add(s, v[t]);
+    for (int t = X + 1; t < W && t <= X + Rx && hole_state(y, t); ++t) smooth_add(s, v[t]);
+    store_rgba(out, eye * W + X, y, smooth_mean(s));
+  }
 }
 
 __global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *mask) {
@@ -434,7 +452,9 @@ struct RowLaunch {
   HoleFill fill;
   unsigned long long *global_keys;
   uint8_t *mask;
-  uint32_t *zbits;
+  uint8_t *state;
+  Rgba *anchor;
+  uint8_t *chunk_holes;
   unsigned long long *total;
   size_t smem;
   cudaStream_t stream;
@@ -449,7 +469,8 @@ CudaStatus launch_rows(const RowLaunch &l) {
                                     static_cast<int>(cudaSharedmemCarveoutMaxShared)));
   const int threads = l.src.width > 1024 ? kRowThreadsMax : 256;
   warp_row_kernel<kSharedKeys><<<l.src.height, threads, l.smem, l.stream>>>(
-      l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence, l.fill, l.global_keys, l.mask, l.zbits, l.total);
+      l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence, l.fill, l.global_keys, l.mask, l.state, l.anchor,
+      l.chunk_holes, l.total);
   P3D_CUDA_TRY_LAUNCH(warp_row_kernel);
   return {};
 }
@@ -485,23 +506,22 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   if (!shared_keys) P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(unsigned long long)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
   const size_t plane = 2 * static_cast<size_t>(W) * H;                                      // both eyes
-  if (smooth) P3D_CUDA_TRY_STATUS(smooth_.ensure(plane * kSmoothBytesPerPixel));
+  if (smooth) P3D_CUDA_TRY_STATUS(smooth_.ensure(plane * kSmoothBytesPerPixel + 2 * static_cast<size_t>(H) * row_chunks(W)));
   P3D_CUDA_TRY_STATUS(counters_.ensure(kCountersBytes));
   uint8_t *counters = counters_.as<uint8_t>();
   auto *total = reinterpret_cast<unsigned long long *>(counters + kTotalOffset);
   P3D_CUDA_TRY(cudaMemsetAsync(counters, 0, kCountersBytes, stream));
 
   uint8_t *mask = average ? scratch_.as<uint8_t>() : nullptr;
-  // BackgroundSmooth scratch, both eyes each: column sums, anchors, zbits, states.
-  SmoothSum *column = smooth ? smooth_.as<SmoothSum>() : nullptr;
-  Rgba *anchor = smooth ? reinterpret_cast<Rgba *>(column + plane) : nullptr;
-  uint32_t *zbits = smooth ? reinterpret_cast<uint32_t *>(anchor + plane) : nullptr;
-  uint8_t *state = smooth ? reinterpret_cast<uint8_t *>(zbits + plane) : nullptr;
+  // BackgroundSmooth scratch, both eyes each: anchors, states, chunk flags.
+  Rgba *anchor = smooth ? smooth_.as<Rgba>() : nullptr;
+  uint8_t *state = smooth ? reinterpret_cast<uint8_t *>(anchor + plane) : nullptr;
+  uint8_t *chunk_holes = smooth ? state + plane : nullptr;
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill, keys_.as<unsigned long long>(), mask,
-                         zbits, total, smem, stream};
+                         state, anchor, chunk_holes, total, smem, stream};
   P3D_CUDA_TRY_STATUS(shared_keys ? launch_rows<true>(launch) : launch_rows<false>(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
-  if (smooth) P3D_CUDA_TRY_STATUS(background_smooth(out, W, H, eyes.shift, D, zbits, state, anchor, column, stream));
+  if (smooth) P3D_CUDA_TRY_STATUS(background_smooth(out, W, H, eyes.shift, D, state, anchor, chunk_holes, stream));
 
   if (holes_out) {
     unsigned long long h = 0;
@@ -512,34 +532,28 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   return {};
 }
 
-// BackgroundSmooth driver: anchors (a block per row and eye), column sums (a
-// thread per column segment and eye), row means (a thread per pixel). No
-// host sync.
+// BackgroundSmooth sums, after the row kernel wrote the states and anchors:
+// one smooth_tile_kernel. No host sync.
 CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H, const float shift[2], float D,
-                                              const uint32_t *zbits, uint8_t *state, Rgba *anchor, SmoothSum *column,
+                                              const uint8_t *state, const Rgba *anchor, const uint8_t *chunk_holes,
                                               cudaStream_t stream) {
   const EyeShifts eyes{{shift[0], shift[1]}};
   const int R0 = smooth_fill_radius(shift[0], D), R1 = smooth_fill_radius(shift[1], D);
-  const size_t smem = smooth_anchor_smem(W);
+  const int Rmax = max(shift[0] == 0.f ? 0 : R0, shift[1] == 0.f ? 0 : R1), Rx = smooth_fill_radius_x(Rmax);
+  // Tile rows: kSmoothTileRowsMax, fewer when V would pass 64 KB (wide Rx).
+  const int S = max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * sizeof(SmoothSum)))));
+  size_t smem = smooth_tile_v_bytes(Rx, S);
+  const bool staged = smem + smooth_tile_copy_bytes(Rmax, Rx, S) + 64 <= static_cast<size_t>(smem_optin_);
+  if (staged) smem += smooth_tile_copy_bytes(Rmax, Rx, S);
   if (smem > 48 * 1024)
-    P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_anchor_kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
+    P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_tile_kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
                                       static_cast<int>(smem)));
-  // 256 threads: twice the resident blocks of 512 for this latency-bound
-  // kernel (4K on an H100: 0.623 against 0.643 ms for the whole warp).
-  smooth_anchor_kernel<<<dim3(H, 2), 256, smem, stream>>>(out, W, H, eyes, zbits, state, anchor);
-  P3D_CUDA_TRY_LAUNCH(smooth_anchor_kernel);
-  constexpr int kColumnThreads = 128;
-  // Both eyes share the grid; the smaller radius of a warped eye sets the
-  // segment (shorter segments: more threads, a little more overlap).
-  const int R_small = shift[0] == 0.f ? R1 : shift[1] == 0.f ? R0 : (R0 < R1 ? R0 : R1);
-  const int segment = smooth_column_segment(R_small);
-  smooth_column_kernel<<<dim3((W + kColumnThreads - 1) / kColumnThreads, (H + segment - 1) / segment, 2),
-                         kColumnThreads, 0, stream>>>(W, H, segment, eyes, make_int2(R0, R1), state, anchor, column);
-  P3D_CUDA_TRY_LAUNCH(smooth_column_kernel);
-  constexpr int kRowThreads = 128;
-  smooth_row_kernel<<<dim3((W + kRowThreads - 1) / kRowThreads, H, 2), kRowThreads, 0, stream>>>(
-      out, W, H, eyes, make_int2(smooth_fill_radius_x(R0), smooth_fill_radius_x(R1)), state, column);
-  P3D_CUDA_TRY_LAUNCH(smooth_row_kernel);
+  P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_tile_kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
+                                    static_cast<int>(cudaSharedmemCarveoutMaxShared)));
+  smooth_tile_kernel<<<dim3((W + kSmoothTileW - 1) / kSmoothTileW, (H + S - 1) / S, 2), kSmoothTileThreads, smem,
+                       stream>>>(out, W, H, eyes, make_int2(R0, R1), S, staged, state, anchor,
+                                 chunk_holes);
+  P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
   return {};
 }
 

@@ -9,17 +9,22 @@
 // than about 50000 pixels are refused with cudaErrorInvalidValue), scatters
 // the depth row (atomicMax on 64-bit keys), resolves colours and holes
 // (kHoleColour for fill=None), adds the row's holes to a device counter and,
-// for Background, fills the row's holes: per-32-pixel-chunk ballots plus a
-// chunk-level prefix max / suffix min give each hole its nearest non-holes,
-// O(W) per row, no host sync. An eye with shift 0 is copied.
-//  * BackgroundSmooth: the row kernel also writes smooth_zbits() of every
-//    pixel; then one block per row and eye finds the anchors (the 3x3 ring
-//    from the hole flags of rows y-1..y+1 in shared memory, nearest clean /
-//    non-hole pixels by chunk ballots as for Background), one thread per
-//    column segment (about 2R rows) and eye slides the +-R window down the
-//    runs of F (column sums V), and one thread per hole sums V over +-Rx
-//    along its row run. No host sync. Scratch: kSmoothBytesPerPixel per
-//    pixel and eye.
+// for Background, fills the row's holes: a ballot per 32-pixel chunk gives
+// its hole bits, and each hole finds its nearest non-holes by searching
+// those bits (holes are narrow: rarely past the next chunk), no host sync.
+// An eye with shift 0 is copied.
+//  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
+//    clean pixels from the chunks' hole bits, nearest clean / non-hole
+//    pixels by bit search as for Background) and writes the states of the
+//    chunks with holes and whether each 32-pixel chunk of the row has a
+//    hole; then one
+//    block per tile of 32 columns x up to 32 rows and eye (tiles without
+//    holes return at once) copies the states and anchors of
+//    its rows and R more above and below into shared memory, slides the
+//    +-R window down the column runs of holes (column sums V for its
+//    columns and Rx more either side) and sums V over +-Rx along each
+//    hole's row run. No host sync. Scratch: kSmoothBytesPerPixel per pixel
+//    and eye.
 //  * NeighborAverage: afterwards, Jacobi steps ping-ponging two hole masks,
 //    in batches of kWarpFillBatch steps; after each batch the host reads the
 //    per-step fill counts (a stream sync) to stop when no hole is left or a
@@ -36,8 +41,9 @@ namespace p3d {
 
 // NeighborAverage steps launched between two host checks of the counters.
 constexpr int kWarpFillBatch = 8;
-// BackgroundSmooth scratch per pixel and eye: SmoothSum, Rgba, zbits, state.
-constexpr size_t kSmoothBytesPerPixel = sizeof(SmoothSum) + sizeof(Rgba) + sizeof(uint32_t) + 1;
+// BackgroundSmooth scratch per pixel and eye: anchor (Rgba), state; and a
+// byte per 32-pixel chunk of a row and eye (has it a hole).
+constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
 
 class WarpRendererGpu {
  public:
@@ -52,13 +58,13 @@ class WarpRendererGpu {
  private:
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
   CudaStatus background_smooth(const FrameView &out, int W, int H, const float shift[2], float D,
-                               const uint32_t *zbits, uint8_t *state, Rgba *anchor, SmoothSum *column,
+                               const uint8_t *state, const Rgba *anchor, const uint8_t *chunk_holes,
                                cudaStream_t stream);
 
   // keys_: 2 eyes x H x W keys, only for rows too wide for shared memory.
   // counters_: total holes, per-step fill counts. scratch_: the two
   // NeighborAverage hole masks (2 eyes x H x W bytes each). smooth_: the
-  // BackgroundSmooth planes (column sums, anchors, zbits, states; 2 eyes).
+  // BackgroundSmooth planes (anchors, states, chunk flags; 2 eyes).
   DeviceBuffer keys_, counters_, scratch_, smooth_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
 };

@@ -566,17 +566,12 @@ HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &non
     if (shift == 0.f) continue;
     const std::vector<unsigned long long> keys = view_keys(params, depth, eye);
     auto hole = [&](int x, int y) { return keys[static_cast<size_t>(y) * w + x] == 0; };
-    auto ring = [&](int x, int y) {
-      if (hole(x, y)) return false;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int xx = x + dx, yy = y + dy;
-          if (xx >= 0 && yy >= 0 && xx < w && yy < h && hole(xx, yy)) return true;
-        }
-      return false;
+    auto is_clean = [&](int x, int y) {
+      for (int xx = x - kSmoothClean; xx <= x + kSmoothClean; ++xx)
+        if (xx >= 0 && xx < w && hole(xx, y)) return false;
+      return true;
     };
-    auto in_f = [&](int x, int y) { return hole(x, y) || ring(x, y); };
-    // The anchor of an F pixel, or false when it has none.
+    // The anchor of a hole, or false when it has none.
     auto anchor = [&](int x, int y, Rgba *c) {
       int side[2];
       for (int dir = 0; dir < 2; ++dir) {
@@ -585,7 +580,7 @@ HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &non
           const int xx = dir == 0 ? x - k : x + k;
           if (xx < 0 || xx >= w) break;
           if (!hole(xx, y) && any < 0) any = xx;
-          if (!hole(xx, y) && !ring(xx, y)) {
+          if (is_clean(xx, y)) {
             clean = xx;
             break;
           }
@@ -604,15 +599,15 @@ HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &non
       for (int x = 0; x < w; ++x) {
         if (!hole(x, y)) continue;
         long long sum[4] = {0, 0, 0, 0}, n = 0;
-        // The row run of F through (x, y) within Rx, then each column's run within R.
+        // The row run of holes through (x, y) within Rx, then each column's run within R.
         for (int dir = -1; dir <= 1; dir += 2)
           for (int dx = dir < 0 ? 0 : 1; dx <= Rx; ++dx) {
             const int xx = x + dir * dx;
-            if (xx < 0 || xx >= w || !in_f(xx, y)) break;
+            if (xx < 0 || xx >= w || !hole(xx, y)) break;
             for (int vdir = -1; vdir <= 1; vdir += 2)
               for (int dy = vdir < 0 ? 0 : 1; dy <= R; ++dy) {
                 const int yy = y + vdir * dy;
-                if (yy < 0 || yy >= h || !in_f(xx, yy)) break;
+                if (yy < 0 || yy >= h || !hole(xx, yy)) break;
                 Rgba c;
                 if (!anchor(xx, yy, &c)) continue;
                 sum[0] += c.r, sum[1] += c.g, sum[2] += c.b, sum[3] += c.a, ++n;
@@ -658,8 +653,7 @@ TEST(WarpFill, BackgroundSmoothOfOneColourIsThatColour) {
   for (int eye = 0; eye < 2; ++eye) EXPECT_TRUE(view_is(r.out, eye, [&](int, int) { return c; }));
 }
 
-// Two flat colours: every anchor of the disocclusion is background (the
-// foreground's ring pixel beside the hole picks the background too), so the
+// Two flat colours: every anchor of the disocclusion is background, so the
 // holes are exactly the background colour, never a blend with the square.
 TEST(WarpFill, BackgroundSmoothFillsDisocclusionWithBackground) {
   const Rgba bg{20, 180, 40, 255}, fg{220, 30, 10, 255};
@@ -673,11 +667,10 @@ TEST(WarpFill, BackgroundSmoothFillsDisocclusionWithBackground) {
 
 // The averaging, by hand: background rows of grey level 10 y, a flat
 // foreground square (rows 2..5). D = 8, shift 1/2: R = 1 + 4 / 2 = 3 rows,
-// Rx = 0. The hole's column run of F is rows 1..6 (the ring rows above and
-// below the hole included), every anchor is the background of its row
-// (10 y), so hole (X, y) = the rounded mean of 10 y' over max(1, y - 3) ..
-// min(6, y + 3). The pixels beside the hole, which the warp sampled across
-// the depth edge, never leak in.
+// Rx = 0. The hole's column run is rows 2..5, every anchor is the
+// background of its row (10 y), so hole (X, y) = the rounded mean of 10 y'
+// over max(2, y - 3) .. min(5, y + 3). The pixels beside the hole, which the
+// warp sampled across the depth edge, never leak in.
 TEST(WarpFill, BackgroundSmoothAveragesDownTheColumn) {
   HostFrame src(PixelFormat::BGRA, kSceneW, kSceneH);
   for (int y = 0; y < kSceneH; ++y)
@@ -691,7 +684,7 @@ TEST(WarpFill, BackgroundSmoothAveragesDownTheColumn) {
   ASSERT_EQ(r.holes, 2 * 4 * 4);
   auto expected = [](int y) {
     int sum = 0, n = 0;
-    for (int t = std::max(1, y - 3); t <= std::min(6, y + 3); ++t) sum += 10 * t, ++n;
+    for (int t = std::max(2, y - 3); t <= std::min(5, y + 3); ++t) sum += 10 * t, ++n;
     const uint8_t g = static_cast<uint8_t>((sum + n / 2) / n);
     return Rgba{g, g, g, 255};
   };
@@ -724,17 +717,18 @@ TEST(WarpHelpers, BackgroundSmoothHelpers) {
   EXPECT_EQ(smooth_fill_radius(1.f, 0.25f * 8192.f), 1025);
   EXPECT_EQ(smooth_fill_radius_x(106), 26);
   EXPECT_EQ(smooth_fill_radius_x(3), 0);
-  // Ring: 8-neighbourhood, clipped to the view; holes themselves are not ring.
-  const uint8_t up[5] = {0, 0, 0, 0, 1}, row[5] = {1, 0, 0, 0, 0}, down[5] = {0, 0, 0, 0, 0};
-  EXPECT_FALSE(smooth_is_ring(up, row, down, 0, 5));  // a hole
-  EXPECT_TRUE(smooth_is_ring(up, row, down, 1, 5));   // left neighbour
-  EXPECT_FALSE(smooth_is_ring(up, row, down, 2, 5));
-  EXPECT_TRUE(smooth_is_ring(up, row, down, 3, 5));   // diagonal, row above
-  EXPECT_TRUE(smooth_is_ring(up, row, down, 4, 5));   // straight above
-  EXPECT_FALSE(smooth_is_ring(nullptr, row, nullptr, 3, 5));  // no row above at the top
+  // Clean: not a hole and no hole within kSmoothClean (4) pixels of the row.
+  static_assert(kSmoothClean == 4, "the row below is laid out for 4");
+  const uint8_t row[12] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
+  EXPECT_FALSE(smooth_is_clean(row, 0, 12));  // a hole
+  EXPECT_FALSE(smooth_is_clean(row, 4, 12));  // 4 from the hole at 0
+  EXPECT_TRUE(smooth_is_clean(row, 5, 12));
+  EXPECT_TRUE(smooth_is_clean(row, 6, 12));
+  EXPECT_FALSE(smooth_is_clean(row, 7, 12));  // 4 from the hole at 11
+  EXPECT_TRUE(smooth_is_clean(row, 7, 11));   // a row 11 wide ends before that hole
   const uint8_t one[1] = {0}, one_hole[1] = {1};
-  EXPECT_TRUE(smooth_is_ring(one_hole, one, nullptr, 0, 1));
-  EXPECT_FALSE(smooth_is_ring(nullptr, one, nullptr, 0, 1));
+  EXPECT_TRUE(smooth_is_clean(one, 0, 1));
+  EXPECT_FALSE(smooth_is_clean(one_hole, 0, 1));
   EXPECT_EQ(smooth_side(3, 5), 3);
   EXPECT_EQ(smooth_side(-1, 5), 5);
   EXPECT_EQ(smooth_side(-1, -1), -1);

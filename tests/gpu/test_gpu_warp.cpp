@@ -181,6 +181,19 @@ TEST_F(GpuWarp, VeryWideRowsUseGlobalKeys) {
   }
 }
 
+// BackgroundSmooth windows too tall for the sums kernel's shared-memory
+// copy (25 % of 3001 pixels: R = 188 rows for both views, 376 for one) read
+// the states and anchors from global memory instead; the result is the same.
+TEST_F(GpuWarp, BackgroundSmoothWideWindowsReadGlobalMemory) {
+  std::mt19937 rng(fresh_seed());
+  HostFrame src(PixelFormat::RGBA, 3001, 41);
+  src.fill_random(rng());
+  for (DepthKind kind : {DepthKind::Noise, DepthKind::Binary}) {
+    const cv::Mat depth = random_depth(3001, 41, kind, rng());
+    for (StereoView v : kAllViews) expect_same(warp_params(25.f, 0.3f, v, HoleFill::BackgroundSmooth), src, depth);
+  }
+}
+
 // Zero disparity and out-of-range parameters / depth (NaN, +-inf, > 1).
 TEST_F(GpuWarp, ZeroDisparityAndInvalidValues) {
   HostFrame src(PixelFormat::BGRA, 64, 9);
