@@ -44,25 +44,29 @@ __device__ unsigned chunk_valid_bits(int c, int W) {
   return n >= 32 ? ~0u : (1u << n) - 1u;
 }
 
+// Chunk k's word of a per-chunk bit array; `invert`: its clear bits within
+// the row of W pixels instead (the non-holes, from the hole bits).
+__device__ unsigned chunk_word(const unsigned *bits, bool invert, int W, int k) {
+  return invert ? chunk_valid_bits(k, W) & ~bits[k] : bits[k];
+}
+
 // The nearest pixel left / right of pixel 32 c + bit whose bit is set in
-// `bits` (one word per chunk; `invert`: clear instead, within the row of W
-// pixels), or -1. Holes are narrow, so the search rarely leaves the chunk
-// or its neighbour; it needs no row-wide scan and no barrier.
+// chunk_word(bits, invert, ...), or -1. Holes are narrow, so the search
+// rarely leaves the chunk or its neighbour; it needs no row-wide scan and
+// no barrier.
 __device__ int nearest_left(const unsigned *bits, bool invert, int W, int c, int bit) {
-  auto word = [&](int k) { return invert ? chunk_valid_bits(k, W) & ~bits[k] : bits[k]; };
-  unsigned m = word(c) & ((1u << bit) - 1u);
+  unsigned m = chunk_word(bits, invert, W, c) & ((1u << bit) - 1u);
   while (!m) {
     if (--c < 0) return -1;
-    m = word(c);
+    m = chunk_word(bits, invert, W, c);
   }
   return c * 32 + 31 - __clz(m);
 }
 __device__ int nearest_right(const unsigned *bits, bool invert, int W, int chunks, int c, int bit) {
-  auto word = [&](int k) { return invert ? chunk_valid_bits(k, W) & ~bits[k] : bits[k]; };
-  unsigned m = word(c) & ~((2u << bit) - 1u);
+  unsigned m = chunk_word(bits, invert, W, c) & ~((2u << bit) - 1u);
   while (!m) {
     if (++c >= chunks) return -1;
-    m = word(c);
+    m = chunk_word(bits, invert, W, c);
   }
   return c * 32 + __ffs(m) - 1;
 }
@@ -111,16 +115,15 @@ struct RowJob {
 
 // ---- BackgroundSmooth (common/warp.h) ----------------------------------------
 // The row kernel finds every hole's anchor (the clean and non-hole pixels
-// are row-local, and the keys are in shared memory), then two kernels sum
-// the anchors down the column runs and along the row runs of holes
-// (smooth_tile_kernel). Scratch per eye (W x H each): state (uint8 flags
+// are row-local, and the keys are in shared memory), then one kernel
+// (smooth_tile_kernel) sums the anchors down the column runs and along the
+// row runs of holes. Scratch per eye (W x H each): state (uint8 flags
 // below), anchor (Rgba). Integer sums throughout, so every reduction order
 // gives the CPU's result.
 
 // State flags of a pixel: a hole (0: not one, so not summed), has an anchor.
 constexpr uint8_t kStateHole = 1, kStateAnchor = 2;
 static_assert(kSmoothClean >= 1 && kSmoothClean < 32, "the clean test reads the chunks on either side");
-
 
 // Anchors of one rendered eye row whose keys are final and whose chunks'
 // hole bits the resolve loop took by ballot: per chunk the clean bits (no
@@ -368,12 +371,14 @@ __global__ void __launch_bounds__(kSmoothTileThreads) smooth_tile_kernel(FrameVi
     __syncthreads();
     for (int i = threadIdx.x; i < rows * cols; i += blockDim.x) {
       const int r = i / cols, c = i % cols;
-      st_copy[r * nc + c] = flags[r * fcn + (sx0 + c) / 32 - fc0] ? st_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c] : 0;
+      const bool chunk_has_hole = flags[r * fcn + (sx0 + c) / 32 - fc0];
+      st_copy[r * nc + c] = chunk_has_hole ? st_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c] : 0;
     }
     __syncthreads();
     for (int i = threadIdx.x; i < rows * cols; i += blockDim.x) {
       const int r = i / cols, c = i % cols;
-      if (st_copy[r * nc + c] & kStateAnchor) an_copy[r * nc + c] = an_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c];
+      if (st_copy[r * nc + c] & kStateAnchor)
+        an_copy[r * nc + c] = an_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c];
     }
     st = st_copy;
     an = an_copy;
@@ -506,7 +511,8 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   if (!shared_keys) P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(unsigned long long)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
   const size_t plane = 2 * static_cast<size_t>(W) * H;                                      // both eyes
-  if (smooth) P3D_CUDA_TRY_STATUS(smooth_.ensure(plane * kSmoothBytesPerPixel + 2 * static_cast<size_t>(H) * row_chunks(W)));
+  const size_t chunk_flags = 2 * static_cast<size_t>(H) * row_chunks(W);  // both eyes
+  if (smooth) P3D_CUDA_TRY_STATUS(smooth_.ensure(plane * kSmoothBytesPerPixel + chunk_flags));
   P3D_CUDA_TRY_STATUS(counters_.ensure(kCountersBytes));
   uint8_t *counters = counters_.as<uint8_t>();
   auto *total = reinterpret_cast<unsigned long long *>(counters + kTotalOffset);
@@ -541,7 +547,8 @@ CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H
   const int R0 = smooth_fill_radius(shift[0], D), R1 = smooth_fill_radius(shift[1], D);
   const int Rmax = max(shift[0] == 0.f ? 0 : R0, shift[1] == 0.f ? 0 : R1), Rx = smooth_fill_radius_x(Rmax);
   // Tile rows: kSmoothTileRowsMax, fewer when V would pass 64 KB (wide Rx).
-  const int S = max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * sizeof(SmoothSum)))));
+  const int S =
+      max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * sizeof(SmoothSum)))));
   size_t smem = smooth_tile_v_bytes(Rx, S);
   const bool staged = smem + smooth_tile_copy_bytes(Rmax, Rx, S) + 64 <= static_cast<size_t>(smem_optin_);
   if (staged) smem += smooth_tile_copy_bytes(Rmax, Rx, S);
@@ -551,8 +558,7 @@ CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H
   P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_tile_kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
                                     static_cast<int>(cudaSharedmemCarveoutMaxShared)));
   smooth_tile_kernel<<<dim3((W + kSmoothTileW - 1) / kSmoothTileW, (H + S - 1) / S, 2), kSmoothTileThreads, smem,
-                       stream>>>(out, W, H, eyes, make_int2(R0, R1), S, staged, state, anchor,
-                                 chunk_holes);
+                       stream>>>(out, W, H, eyes, make_int2(R0, R1), S, staged, state, anchor, chunk_holes);
   P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
   return {};
 }
