@@ -1,9 +1,9 @@
 // CPU reference of the DIBR warp (common/warp.h). Rows are independent for
 // the warp and the Background fill, so each row is scattered, resolved and
 // filled by one cv::parallel_for_ task with its own key array; the
-// NeighborAverage fill is an image-wide Jacobi iteration, and BackgroundSmooth
-// a row pass (anchors), a column pass and a row pass (run sums), run
-// afterwards.
+// NeighborAverage fill is an image-wide Jacobi iteration. BackgroundSmooth
+// finds its anchors in the row tasks and sums them afterwards in bands of
+// rows (smooth_band).
 #include "warp.h"
 
 #include <algorithm>
@@ -50,9 +50,11 @@ struct RowScratch {
   SourceRow src;
   std::vector<float> depth, target;
   std::vector<unsigned long long> keys;
-  std::vector<int> right;
-  explicit RowScratch(int width)
-      : src(width), depth(width), target(width), keys(width), right(width) {}
+  std::vector<int> right, right_clean;  // right_clean: BackgroundSmooth only
+  std::vector<uint8_t> clean;           // BackgroundSmooth only
+  RowScratch(int width, bool smooth)
+      : src(width), depth(width), target(width), keys(width), right(width), right_clean(smooth ? width : 0),
+        clean(smooth ? width : 0) {}
 };
 
 // Z-buffer of row y: keys[X] = the largest key any source pixel offers X.
@@ -114,21 +116,74 @@ void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vec
   }
 }
 
-// What the image-wide fills keep of the warp: the hole mask (W x H, 1 =
-// hole) and, for BackgroundSmooth, every pixel's key.
+// What the image-wide fills keep of the warp (W x H each): NeighborAverage
+// the hole mask (1 = hole); BackgroundSmooth every pixel's state (0: not a
+// hole, kSmoothHole: a hole without an anchor, kSmoothAnchor: a hole with
+// anchor[i]) and the holes' anchors.
+constexpr uint8_t kSmoothHole = 1, kSmoothAnchor = 2;
 struct EyeScratch {
   std::vector<uint8_t> mask;
-  std::vector<unsigned long long> keys;
+  std::vector<uint8_t> state;
+  std::vector<Rgba> anchor;
 };
 
+// BackgroundSmooth, row part: the state and anchor of every pixel of row y,
+// whose keys are final and whose non-holes are rendered. Clean pixels from
+// the distance to the nearest hole on either side (smooth_is_clean), then
+// each hole's nearest clean / non-hole pixel on either side.
+void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, EyeScratch &s) {
+  const YuvToRgb packed;
+  const int W = j.width;
+  const std::vector<unsigned long long> &keys = r.keys;
+  uint8_t *clean = r.clean.data();
+  int *right_clean = r.right_clean.data(), *right_any = r.right.data();
+  int hole = -kSmoothClean - 1;  // the last hole at or left of X
+  for (int X = 0; X < W; ++X) {
+    if (keys[X] == 0) hole = X;
+    clean[X] = X - hole > kSmoothClean;
+  }
+  hole = W + kSmoothClean;  // the first hole at or right of X
+  for (int X = W - 1; X >= 0; --X) {
+    if (keys[X] == 0) hole = X;
+    clean[X] = clean[X] && hole - X > kSmoothClean;
+  }
+  int near_clean = -1, near_any = -1;
+  for (int X = W - 1; X >= 0; --X) {  // nearest clean / non-hole pixel right of X
+    right_clean[X] = near_clean;
+    right_any[X] = near_any;
+    if (keys[X] != 0) near_any = X;
+    if (clean[X]) near_clean = X;
+  }
+  const size_t base = static_cast<size_t>(y) * W;
+  uint8_t *state = &s.state[base];
+  Rgba *anchor = &s.anchor[base];
+  near_clean = -1;
+  near_any = -1;
+  for (int X = 0; X < W; ++X) {
+    if (keys[X] != 0) {
+      state[X] = 0;
+      near_any = X;
+      if (clean[X]) near_clean = X;
+      continue;
+    }
+    state[X] = kSmoothHole;
+    const int xl = smooth_side(near_clean, near_any), xr = smooth_side(right_clean[X], right_any[X]);
+    const int pick = background_source(X, xl, xl >= 0 ? keys[xl] : 0ull, xr, xr >= 0 ? keys[xr] : 0ull);
+    if (pick < 0) continue;
+    state[X] = kSmoothAnchor;
+    anchor[X] = load_rgba(j.out, eye.col0 + pick, y, packed);
+  }
+}
+
 // Warps both eyes row by row (a row task converts its source row once);
-// an eye with shift 0 is the source row copied. scratch[e] (when its mask
-// is sized) receives eye e's holes and, if its key array is sized, the keys.
+// an eye with shift 0 is the source row copied. scratch[e] receives eye e's
+// hole mask when its mask is sized, and its BackgroundSmooth states and
+// anchors for that fill (sized W x H by the caller).
 // holes[e]: eye e's hole count.
-void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch scratch[2], long long holes[2]) {
+void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long long holes[2]) {
   std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
-    RowScratch row(j.width);
+    RowScratch row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
     const SourceRow &src = row.src;
     const std::vector<unsigned long long> &keys = row.keys;
     long long local[2] = {0, 0};
@@ -145,10 +200,10 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch scratch[2], long 
         local[e] += h;
         if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, row.right);
         EyeScratch &s = scratch[e];
+        if (j.params.fill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye, y, row, s);
         if (s.mask.empty()) continue;
         const size_t base = static_cast<size_t>(y) * j.width;
         for (int X = 0; X < j.width; ++X) s.mask[base + X] = keys[X] == 0;
-        if (!s.keys.empty()) std::copy(keys.begin(), keys.end(), s.keys.begin() + base);
       }
     }
     total[0] += local[0];
@@ -158,118 +213,81 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch scratch[2], long 
   holes[1] = total[1].load();
 }
 
-// BackgroundSmooth, pass 1 (rows): every hole's anchor. state: 0 = not a
-// hole, 1 = a hole without an anchor, 2 = a hole with anchor[i].
-void smooth_anchor_rows(const WarpJob &j, const Eye &eye, const EyeScratch &s, std::vector<uint8_t> &state,
-                        std::vector<Rgba> &anchor) {
-  const YuvToRgb packed;
-  const int W = j.width, H = j.height;
-  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &rows) {
-    std::vector<uint8_t> clean(W);
-    std::vector<int> right_clean(W), right_any(W);
-    for (int y = rows.start; y < rows.end; ++y) {
-      const size_t base = static_cast<size_t>(y) * W;
-      const uint8_t *row = &s.mask[base];
-      for (int X = 0; X < W; ++X) clean[X] = smooth_is_clean(row, X, W);
-      int near_clean = -1, near_any = -1;
-      for (int X = W - 1; X >= 0; --X) {  // nearest clean / non-hole pixel right of X
-        right_clean[X] = near_clean;
-        right_any[X] = near_any;
-        if (!row[X]) near_any = X;
-        if (clean[X]) near_clean = X;
-      }
-      near_clean = -1;
-      near_any = -1;
-      for (int X = 0; X < W; ++X) {
-        state[base + X] = row[X] ? 1 : 0;
-        if (row[X]) {
-          const int xl = smooth_side(near_clean, near_any), xr = smooth_side(right_clean[X], right_any[X]);
-          const int pick = background_source(X, xl, xl >= 0 ? s.keys[base + xl] : 0ull, xr,
-                                             xr >= 0 ? s.keys[base + xr] : 0ull);
-          if (pick >= 0) {
-            state[base + X] = 2;
-            anchor[base + X] = load_rgba(j.out, eye.col0 + pick, y, packed);
-          }
-        }
-        if (!row[X]) near_any = X;
-        if (clean[X]) near_clean = X;
-      }
-    }
-  });
-}
+// BackgroundSmooth sums, after the row pass (smooth_anchor_row) wrote every
+// row's states and anchors. Bands of rows run in parallel; a band sweeps
+// its rows top-down and keeps, per column, the window of its current run of
+// holes (rows lo..hi with their anchors' sum s), sliding it as y moves on,
+// so V(X, y) comes in row order and each row is filled as soon as its V
+// row is complete. Integer sums: the same result as any other order.
+struct ColumnWindow {
+  int lo, hi;
+  SmoothSum s;
+};
 
-// BackgroundSmooth, pass 2 (columns): V of every hole, the anchors of its
-// column's run of holes within +-R rows, from prefix sums over each run. Columns
-// are independent; a task takes a range of them.
-void smooth_column_sums(const WarpJob &j, const std::vector<uint8_t> &state, const std::vector<Rgba> &anchor, int R,
-                        std::vector<SmoothSum> &column) {
+void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, int Rx, int y0, int y1,
+                 std::vector<ColumnWindow> &win, std::vector<SmoothSum> &V, std::vector<SmoothSum> &prefix) {
   const int W = j.width, H = j.height;
-  cv::parallel_for_(cv::Range(0, W), [&](const cv::Range &cols) {
-    std::vector<SmoothSum> prefix(static_cast<size_t>(H) + 1);
-    for (int X = cols.start; X < cols.end; ++X) {
-      int y = 0;
-      while (y < H) {
-        if (!state[static_cast<size_t>(y) * W + X]) {
-          ++y;
-          continue;
+  const uint8_t *state = es.state.data();
+  const Rgba *anchor = es.anchor.data();
+  auto at = [W](int y, int X) { return static_cast<size_t>(y) * W + X; };
+  for (int y = y0; y < y1; ++y) {
+    const uint8_t *row = state + at(y, 0);
+    bool any = false;
+    for (int X = 0; X < W; ++X) {
+      if (!row[X]) continue;
+      any = true;
+      ColumnWindow &w = win[X];
+      if (y == y0 || !state[at(y - 1, X)]) {  // a new run, or the band's first row: lo = the run's start
+        w.lo = y;
+        while (w.lo > 0 && w.lo > y - R && state[at(w.lo - 1, X)]) --w.lo;
+        w.hi = w.lo - 1;
+        w.s = SmoothSum{0, 0, 0, 0, 0};
+      }
+      while (w.hi < y + R && w.hi + 1 < H && state[at(w.hi + 1, X)]) {
+        ++w.hi;
+        if (state[at(w.hi, X)] == kSmoothAnchor) smooth_add(w.s, anchor[at(w.hi, X)]);
+      }
+      for (; w.lo < y - R; ++w.lo)
+        if (state[at(w.lo, X)] == kSmoothAnchor) {
+          const Rgba c = anchor[at(w.lo, X)];
+          w.s = smooth_window(w.s, SmoothSum{c.r, c.g, c.b, c.a, 1u});
         }
-        const int a = y;  // the run is rows a..b
-        prefix[0] = SmoothSum{0, 0, 0, 0, 0};
-        for (; y < H && state[static_cast<size_t>(y) * W + X]; ++y) {
-          SmoothSum next = prefix[y - a];
-          const size_t i = static_cast<size_t>(y) * W + X;
-          if (state[i] == 2) smooth_add(next, anchor[i]);
-          prefix[y - a + 1] = next;
-        }
-        const int b = y - 1;
-        for (int t = a; t <= b; ++t)
-          column[static_cast<size_t>(t) * W + X] =
-              smooth_window(prefix[std::min(b, t + R) - a + 1], prefix[std::max(a, t - R) - a]);
+      V[X] = w.s;
+    }
+    if (!any) continue;
+    // Every hole becomes the mean of V over its row run within +-Rx.
+    int X = 0;
+    while (X < W) {
+      if (!row[X]) {
+        ++X;
+        continue;
+      }
+      const int a = X;  // the run is columns a..b
+      prefix[0] = SmoothSum{0, 0, 0, 0, 0};
+      for (; X < W && row[X]; ++X) {
+        prefix[X - a + 1] = prefix[X - a];
+        smooth_add(prefix[X - a + 1], V[X]);
+      }
+      const int b = X - 1;
+      for (int t = a; t <= b; ++t) {
+        const SmoothSum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
+        store_rgba(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
       }
     }
-  });
-}
-
-// BackgroundSmooth, pass 3 (rows): every hole becomes the mean of the column
-// sums over its row's run of holes within +-Rx columns.
-void smooth_fill_rows(const WarpJob &j, const Eye &eye, const std::vector<uint8_t> &state,
-                      const std::vector<SmoothSum> &column, int Rx) {
-  const int W = j.width, H = j.height;
-  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &rows) {
-    std::vector<SmoothSum> prefix(static_cast<size_t>(W) + 1);
-    for (int y = rows.start; y < rows.end; ++y) {
-      const size_t base = static_cast<size_t>(y) * W;
-      int X = 0;
-      while (X < W) {
-        if (!state[base + X]) {
-          ++X;
-          continue;
-        }
-        const int a = X;  // the run is columns a..b
-        prefix[0] = SmoothSum{0, 0, 0, 0, 0};
-        for (; X < W && state[base + X]; ++X) {
-          prefix[X - a + 1] = prefix[X - a];
-          smooth_add(prefix[X - a + 1], column[base + X]);
-        }
-        const int b = X - 1;
-        for (int t = a; t <= b; ++t) {
-          const SmoothSum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
-          store_rgba(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
-        }
-      }
-    }
-  });
+  }
 }
 
 void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &s) {
-  const size_t n = static_cast<size_t>(j.width) * j.height;
-  std::vector<uint8_t> state(n);
-  std::vector<Rgba> anchor(n);
-  std::vector<SmoothSum> column(n);
-  const int R = smooth_fill_radius(eye.shift, j.D);
-  smooth_anchor_rows(j, eye, s, state, anchor);
-  smooth_column_sums(j, state, anchor, R, column);
-  smooth_fill_rows(j, eye, state, column, smooth_fill_radius_x(R));
+  const int R = smooth_fill_radius(eye.shift, j.D), Rx = smooth_fill_radius_x(R);
+  // Bands of at least 4R rows, so that finding a run's start at a band's
+  // first row (up to R rows up) stays a small share of the sweep.
+  const int band = std::max(64, 4 * R), bands = (j.height + band - 1) / band;
+  cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range &r) {
+    std::vector<ColumnWindow> win(j.width);
+    std::vector<SmoothSum> V(j.width), prefix(static_cast<size_t>(j.width) + 1);
+    for (int b = r.start; b < r.end; ++b)
+      smooth_band(j, eye, s, R, Rx, b * band, std::min(j.height, (b + 1) * band), win, V, prefix);
+  });
 }
 
 // NeighborAverage: Jacobi steps ping-ponging between two hole masks (reads
@@ -320,12 +338,23 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
   const bool average = j.params.fill == HoleFill::NeighborAverage;
   const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
-  EyeScratch scratch[2];
+  // BackgroundSmooth's planes (5 bytes a pixel and eye, 20 MB at 1080p) stay
+  // with the calling thread and serve its next frames: allocated per frame,
+  // their page faults cost more than the fill itself in a chain (1080p, two
+  // cores). Every state is written each frame and anchors are read only
+  // where a state names one, so nothing needs clearing; a thread keeps the
+  // planes of the largest frame it warped until it ends.
+  thread_local EyeScratch smooth_planes[2];
+  EyeScratch local[2];
+  EyeScratch *scratch = smooth ? smooth_planes : local;
   const size_t n = static_cast<size_t>(j.width) * j.height;
   for (int e = 0; e < 2; ++e) {
     if (eyes[e].shift == 0.f) continue;
-    if (average || smooth) scratch[e].mask.resize(n);
-    if (smooth) scratch[e].keys.resize(n);
+    if (average) scratch[e].mask.resize(n);
+    if (smooth) {
+      scratch[e].state.resize(n);
+      scratch[e].anchor.resize(n);
+    }
   }
   long long holes[2] = {0, 0};
   warp_eyes(j, eyes, scratch, holes);

@@ -42,7 +42,7 @@
 //    D == 0 both views are the source, copied.
 //
 // Hole filling (only pixels with key 0 are touched):
-//  * BackgroundSmooth: the background side of each row, averaged down the
+//  * BackgroundSmooth (default): the background side of each row, averaged down the
 //    column, over the holes. Per rendered view:
 //     - Clean pixel: a non-hole with no hole within kSmoothClean pixels of it
 //       in its row (smooth_is_clean). The warp's pixels beside a hole mix the
@@ -73,7 +73,7 @@
 //    background next to it (docs/quality.md). Everything but the column
 //    and row sums is row-local, so the GPU finds the anchors in the warp's
 //    row kernel, where the row's keys are at hand.
-//  * Background (default): take the nearest non-hole pixel to the left (XL)
+//  * Background: take the nearest non-hole pixel to the left (XL)
 //    and to the right (XR) in the same row of the rendered view; copy the
 //    colour of the farther one (smaller key depth; equal depth: the nearer in
 //    distance, then XL). One side missing: the other. Neither: black.
@@ -108,12 +108,11 @@ struct WarpParams {
   float max_disparity = 3.f;   // percent of frame width, 0..kMaxDisparityPercent
   float convergence = 0.5f;    // depth that lands on the screen plane, 0..1
   StereoView view = StereoView::Both;
-  // Background stays the default: BackgroundSmooth scores better (Aloe 24.54
-  // against 22.97 dB) but its anchors in the warp's row kernel and one sums
-  // kernel cost 0.105 ms per 4K frame on an H100 against fill=none (0.085
-  // more than Background's 0.020), just past the 0.1 ms fill budget, and it
-  // slows the CPU warp (docs/benchmarks.md).
-  HoleFill fill = HoleFill::Background;
+  // BackgroundSmooth is the default (2026-11-23): Aloe 24.54 dB / SSIM
+  // 0.804 against Background's 22.97 / 0.790, at about 0.10 ms per 4K frame
+  // on an H100 over fill=none (Background 0.02) and about 10 ms more than
+  // Background per 1080p frame on two CPU cores (docs/benchmarks.md).
+  HoleFill fill = HoleFill::BackgroundSmooth;
 };
 
 // Disparity scale D in pixels for a frame width.

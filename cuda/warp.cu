@@ -316,10 +316,46 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
 // at once.
 constexpr int kSmoothTileW = 32, kSmoothSub = 8, kSmoothTileThreads = 256, kSmoothTileRowsMax = 32;
 static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
+static_assert(kSmoothTileThreads % 32 == 0, "the copy loops go a warp per row");
 __host__ __device__ size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
 __host__ __device__ int smooth_tile_columns(int Rx) { return kSmoothTileW + 2 * Rx; }
-__host__ __device__ size_t smooth_tile_v_bytes(int Rx, int S) {
-  return align16(static_cast<size_t>(smooth_tile_columns(Rx)) * S * sizeof(SmoothSum));
+
+// V in shared memory. Wide: SmoothSum (20 bytes). Narrow, when a column
+// window holds at most 257 anchors (R <= kSmoothNarrowRMax): each channel
+// sum fits 16 bits (255 * 257 = 65535), so V takes 10 bytes, (r | g << 16,
+// b | a << 16) and the count, which lets more tiles share an SM.
+constexpr int kSmoothNarrowRMax = 128;
+static_assert(255 * (2 * kSmoothNarrowRMax + 1) <= 65535, "a narrow V channel fits 16 bits");
+template <bool kNarrow>
+struct TileSums;
+template <>
+struct TileSums<false> {
+  SmoothSum *v;
+  static __host__ __device__ size_t bytes(size_t n) { return align16(n * sizeof(SmoothSum)); }
+  __device__ TileSums(unsigned char *smem, size_t) : v(reinterpret_cast<SmoothSum *>(smem)) {}
+  __device__ void put(size_t i, const SmoothSum &s) { v[i] = s; }
+  __device__ SmoothSum get(size_t i) const { return v[i]; }
+};
+template <>
+struct TileSums<true> {
+  uint2 *rgba;
+  unsigned short *n;
+  static __host__ __device__ size_t bytes(size_t count) { return align16(count * sizeof(uint2)) + align16(count * 2); }
+  __device__ TileSums(unsigned char *smem, size_t count)
+      : rgba(reinterpret_cast<uint2 *>(smem)),
+        n(reinterpret_cast<unsigned short *>(smem + align16(count * sizeof(uint2)))) {}
+  __device__ void put(size_t i, const SmoothSum &s) {
+    rgba[i] = make_uint2(s.r | (s.g << 16), s.b | (s.a << 16));
+    n[i] = static_cast<unsigned short>(s.n);
+  }
+  __device__ SmoothSum get(size_t i) const {
+    const uint2 p = rgba[i];
+    return SmoothSum{p.x & 0xffffu, p.x >> 16, p.y & 0xffffu, p.y >> 16, n[i]};
+  }
+};
+__host__ __device__ size_t smooth_tile_v_bytes(bool narrow, int Rx, int S) {
+  const size_t count = static_cast<size_t>(smooth_tile_columns(Rx)) * S;
+  return narrow ? TileSums<true>::bytes(count) : TileSums<false>::bytes(count);
 }
 // The staged copy: anchors (Rgba), states (bytes), then the chunk flags of
 // its rows (at most 2 + (columns - 1) / 32 chunks a row).
@@ -330,6 +366,7 @@ __host__ __device__ size_t smooth_tile_copy_bytes(int R, int Rx, int S) {
   const size_t flag_columns = 2 + (smooth_tile_columns(Rx) - 1) / 32;
   return smooth_tile_copy_pixels(R, Rx, S) * (sizeof(Rgba) + 1) + flag_columns * (S + 2 * R);
 }
+template <bool kNarrow>
 __global__ void __launch_bounds__(kSmoothTileThreads) smooth_tile_kernel(FrameView out, int W, int H, EyeShifts eyes,
                                                                          int2 radius, int S, bool staged,
                                                                          const uint8_t *state, const Rgba *anchor,
@@ -350,35 +387,33 @@ __global__ void __launch_bounds__(kSmoothTileThreads) smooth_tile_kernel(FrameVi
   if (!__syncthreads_or(tile_has_hole)) return;  // block-uniform
 
   const int nc = smooth_tile_columns(Rx), cx0 = x0 - Rx;  // V columns cx0 .. cx0 + nc - 1
-  SmoothSum *V = reinterpret_cast<SmoothSum *>(smem_bytes);  // row r of the tile: V[r * nc + column - cx0]
+  TileSums<kNarrow> V(smem_bytes, static_cast<size_t>(nc) * S);  // row r of the tile: r * nc + column - cx0
   const uint8_t *st = st_eye;
   const Rgba *an = an_eye;
   size_t pitch = W;
   int sy0 = 0, sx0 = 0;
   if (staged) {
-    Rgba *an_copy = reinterpret_cast<Rgba *>(smem_bytes + smooth_tile_v_bytes(Rx, S));
+    Rgba *an_copy = reinterpret_cast<Rgba *>(smem_bytes + smooth_tile_v_bytes(kNarrow, Rx, S));
     uint8_t *st_copy = reinterpret_cast<uint8_t *>(an_copy + smooth_tile_copy_pixels(R, Rx, S));
     uint8_t *flags = st_copy + smooth_tile_copy_pixels(R, Rx, S);
     sy0 = max(0, y0 - R);
     sx0 = max(0, cx0);
     const int rows = min(H, y0 + S + R) - sy0, cols = min(W, cx0 + nc) - sx0;
     // The chunk flags of the copied rows, then the states of the chunks
-    // with holes (zeros elsewhere, nothing read), then the anchors the
-    // states name: holes are sparse, so most of the copy costs no load.
+    // with holes (zeros elsewhere, nothing read) and the anchors they name:
+    // holes are sparse, so most of the copy costs no load. A warp a row.
     const int fc0 = sx0 / 32, fcn = (sx0 + cols - 1) / 32 - fc0 + 1;
-    for (int i = threadIdx.x; i < rows * fcn; i += blockDim.x)
-      flags[i] = ch_eye[static_cast<size_t>(sy0 + i / fcn) * chunks + fc0 + i % fcn];
+    const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5, warps = blockDim.x >> 5;
+    for (int r = warp; r < rows; r += warps)
+      for (int c = lane; c < fcn; c += 32) flags[r * fcn + c] = ch_eye[static_cast<size_t>(sy0 + r) * chunks + fc0 + c];
     __syncthreads();
-    for (int i = threadIdx.x; i < rows * cols; i += blockDim.x) {
-      const int r = i / cols, c = i % cols;
-      const bool chunk_has_hole = flags[r * fcn + (sx0 + c) / 32 - fc0];
-      st_copy[r * nc + c] = chunk_has_hole ? st_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c] : 0;
-    }
-    __syncthreads();
-    for (int i = threadIdx.x; i < rows * cols; i += blockDim.x) {
-      const int r = i / cols, c = i % cols;
-      if (st_copy[r * nc + c] & kStateAnchor)
-        an_copy[r * nc + c] = an_eye[static_cast<size_t>(sy0 + r) * W + sx0 + c];
+    for (int r = warp; r < rows; r += warps) {
+      const size_t g = static_cast<size_t>(sy0 + r) * W + sx0;
+      for (int c = lane; c < cols; c += 32) {
+        const uint8_t v = flags[r * fcn + (sx0 + c) / 32 - fc0] ? st_eye[g + c] : 0;
+        st_copy[r * nc + c] = v;
+        if (v & kStateAnchor) an_copy[r * nc + c] = an_eye[g + c];
+      }
     }
     st = st_copy;
     an = an_copy;
@@ -421,7 +456,7 @@ __global__ void __launch_bounds__(kSmoothTileThreads) smooth_tile_kernel(FrameVi
         }
         ++lo;
       }
-      V[(y - y0) * nc + ci] = s;
+      V.put(static_cast<size_t>(y - y0) * nc + ci, s);
     }
   }
   __syncthreads();
@@ -429,10 +464,10 @@ __global__ void __launch_bounds__(kSmoothTileThreads) smooth_tile_kernel(FrameVi
   for (int i = threadIdx.x; i < kSmoothTileW * S; i += blockDim.x) {
     const int X = x0 + i % kSmoothTileW, y = y0 + i / kSmoothTileW;
     if (X >= W || y >= H || !hole_state(y, X)) continue;
-    const SmoothSum *v = V + (y - y0) * nc - cx0;  // v[t]: V of column t in row y
-    SmoothSum s = v[X];
-    for (int t = X - 1; t >= 0 && t >= X - Rx && hole_state(y, t); --t) smooth_add(s, v[t]);
-    for (int t = X + 1; t < W && t <= X + Rx && hole_state(y, t); ++t) smooth_add(s, v[t]);
+    const size_t v0 = static_cast<size_t>(y - y0) * nc - cx0;  // V of column t in row y: v0 + t
+    SmoothSum s = V.get(v0 + X);
+    for (int t = X - 1; t >= 0 && t >= X - Rx && hole_state(y, t); --t) smooth_add(s, V.get(v0 + t));
+    for (int t = X + 1; t < W && t <= X + Rx && hole_state(y, t); ++t) smooth_add(s, V.get(v0 + t));
     store_rgba(out, eye * W + X, y, smooth_mean(s));
   }
 }
@@ -538,6 +573,19 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   return {};
 }
 
+// One smooth_tile_kernel instantiation: its shared-memory attributes, then
+// the launch.
+template <typename Kernel, typename... Args>
+CudaStatus launch_smooth_tiles(Kernel kernel, dim3 grid, size_t smem, cudaStream_t stream, Args... args) {
+  if (smem > 48 * 1024)
+    P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(smem)));
+  P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
+                                    static_cast<int>(cudaSharedmemCarveoutMaxShared)));
+  kernel<<<grid, kSmoothTileThreads, smem, stream>>>(args...);
+  P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
+  return {};
+}
+
 // BackgroundSmooth sums, after the row kernel wrote the states and anchors:
 // one smooth_tile_kernel. No host sync.
 CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H, const float shift[2], float D,
@@ -546,20 +594,21 @@ CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H
   const EyeShifts eyes{{shift[0], shift[1]}};
   const int R0 = smooth_fill_radius(shift[0], D), R1 = smooth_fill_radius(shift[1], D);
   const int Rmax = max(shift[0] == 0.f ? 0 : R0, shift[1] == 0.f ? 0 : R1), Rx = smooth_fill_radius_x(Rmax);
+  const bool narrow = Rmax <= kSmoothNarrowRMax;
   // Tile rows: kSmoothTileRowsMax, fewer when V would pass 64 KB (wide Rx).
-  const int S =
-      max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * sizeof(SmoothSum)))));
-  size_t smem = smooth_tile_v_bytes(Rx, S);
+  const size_t v_pixel = narrow ? sizeof(uint2) + sizeof(unsigned short) : sizeof(SmoothSum);
+  const int S = max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * v_pixel))));
+  size_t smem = smooth_tile_v_bytes(narrow, Rx, S);
   const bool staged = smem + smooth_tile_copy_bytes(Rmax, Rx, S) + 64 <= static_cast<size_t>(smem_optin_);
   if (staged) smem += smooth_tile_copy_bytes(Rmax, Rx, S);
-  if (smem > 48 * 1024)
-    P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_tile_kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                      static_cast<int>(smem)));
-  P3D_CUDA_TRY(cudaFuncSetAttribute(smooth_tile_kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
-                                    static_cast<int>(cudaSharedmemCarveoutMaxShared)));
-  smooth_tile_kernel<<<dim3((W + kSmoothTileW - 1) / kSmoothTileW, (H + S - 1) / S, 2), kSmoothTileThreads, smem,
-                       stream>>>(out, W, H, eyes, make_int2(R0, R1), S, staged, state, anchor, chunk_holes);
-  P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
+  const dim3 grid((W + kSmoothTileW - 1) / kSmoothTileW, (H + S - 1) / S, 2);
+  const int2 radius = make_int2(R0, R1);
+  if (narrow)
+    P3D_CUDA_TRY_STATUS(launch_smooth_tiles(smooth_tile_kernel<true>, grid, smem, stream, out, W, H, eyes, radius, S,
+                                            staged, state, anchor, chunk_holes));
+  else
+    P3D_CUDA_TRY_STATUS(launch_smooth_tiles(smooth_tile_kernel<false>, grid, smem, stream, out, W, H, eyes, radius, S,
+                                            staged, state, anchor, chunk_holes));
   return {};
 }
 

@@ -110,7 +110,7 @@ void print_usage(std::ostream &os) {
         "  --radius N              bilateral radius (default 5)\n"
         "  --filter-mode M         separable (default, as pseudo3dfilter) or exact\n"
         "  --max-disparity P       percent of width (default 3)\n"
-        "  --fill F                background (default), background-smooth, neighbor-average, none\n"
+        "  --fill F                background-smooth (default), background, neighbor-average, none\n"
         "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
         "  --warmup N              GPU warm-up iterations (default 10; CPU always 1)\n"
         "  --cpu-threads N         OpenCV worker threads for the CPU timings\n"

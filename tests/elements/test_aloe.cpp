@@ -134,12 +134,28 @@ AloeResult synthesize_right_external(const char *fill, double scale, const std::
   return r;
 }
 
+
+// The fill a fresh element starts with, by its nick.
+std::string default_fill(const char *factory) {
+  GstElement *e = gst_element_factory_make(factory, nullptr);
+  if (!e) return "no " + std::string(factory);
+  GParamSpec *spec = g_object_class_find_property(G_OBJECT_GET_CLASS(e), "fill");
+  gint value = -1;
+  g_object_get(e, "fill", &value, nullptr);
+  const GEnumValue *v = spec ? g_enum_get_value(G_PARAM_SPEC_ENUM(spec)->enum_class, value) : nullptr;
+  const std::string nick = v ? v->value_nick : "?";
+  gst_object_unref(e);
+  return nick;
+}
+
 }  // namespace
 
-// The best fill (background-smooth): the synthesized right view must be
-// far closer to the real one than the left view itself is (the no-warp
-// baseline).
+// The default fill (background-smooth since 2026-11-23): the synthesized
+// right view must be far closer to the real one than the left view itself
+// is (the no-warp baseline).
 TEST(Aloe, SynthesizedRightViewMatchesRealRightView) {
+  EXPECT_EQ(default_fill("pseudo3dwarp"), "background-smooth");
+  EXPECT_EQ(default_fill("pseudo3dconvert"), "background-smooth");
   const AloeResult r = synthesize_right("background-smooth", PixelFormat::RGBA);
   RecordProperty("psnr_db", std::to_string(r.psnr));
   RecordProperty("ssim", std::to_string(r.ssim));
@@ -150,10 +166,12 @@ TEST(Aloe, SynthesizedRightViewMatchesRealRightView) {
   // What is left is disocclusions, the right border (content the left view
   // never saw) and pixels whose ground truth is unknown (0). SSIM: even the
   // real right view blurred (sigma 4) in the holes scores 0.823, so no
-  // smooth fill reaches 0.83 (docs/quality.md).
+  // smooth fill reaches 0.83, and none of OpenCV's inpainting methods
+  // (Telea, Navier-Stokes, shift-map, FSR) passes 0.803 in the same holes
+  // (docs/quality.md).
   EXPECT_GE(r.psnr, 24.5);
   EXPECT_GT(r.psnr, r.baseline_psnr + 9.0);
-  EXPECT_GT(r.ssim, 0.80);
+  EXPECT_GE(r.ssim, 0.803);
 }
 
 // The other fills and a YUV input stay in their quality bands.

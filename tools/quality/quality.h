@@ -3,7 +3,8 @@
 // share:
 //   main.cpp             command line, the run line, which studies run
 //   common.cpp           output, timing, statistics, the Aloe data set
-//   synthesis.cpp        Aloe's right view for every hole fill and depth filter
+//   synthesis.cpp        Aloe's right view for every hole fill and depth filter,
+//                        and peers' inpainting in the same holes
 //   filter_variants.cpp  exact cross-bilateral window against its faster variants
 //   depth_rank.cpp       single-picture depth against Aloe's ground truth, per cue
 //   flicker.cpp          depth change on vtest.avi's static background
@@ -36,6 +37,8 @@ struct Options {
   int runs = 5;
   int frames = 200;
   int threads = -1;  // -1: OpenCV's default
+  // "peers" (OpenCV's inpainting in the warp's holes, minutes on the CPU)
+  // runs only when asked for (--only peers).
   std::set<std::string> parts = {"synthesis", "filter", "depth", "flicker"};
   // The cross-bilateral filter's mode in the depth and flicker studies
   // (what pseudo3dfilter runs; its other parameters are the defaults).
@@ -112,6 +115,8 @@ const char *hypothesis_name(Hypothesis h);
 
 void measure_baseline(Writer &w, const Aloe &a);
 void measure_synthesis(Writer &w, const Aloe &a, int runs);
+// Peers' inpainting (OpenCV photo and xphoto) in the same warp's holes.
+void measure_peer_fills(Writer &w, const Aloe &a);
 void measure_filter_variants(Writer &w, const Aloe &a, int runs);
 // full: Aloe as shipped; half: the same at half size (the cues must not
 // depend on the picture's resolution).

@@ -6,9 +6,13 @@
 // alone, and the time of filter + warp. Plus what fills cannot beat: the
 // holes given aloeR itself, sharp or blurred (kind synthesis_bound).
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <functional>
 
 #include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
+#include <opencv2/xphoto/inpainting.hpp>
 
 #include "metrics.h"
 #include "quality.h"
@@ -67,6 +71,51 @@ void measure_bounds(Writer &w, const Aloe &a) {
 }
 
 }  // namespace
+
+// Peers' inpainting on the same holes (the GT warp, depth as is): what the
+// issue's peers and OpenCV's best single-image inpainting reach with this
+// warp, at any cost. Each runs once (they take up to minutes on the CPU).
+void measure_peer_fills(Writer &w, const Aloe &a) {
+  HostFrame out(PixelFormat::BGRA, 2 * a.left.cols, a.left.rows);
+  const cv::Mat holes = hole_mask(a, a.gt_depth, out);
+  render_right(a, a.gt_depth, HoleFill::None, out);
+  const cv::Mat view = right_half_bgr(out);
+  cv::Mat valid;
+  cv::bitwise_not(holes, valid);  // xphoto::inpaint marks the known pixels
+  struct Peer {
+    const char *name;
+    std::function<void(cv::Mat &)> fill;
+  };
+  const std::vector<Peer> peers = {
+      {"opencv-telea-r3", [&](cv::Mat &d) { cv::inpaint(view, holes, d, 3, cv::INPAINT_TELEA); }},
+      {"opencv-ns-r3", [&](cv::Mat &d) { cv::inpaint(view, holes, d, 3, cv::INPAINT_NS); }},
+      {"xphoto-shiftmap",
+       [&](cv::Mat &d) {
+         // Shift-map expects a Lab-like space (intensity first).
+         cv::Mat lab, filled;
+         cv::cvtColor(view, lab, cv::COLOR_BGR2Lab);
+         cv::xphoto::inpaint(lab, valid, filled, cv::xphoto::INPAINT_SHIFTMAP);
+         cv::cvtColor(filled, d, cv::COLOR_Lab2BGR);
+         view.copyTo(d, valid);
+       }},
+      {"xphoto-fsr-fast", [&](cv::Mat &d) { cv::xphoto::inpaint(view, valid, d, cv::xphoto::INPAINT_FSR_FAST); }},
+      {"xphoto-fsr-best", [&](cv::Mat &d) { cv::xphoto::inpaint(view, valid, d, cv::xphoto::INPAINT_FSR_BEST); }},
+  };
+  for (const Peer &p : peers) {
+    cv::Mat synth;
+    const auto t0 = std::chrono::steady_clock::now();
+    p.fill(synth);
+    const double ms = elapsed_ms(t0);
+    JsonLine j;
+    j.str("kind", "synthesis_peer").str("method", p.name);
+    j.num("psnr", psnr(synth, a.right)).num("ssim", ssim(synth, a.right)).num("psnr_holes", psnr(synth, a.right, holes));
+    j.num("time_ms", ms);
+    w.emit(j);
+    std::printf("peer       %-16s  PSNR %6.2f dB  SSIM %.4f  holes %6.2f dB  %10.1f ms\n", p.name,
+                psnr(synth, a.right), ssim(synth, a.right), psnr(synth, a.right, holes), ms);
+    std::fflush(stdout);
+  }
+}
 
 void measure_synthesis(Writer &w, const Aloe &a, int runs) {
   const std::vector<int> radii = {0, 2, 5, 10};  // 0: the GT depth as is
