@@ -153,8 +153,10 @@ def synthesis_section(rows):
     if sm0 and bg0 and base:
         notes.append(f"The warp with the true depth scores {fmt(sm0['psnr'])} dB / SSIM {fmt(sm0['ssim'], 3)} with "
                      f"fill=background-smooth, against {fmt(bg0['psnr'])} dB / {fmt(bg0['ssim'], 3)} with "
-                     f"background (the default: the smooth fill costs 0.105 ms per 4K frame on an H100 against fill=none, "
-                     f"0.085 ms more than background, against a 0.1 ms budget) ({sfmt(sm0['psnr'] - bg0['psnr'])} dB, {sfmt(sm0['ssim'] - bg0['ssim'], 4)} SSIM); "
+                     f"background ({sfmt(sm0['psnr'] - bg0['psnr'])} dB, {sfmt(sm0['ssim'] - bg0['ssim'], 4)} SSIM). "
+                     f"background-smooth is the default since 2026-11-23: on an H100 it costs 0.100 ms per 4K frame "
+                     f"over fill=none, 0.08 ms more than background ([benchmarks.md](benchmarks.md)). "
+                     f"It scores "
                      f"{fmt(sm0['psnr'] - base[0]['psnr'])} dB over the unwarped left view. On the pixels with a known "
                      f"correspondence it reaches {fmt(sm0['psnr_masked'])} dB; "
                      f"{fmt(100 * outside_share(sm0), 0)} % of the squared error lies in the other "
@@ -164,7 +166,7 @@ def synthesis_section(rows):
                      f"{fmt(bg0['psnr_holes'])} dB for background.")
     if sm0 and na0:
         notes.append(f"Neighbour averaging (the paper's inpainting) scores {fmt(na0['psnr'])} dB / "
-                     f"{fmt(na0['ssim'], 3)} at {fmt(na0['warp_ms'] / bg0['warp_ms'], 1)}x the default's warp time "
+                     f"{fmt(na0['ssim'], 3)} at {fmt(na0['warp_ms'] / bg0['warp_ms'], 1)}x background's warp time "
                      f"(iterations scale with the hole width); `none` shows the unfilled holes (magenta) for scale.")
     if sm0 and sm5:
         notes.append(f"Filtering the true depth does not help: radius 5 costs {fmt(sm0['psnr'] - sm5['psnr'])} dB "
@@ -411,7 +413,7 @@ def report(rows, md, png_rel, data_rel):
         "common/bilateral.h: a 1D cross-bilateral pass along rows, then along columns, each against the centre's "
         "guide: 2(2r+1) taps) and *stride2* (a study in tools/quality/: only taps with even dx, dy, a quarter of "
         "the window). Inputs: the estimator's depth of aloeL (what the element filters) and the GT depth (which "
-        "also goes through the warp, default fill).",
+        "also goes through the warp, fill=background-smooth).",
         "* **Depth estimation.** `DepthEstimatorCpu` + the default filter on aloeL; Spearman rank correlation "
         "(ties get their average rank) with aloeGT over a fixed random sample of 50,000 known-GT pixels "
         "(disparity grows with nearness, like depth), at full size and at half size (aloeL INTER_AREA-downscaled, "
@@ -432,6 +434,7 @@ def report(rows, md, png_rel, data_rel):
         "",
         *bounds_section(rows),
         "",
+        *hand_written(md, "peer-fills.md"),
         *hand_written(md, "external-depth.md"),
         "## Bilateral filter: exact vs faster variants",
         "",
