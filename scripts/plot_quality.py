@@ -378,6 +378,12 @@ def hand_written(md, name):
         return f.read().rstrip("\n").split("\n") + [""]
 
 
+def rerun_lines(rows):
+    """Run lines after the first: parts measured again (`parts` says which)
+    and merged into the data file in place of the first run's rows."""
+    return [r for r in rows if r.get("kind") == "run"][1:]
+
+
 def report(rows, md, png_rel, data_rel):
     run = next((r for r in rows if r.get("kind") == "run"), {})
     parts = [
@@ -387,6 +393,8 @@ def report(rows, md, png_rel, data_rel):
         f"{run.get('date', '?')}, commit `{run.get('git') or '?'}`, {run.get('cpu', '?')} with "
         f"{threads(run)}, OpenCV {run.get('opencv', '?')}. Raw data: "
         f"[{os.path.basename(data_rel)}]({data_rel}).",
+        *[f"Re-measured since: {r.get('parts', '?')} on {r.get('date', '?')}, commit `{r.get('git') or '?'}` "
+          f"(`{r.get('args', '')}`): its rows replace the first run's." for r in rerun_lines(rows)],
         "",
         f"![error against run time]({png_rel})",
         "",
