@@ -645,16 +645,16 @@ TEST(WarpFill, BackgroundSmoothMatchesTheSpecification) {
                                          textured(PixelFormat::RGBA, 97, 45, 44), steps);
 }
 
-// Pictures taller than the CPU's bands of rows (at least 64, at least 4R):
+// Pictures taller than the CPU's bands of rows (at least 32, at least 2R):
 // column runs of holes (the border band, tall depth steps) cross the band
 // boundaries, where a band starts its windows by looking up the run.
 TEST(WarpFill, BackgroundSmoothMatchesTheSpecificationAcrossRowBands) {
   const cv::Mat columns = make_depth(150, 300, [](int x, int y) { return ((x / 17 + y / 70) % 3) / 2.f; });
   expect_background_smooth_matches_naive(warp_params(15.f, 0.f, StereoView::Both, HoleFill::None),
-                                         textured(PixelFormat::BGRA, 150, 300, 45), columns);  // R = 6: bands of 64
+                                         textured(PixelFormat::BGRA, 150, 300, 45), columns);  // R = 6: bands of 32
   const cv::Mat tall = make_depth(240, 260, [](int x, int y) { return ((x / 50 + y / 90) % 2) ? 1.f : 0.2f; });
   expect_background_smooth_matches_naive(warp_params(25.f, 0.f, StereoView::Right, HoleFill::None),
-                                         textured(PixelFormat::RGBA, 240, 260, 46), tall);  // R = 31: bands of 124
+                                         textured(PixelFormat::RGBA, 240, 260, 46), tall);  // R = 31: bands of 62
 }
 
 TEST(WarpFill, BackgroundSmoothOfOneColourIsThatColour) {
