@@ -123,8 +123,8 @@ void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vec
 constexpr uint8_t kSmoothHole = 1, kSmoothAnchor = 2;
 struct EyeScratch {
   std::vector<uint8_t> mask;
-  std::vector<uint8_t> state;
-  std::vector<Rgba> anchor;
+  uint8_t *state = nullptr;  // in WarpCpuScratch
+  Rgba *anchor = nullptr;
 };
 
 // BackgroundSmooth, row part: the state and anchor of every pixel of row y,
@@ -155,8 +155,8 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, E
     if (clean[X]) near_clean = X;
   }
   const size_t base = static_cast<size_t>(y) * W;
-  uint8_t *state = &s.state[base];
-  Rgba *anchor = &s.anchor[base];
+  uint8_t *state = s.state + base;
+  Rgba *anchor = s.anchor + base;
   near_clean = -1;
   near_any = -1;
   for (int X = 0; X < W; ++X) {
@@ -227,8 +227,8 @@ struct ColumnWindow {
 void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, int Rx, int y0, int y1,
                  std::vector<ColumnWindow> &win, std::vector<SmoothSum> &V, std::vector<SmoothSum> &prefix) {
   const int W = j.width, H = j.height;
-  const uint8_t *state = es.state.data();
-  const Rgba *anchor = es.anchor.data();
+  const uint8_t *state = es.state;
+  const Rgba *anchor = es.anchor;
   auto at = [W](int y, int X) { return static_cast<size_t>(y) * W + X; };
   for (int y = y0; y < y1; ++y) {
     const uint8_t *row = state + at(y, 0);
@@ -334,28 +334,30 @@ void neighbour_average_fill(const WarpJob &j, const Eye &eye, std::vector<uint8_
 
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out) {
+  WarpCpuScratch scratch;
+  return warp_render_cpu(params, src, m, depth, out, scratch);
+}
+
+long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                          ImageView<const float> depth, const FrameView &out, WarpCpuScratch &planes) {
   if (!warp_frames_fit(src, depth, out)) return -1;
   WarpJob j{warp_sanitize(params), src, m, depth, out, 0.f, src.width, src.height};
   j.D = disparity_scale(j.params, j.width);
   const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
   const bool average = j.params.fill == HoleFill::NeighborAverage;
   const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
-  // BackgroundSmooth's planes (5 bytes a pixel and eye, 20 MB at 1080p) stay
-  // with the calling thread and serve its next frames: allocated per frame,
-  // their page faults cost more than the fill itself in a chain (1080p, two
-  // cores). Every state is written each frame and anchors are read only
-  // where a state names one, so nothing needs clearing; a thread keeps the
-  // planes of the largest frame it warped until it ends.
-  thread_local EyeScratch smooth_planes[2];
-  EyeScratch local[2];
-  EyeScratch *scratch = smooth ? smooth_planes : local;
+  // Every smooth state is written each frame and anchors are read only where
+  // a state names one, so reused planes need no clearing.
+  EyeScratch scratch[2];
   const size_t n = static_cast<size_t>(j.width) * j.height;
   for (int e = 0; e < 2; ++e) {
     if (eyes[e].shift == 0.f) continue;
     if (average) scratch[e].mask.resize(n);
     if (smooth) {
-      scratch[e].state.resize(n);
-      scratch[e].anchor.resize(n);
+      planes.smooth_state[e].resize(n);
+      planes.smooth_anchor[e].resize(n);
+      scratch[e].state = planes.smooth_state[e].data();
+      scratch[e].anchor = planes.smooth_anchor[e].data();
     }
   }
   long long holes[2] = {0, 0};

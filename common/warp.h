@@ -91,6 +91,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "frame.h"
 
@@ -398,5 +399,17 @@ inline bool warp_frames_fit(const FrameView &src, ImageView<const float> depth, 
 // written).
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out);
+
+// What the CPU warp keeps from one frame to the next: BackgroundSmooth's
+// per-pixel state and anchor planes (5 bytes a pixel and eye, 20 MB at
+// 1080p). Allocated per frame they cost page faults worth more than the
+// fill itself, so a caller that renders a stream keeps one and passes it
+// to every frame (one call at a time); the overload above uses a fresh one.
+struct WarpCpuScratch {
+  std::vector<uint8_t> smooth_state[2];
+  std::vector<Rgba> smooth_anchor[2];
+};
+long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                          ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch);
 
 }  // namespace p3d

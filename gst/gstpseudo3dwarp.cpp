@@ -35,6 +35,7 @@ GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_warp_debug);
 enum { PROP_0, PROP_MAX_DISPARITY, PROP_CONVERGENCE, PROP_VIEW, PROP_FILL };
 
 struct WarpState {
+  p3d::WarpCpuScratch cpu;  // the CPU path's planes, reused frame to frame (streaming thread only)
 #if HAVE_CUDA
   p3d::WarpRendererGpu gpu;
 #endif
@@ -100,7 +101,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
     });
   }
 #endif
-  const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), dst);
+  const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), dst, self->state->cpu);
   if (holes < 0) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));

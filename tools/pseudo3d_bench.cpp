@@ -395,8 +395,9 @@ struct CpuSizeBench {
     }
   }
 
-  static void warp(const StageParams &p, const FrameView &f, const cv::Mat &depth, const FrameView &out) {
-    if (warp_render_cpu(p.warp, f, p.yuv, depth_view_of(depth), out) < 0)
+  WarpCpuScratch warp_scratch;  // as pseudo3dwarp keeps it
+  void warp(const StageParams &p, const FrameView &f, const cv::Mat &depth, const FrameView &out) {
+    if (warp_render_cpu(p.warp, f, p.yuv, depth_view_of(depth), out, warp_scratch) < 0)
       throw std::runtime_error("warp_render_cpu: frames do not fit");
   }
 

@@ -645,6 +645,37 @@ TEST(WarpFill, BackgroundSmoothMatchesTheSpecification) {
                                          textured(PixelFormat::RGBA, 97, 45, 44), steps);
 }
 
+// A WarpCpuScratch carried from frame to frame (as pseudo3dwarp carries
+// it) gives every frame what a fresh one gives: planes left over from a
+// larger or a different frame, or from another fill, are never read as
+// this frame's.
+TEST(WarpFill, ReusedScratchGivesWhatAFreshOneGives) {
+  struct Frame {
+    int w, h;
+    HoleFill fill;
+    StereoView view;
+  };
+  const Frame frames[] = {{97, 61, HoleFill::BackgroundSmooth, StereoView::Both},
+                          {61, 37, HoleFill::BackgroundSmooth, StereoView::Right},  // smaller: stale planes beyond it
+                          {61, 37, HoleFill::Background, StereoView::Both},
+                          {80, 50, HoleFill::BackgroundSmooth, StereoView::Left},
+                          {80, 50, HoleFill::BackgroundSmooth, StereoView::Both}};
+  WarpCpuScratch kept;
+  uint32_t seed = 50;
+  for (const Frame &f : frames) {
+    SCOPED_TRACE(std::to_string(f.w) + "x" + std::to_string(f.h));
+    const HostFrame src = textured(PixelFormat::BGRA, f.w, f.h, seed++);
+    const cv::Mat depth = noise_depth(f.w, f.h, seed++, true);
+    const WarpParams p = warp_params(20.f, 0.3f, f.view, f.fill);
+    HostFrame with_kept(PixelFormat::BGRA, 2 * f.w, f.h), fresh(PixelFormat::BGRA, 2 * f.w, f.h);
+    const long long a = warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), with_kept.view(), kept);
+    const long long b = warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), fresh.view());
+    EXPECT_GT(a, 0);
+    EXPECT_EQ(a, b);
+    EXPECT_TRUE(same_bytes(with_kept, fresh));
+  }
+}
+
 // Pictures taller than the CPU's bands of rows (at least 32, at least 2R):
 // column runs of holes (the border band, tall depth steps) cross the band
 // boundaries, where a band starts its windows by looking up the run.

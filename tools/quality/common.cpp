@@ -219,7 +219,8 @@ bool load_aloe(const std::string &dir, double scale, Aloe &a, std::string &err) 
 long long render_right(const Aloe &a, const cv::Mat &depth, HoleFill fill, HostFrame &out) {
   WarpParams p = a.warp;
   p.fill = fill;
-  return warp_render_cpu(p, a.left_frame.view(), YuvToRgb(), depth_view_of(depth), out.view());
+  static WarpCpuScratch scratch;  // kept between renders, as pseudo3dwarp keeps it between frames
+  return warp_render_cpu(p, a.left_frame.view(), YuvToRgb(), depth_view_of(depth), out.view(), scratch);
 }
 
 cv::Mat right_half_bgr(const HostFrame &out) {
