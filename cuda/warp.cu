@@ -337,6 +337,7 @@ template <bool kNarrow>
 struct TileSums;
 template <>
 struct TileSums<false> {
+  static constexpr size_t kPixelBytes = sizeof(SmoothSum);
   SmoothSum *v;
   static __host__ __device__ size_t bytes(size_t n) { return align16(n * sizeof(SmoothSum)); }
   __device__ TileSums(unsigned char *smem, size_t) : v(reinterpret_cast<SmoothSum *>(smem)) {}
@@ -345,6 +346,7 @@ struct TileSums<false> {
 };
 template <>
 struct TileSums<true> {
+  static constexpr size_t kPixelBytes = sizeof(uint2) + sizeof(unsigned short);
   uint2 *rgba;
   unsigned short *n;
   static __host__ __device__ size_t bytes(size_t count) { return align16(count * sizeof(uint2)) + align16(count * 2); }
@@ -603,7 +605,7 @@ CudaStatus WarpRendererGpu::background_smooth(const FrameView &out, int W, int H
   const int Rmax = max(shift[0] == 0.f ? 0 : R0, shift[1] == 0.f ? 0 : R1), Rx = smooth_fill_radius_x(Rmax);
   const bool narrow = Rmax <= kSmoothNarrowRMax;
   // Tile rows: kSmoothTileRowsMax, fewer when V would pass 64 KB (wide Rx).
-  const size_t v_pixel = narrow ? sizeof(uint2) + sizeof(unsigned short) : sizeof(SmoothSum);
+  const size_t v_pixel = narrow ? TileSums<true>::kPixelBytes : TileSums<false>::kPixelBytes;
   const int S = max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * v_pixel))));
   size_t smem = smooth_tile_v_bytes(narrow, Rx, S);
   const bool staged = smem + smooth_tile_copy_bytes(Rmax, Rx, S) + 64 <= static_cast<size_t>(smem_optin_);

@@ -194,6 +194,21 @@ TEST_F(GpuWarp, BackgroundSmoothWideWindowsReadGlobalMemory) {
   }
 }
 
+// The sums kernel keeps V in 16 bits a channel up to R = 128, where a
+// column window holds 257 anchors (255 * 257 = 65535), and in 32 bits
+// above. A white picture at constant depth leaves border bands that are
+// holes in all 300 rows, so windows fill up with 255s: R = 128 reaches the
+// 16-bit limit exactly, R = 129 and 130 (V in 32 bits, still copied into
+// shared memory) would pass it.
+TEST_F(GpuWarp, BackgroundSmoothSumsAtTheNarrowLimit) {
+  for (const int W : {2032, 2048, 2064}) {  // 25 %, both views: R = 128, 129, 130
+    SCOPED_TRACE(W);
+    const HostFrame src = HostFrame::from_bgr(cv::Mat(300, W, CV_8UC3, cv::Scalar(255, 255, 255)), PixelFormat::RGBA);
+    const cv::Mat depth(300, W, CV_32FC1, cv::Scalar(1.f));
+    expect_same(warp_params(25.f, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth), src, depth);
+  }
+}
+
 // Zero disparity and out-of-range parameters / depth (NaN, +-inf, > 1).
 TEST_F(GpuWarp, ZeroDisparityAndInvalidValues) {
   HostFrame src(PixelFormat::BGRA, 64, 9);
