@@ -30,9 +30,10 @@ struct FrameView {
 };
 
 // 4-byte aligned, so that a whole pixel in shared memory or a host array
-// can move as one 32-bit word. (Global frame rows keep byte accesses: 32-bit
-// loads and stores there, behind an alignment check, measured slower on an
-// H100: 4K pack 0.056 -> 0.061 ms, warp 0.230 -> 0.236 ms.)
+// can move as one 32-bit word. Kernels that move whole words or 16-byte
+// vectors through global frame rows check the rows' alignment once per
+// launch (cuda/warp.cu, cuda/pack.cu) and keep these byte accesses for the
+// rest; a per-pixel alignment check measured slower than bytes.
 struct alignas(4) Rgba {
   uint8_t r, g, b, a;
 };

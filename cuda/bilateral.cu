@@ -172,7 +172,7 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
 // tile as bilateral_kernel (its 32 x 32 outputs with an apron of R), runs
 // the row pass for its 32 columns over every tile row into shared memory
 // (mid), then the column pass from mid: the intermediate plane never goes
-// through global memory, and each tap is a shared-memory load. Every
+// through global memory, and each tap reads shared memory or registers. Every
 // value is bilateral_pass_pixel()'s (the CPU reference's function, on the
 // same tables, taps in its order), so bit-identical; windows that need no
 // clipping take the same taps through a loop whose bounds are constants.
@@ -192,18 +192,22 @@ static_assert(SeparableGeometry<kMaxBilateralRadius>::kSharedBytes <= 48 * 1024,
 
 // Taps d = -R..R of one unclipped 1-D window, ascending, as bilateral_pass_pixel.
 // luma(d) / depth(d) read the tap d away from the centre.
+// space_1d holds the 1-D weights in registers (index d + R).
 template <int R, typename LumaFn, typename DepthFn>
-__device__ __forceinline__ float pass_unclipped(int centre, const float *space_1d, const float *range_sym,
+__device__ __forceinline__ float pass_unclipped(int centre, const float (&space_1d)[2 * R + 1], const float *range_sym,
                                                 const LumaFn &luma, const DepthFn &depth) {
   float sum_w = 0.f, sum_wd = 0.f;
   const float *range_c = range_sym + kRangeMid - centre;  // index by the tap's luma
 #pragma unroll
-  for (int d = -R; d <= R; ++d) bilateral_accumulate(space_1d[d], range_c[luma(d)], depth(d), sum_w, sum_wd);
+  for (int d = -R; d <= R; ++d) bilateral_accumulate(space_1d[d + R], range_c[luma(d)], depth(d), sum_w, sum_wd);
   return sum_wd / sum_w;
 }
 
+// At least 6 blocks an SM: at most 40 registers a thread, where the
+// compiler took 58 and so ran 4 blocks (4K filter 0.133 -> 0.120 ms on an
+// H100; a bound of 5 blocks gave 0.124).
 template <int R>
-__global__ void __launch_bounds__(kThreads) separable_kernel(FrameView guide, ImageView<const float> depth_in,
+__global__ void __launch_bounds__(kThreads, 6) separable_kernel(FrameView guide, ImageView<const float> depth_in,
                                                              ImageView<float> depth_out,
                                                              const float *__restrict__ tables) {
   using G = SeparableGeometry<R>;
@@ -213,13 +217,18 @@ __global__ void __launch_bounds__(kThreads) separable_kernel(FrameView guide, Im
   float *s_tables = mid + G::kMid;
   const float *s_range_sym = s_tables;
   const float *s_space = s_tables + kRangeSym;
-  const float *space_1d = s_space + R * G::kSide + R;  // space(d, 0), index by d
 
   const int w = depth_in.width, h = depth_in.height;
   const int bx = blockIdx.x * kBlockX, by = blockIdx.y * kOutY;  // the block's first output
   const int ox = bx - R, oy = by - R;                             // tile origin in the image
   stage_tile<G::kTileW, G::kTexels, G::kTables>(guide, depth_in, ox, oy, tables, tile, s_tables);
   const int tid = threadIdx.y * kBlockX + threadIdx.x;
+  // The 1-D space weights space(d, 0) in registers: the unclipped taps
+  // index them by compile-time constants instead of loading them from
+  // shared memory, whose bandwidth bounds this kernel.
+  float space_1d[G::kSide];
+#pragma unroll
+  for (int d = 0; d < G::kSide; ++d) space_1d[d] = s_space[R * G::kSide + d];
 
   auto at = [=](int qx, int qy) { return tile[(qy - oy) * G::kTileW + (qx - ox)]; };
   auto guide_at = [=](int qx, int qy) { return at(qx, qy).luma; };
@@ -245,19 +254,33 @@ __global__ void __launch_bounds__(kThreads) separable_kernel(FrameView guide, Im
   // Column pass: the thread's kRowsPerThread outputs down its column.
   const int x = bx + threadIdx.x;
   if (x >= w) return;
+  const int ly0 = threadIdx.y * kRowsPerThread;  // the thread's first output row in the block
+  if (cols_unclipped) {
+    // Its windows cover kRowsPerThread + 2R tile rows, which it loads once
+    // into registers (luma and the row pass's value) for all its outputs,
+    // instead of 2R + 1 loads of each per output.
+    constexpr int kRun = kRowsPerThread + 2 * R;
+    const Texel *c = tile + ly0 * G::kTileW + R + threadIdx.x;  // tap -R of output 0
+    const float *m = mid + ly0 * kBlockX + threadIdx.x;
+    int luma[kRun];
+    float value[kRun];
+#pragma unroll
+    for (int t = 0; t < kRun; ++t) {
+      luma[t] = c[t * G::kTileW].luma;
+      value[t] = m[t * kBlockX];
+    }
+#pragma unroll
+    for (int j = 0; j < kRowsPerThread; ++j)
+      depth_out.row(by + ly0 + j)[x] =
+          pass_unclipped<R>(luma[j + R], space_1d, s_range_sym, [&](int d) { return luma[j + R + d]; },
+                            [&](int d) { return value[j + R + d]; });
+    return;
+  }
   auto mid_at = [=](int qx, int qy) { return mid[(qy - oy) * kBlockX + (qx - bx)]; };
   for (int j = 0; j < kRowsPerThread; ++j) {
-    const int ly = threadIdx.y * kRowsPerThread + j, y = by + ly;
+    const int y = by + ly0 + j;
     if (y >= h) return;
-    if (cols_unclipped) {
-      const Texel *c = tile + (ly + R) * G::kTileW + R + threadIdx.x;
-      const float *m = mid + (ly + R) * kBlockX + threadIdx.x;
-      depth_out.row(y)[x] = pass_unclipped<R>(c->luma, space_1d, s_range_sym,
-                                              [c](int d) { return c[d * G::kTileW].luma; },
-                                              [m](int d) { return m[d * kBlockX]; });
-    } else {
-      depth_out.row(y)[x] = bilateral_pass_pixel(x, y, 0, 1, h, R, s_space, range, guide_at, mid_at);
-    }
+    depth_out.row(y)[x] = bilateral_pass_pixel(x, y, 0, 1, h, R, s_space, range, guide_at, mid_at);
   }
 }
 

@@ -21,49 +21,65 @@ unsigned grid_for(long long items, int per_block) { return static_cast<unsigned>
 
 // ---------------------------------------------------------------- step 1 ---
 // A CTA covers `per_cta` blocks side by side (per_cta * B <= 256 pixel
-// columns, one thread a column) and `rows_per_cta` block rows. Each thread sums
-// its column over a block row in integers; the first per_cta threads then add
-// their block's B columns, so every block sum is formed by one thread, exactly.
-__global__ void block_features_kernel(FrameView frame, int B, int per_cta, int rows_per_cta, int bx, int by,
-                                      float *__restrict__ features, const float *__restrict__ ref, bool have_state,
-                                      DepthDeviceState *state) {
-  __shared__ uint32_t col[3][kThreads];
+// columns, one thread a column) and `rows_per_cta` block rows (16 pixel
+// rows when B <= 16). First every thread sums its column over each of the
+// CTA's block rows in integers, all of its loads independent of each other
+// so that they are in flight together (one loop per block row, each waiting
+// for its loads, took 37 us at 4K instead of about 10); then one thread per
+// block adds the block's B column sums, so every block sum is formed by one
+// thread, exactly. kB > 0: B is kB, known at compile time (the automatic
+// sizes); 0: any B.
+constexpr int kFeatureRowsMax = 8;  // block rows a CTA holds: 16 / B for B >= 2
+template <int kB>
+__global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView frame, int B_arg, int bx, int by,
+                                                                  float *__restrict__ features,
+                                                                  const float *__restrict__ ref, bool have_state,
+                                                                  DepthDeviceState *state) {
+  constexpr int kRows = kB > 0 ? (kB >= 16 ? 1 : 16 / kB) : kFeatureRowsMax;
+  __shared__ uint32_t col[kRows][3][kThreads];
   __shared__ unsigned long long warp_diff[kThreads / 32];
+  const int B = kB > 0 ? kB : B_arg;
+  const int per_cta = kThreads / B, rows_per_cta = B >= 16 ? 1 : 16 / B;
   const int t = threadIdx.x;
   const int x = blockIdx.x * per_cta * B + t;
   const bool column_in = t < per_cta * B && x < frame.width;
-  const int i = blockIdx.x * per_cta + t;  // the block this thread finishes (t < per_cta)
-  unsigned long long diff = 0;
-  for (int r = 0; r < rows_per_cta; ++r) {
-    const int j = blockIdx.y * rows_per_cta + r;
-    if (j >= by) break;  // uniform over the CTA
-    const int rows = block_extent(j, B, frame.height);
+  const int j0 = blockIdx.y * rows_per_cta;
+#pragma unroll
+  for (int r = 0; r < kRows; ++r) {
+    if (r >= rows_per_cta) break;  // kB > 0: never
+    const int y0 = (j0 + r) * B;
     uint32_t s0 = 0, s1 = 0, s2 = 0;
-    if (column_in)
-      for (int y = j * B; y < j * B + rows; ++y) {
+    if (column_in) {
+#pragma unroll 4
+      for (int dy = 0; dy < B; ++dy) {
+        if (y0 + dy >= frame.height) continue;  // the last block row may be partial, or past the frame
         int c[3];
-        load_native3(frame, x, y, c);
+        load_native3(frame, x, y0 + dy, c);
         s0 += c[0];
         s1 += c[1];
         s2 += c[2];
       }
-    col[0][t] = s0;
-    col[1][t] = s1;
-    col[2][t] = s2;
-    __syncthreads();
-    if (t < per_cta && i < bx) {
-      const int cols = block_extent(i, B, frame.width);
-      uint32_t sum[3] = {0, 0, 0};
-      for (int k = t * B; k < t * B + cols; ++k)
-        for (int c = 0; c < 3; ++c) sum[c] += col[c][k];
-      const size_t base = (static_cast<size_t>(j) * bx + i) * 3;
-      for (int c = 0; c < 3; ++c) {
-        const float f = block_mean(sum[c], cols * rows);
-        features[base + c] = f;
-        if (have_state) diff += temporal_diff_fixed(f, ref[base + c]);
-      }
     }
-    __syncthreads();
+    col[r][0][t] = s0;
+    col[r][1][t] = s1;
+    col[r][2][t] = s2;
+  }
+  __syncthreads();
+  unsigned long long diff = 0;
+  for (int item = t; item < per_cta * rows_per_cta; item += kThreads) {
+    const int r = item / per_cta, b = item - r * per_cta;
+    const int i = blockIdx.x * per_cta + b, j = j0 + r;
+    if (i >= bx || j >= by) continue;
+    const int cols = block_extent(i, B, frame.width), rows = block_extent(j, B, frame.height);
+    uint32_t sum[3] = {0, 0, 0};
+    for (int k = b * B; k < b * B + cols; ++k)
+      for (int c = 0; c < 3; ++c) sum[c] += col[r][c][k];
+    const size_t base = (static_cast<size_t>(j) * bx + i) * 3;
+    for (int c = 0; c < 3; ++c) {
+      const float f = block_mean(sum[c], cols * rows);
+      features[base + c] = f;
+      if (have_state) diff += temporal_diff_fixed(f, ref[base + c]);
+    }
   }
   if (!have_state) return;  // uniform: a kernel parameter
   for (int o = 16; o > 0; o >>= 1) diff += __shfl_down_sync(kFullMask, diff, o);
@@ -141,18 +157,25 @@ __device__ TemporalDecision device_decision(const DepthDeviceState *state, const
 // smoothed feature (step 2) is updated here, by the one thread that loads
 // it, and left in `smoothed` for the border pass. Also clears the region
 // sums, counts and maxima that the resolve pass accumulates into.
+// A warp works one tile row at a time, so the horizontal joins come from a
+// ballot: every block points straight at the first block of its row run
+// (no atomics; that is a valid forest, each run's root its smallest
+// index), and only the vertical joins go through unite(), skipping those
+// that the join to the left already made (both blocks joined to their left
+// neighbours, which are joined vertically). Large regions, whose every
+// block used to unite twice, now cost about one unite per run and row.
 __global__ void tile_labels_kernel(const float *__restrict__ features, float *__restrict__ smoothed, int bx, int by,
                                    DepthParams params, bool have_state, const DepthDeviceState *state, int *labels,
                                    unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
   __shared__ int parent[kTile * kTile];
   __shared__ float feat[kTile * kTile][3];
+  __shared__ unsigned left_bits[kTile], up_bits[kTile];  // per tile row: bit lx set when joined to the left / above
   const int lx = threadIdx.x, x0 = blockIdx.x * kTile, y0 = blockIdx.y * kTile;
   const int gx = x0 + lx;
   const float edge_threshold = params.edge_threshold;
   const bool cut = device_decision(state, params, have_state, bx * by) == TemporalDecision::Cut;
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
     const int l = ly * kTile + lx, gy = y0 + ly;
-    parent[l] = l;
     if (gx < bx && gy < by) {
       const int g = gy * bx + gx;
       float f[3];
@@ -163,11 +186,31 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
     }
   }
   __syncthreads();
+  // Row runs: lane lx's run starts at the highest lane <= lx not joined to
+  // its left (lane 0 never is).
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
     const int l = ly * kTile + lx, gy = y0 + ly;
-    if (gx >= bx || gy >= by) continue;
-    if (lx > 0 && blocks_joined(feat[l], feat[l - 1], edge_threshold)) unite(parent, l, l - 1);
-    if (ly > 0 && blocks_joined(feat[l], feat[l - kTile], edge_threshold)) unite(parent, l, l - kTile);
+    const bool in = gx < bx && gy < by;
+    const bool left = in && lx > 0 && blocks_joined(feat[l], feat[l - 1], edge_threshold);
+    const bool up = in && ly > 0 && blocks_joined(feat[l], feat[l - kTile], edge_threshold);
+    const unsigned lb = __ballot_sync(kFullMask, left), ub = __ballot_sync(kFullMask, up);
+    if (lx == 0) {
+      left_bits[ly] = lb;
+      up_bits[ly] = ub;
+    }
+    const unsigned starts = ~lb & (lx == 31 ? kFullMask : (2u << lx) - 1u);
+    parent[l] = ly * kTile + 31 - __clz(starts);
+  }
+  __syncthreads();
+  for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
+    if (ly == 0) continue;
+    const unsigned lb = left_bits[ly], lb_above = left_bits[ly - 1], ub = up_bits[ly];
+    if (!((ub >> lx) & 1u)) continue;
+    // Already linked when this block and the one above both continue the
+    // runs of their left neighbours, and those two are joined.
+    const bool made = lx > 0 && ((lb >> lx) & 1u) && ((lb_above >> lx) & 1u) && ((ub >> (lx - 1)) & 1u);
+    const int l = ly * kTile + lx;
+    if (!made) unite(parent, l, l - kTile);
   }
   __syncthreads();
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
@@ -366,8 +409,12 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   // Step 1 (+ the difference sum of step 5). ~16 pixel rows a CTA, so that
   // small blocks do not make one atomic per handful of pixels.
   const int per_cta = kThreads / B, rows_per_cta = B >= 16 ? 1 : 16 / B;
-  block_features_kernel<<<dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0, stream>>>(
-      frame, B, per_cta, rows_per_cta, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid, state);
+  auto features_kernel = B == 2 ? block_features_kernel<2>
+                         : B == 4 ? block_features_kernel<4>
+                         : B == 8 ? block_features_kernel<8>
+                                  : block_features_kernel<0>;
+  features_kernel<<<dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0, stream>>>(
+      frame, B, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid, state);
   P3D_CUDA_TRY_LAUNCH(block_features_kernel);
 
   // Step 2.

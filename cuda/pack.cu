@@ -53,6 +53,37 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
 }
 
+// The default case, an anaglyph of a side-by-side pair into packed RGB, with
+// kVec pixels a thread: each eye's kVec input pixels come in one 16-byte
+// load (the launcher checks that the rows are 16-byte aligned and the view
+// width is a multiple of kVec, so no thread has a ragged end), then
+// pack_pixel_for's own anaglyph() per pixel, read from the registers by
+// pixel_at() as from the frame.
+__global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
+  const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
+  const int y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x0 >= kp.out.width || y >= kp.out.height) return;
+  const int w = kp.in.width / 2;
+  const int first_left = (kp.p.swap_eyes ? 1 : 0) ^ (kp.p.input_right_first ? 1 : 0);  // view_pixel's slot of eye 0
+  const uint8_t *row = kp.in.plane[0] + static_cast<size_t>(y) * kp.in.stride[0];
+  uint4 eye[2];
+  eye[0] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + first_left * w));
+  eye[1] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + (first_left ^ 1) * w));
+  FrameView view[2] = {kp.in, kp.in};
+  for (int e = 0; e < 2; ++e) {
+    view[e].plane[0] = reinterpret_cast<uint8_t *>(&eye[e]);
+    view[e].stride[0] = 4 * kVec;
+  }
+  uint4 packed;
+  FrameView reg = kp.out;
+  reg.plane[0] = reinterpret_cast<uint8_t *>(&packed);
+  reg.stride[0] = 4 * kVec;
+#pragma unroll
+  for (int i = 0; i < kVec; ++i)
+    store_rgba(reg, i, 0, pack_detail::anaglyph(kp.am, pack_detail::pixel_at(view[0], i, 0), pack_detail::pixel_at(view[1], i, 0)));
+  *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
+}
+
 // 4:2:0 output: one thread per 2x2 block (its four pixels, one chroma pair).
 template <StereoInput I>
 __global__ void pack_kernel_yuv(const PackKernelParams kp) {
@@ -73,10 +104,20 @@ bool use_vector_stores(const PackParams &p, const FrameView &out) {
   return p.layout != PackLayout::SideBySideHalf && is_packed_rgb(out.format) && rows_16byte_aligned(out);
 }
 
+// pack_anaglyph_pair_vec's conditions (besides the side-by-side input).
+bool anaglyph_pair_vec(const PackParams &p, const FrameView &in, const FrameView &out) {
+  return p.layout == PackLayout::Anaglyph && is_packed_rgb(out.format) && (in.width / 2) % kVec == 0 &&
+         rows_16byte_aligned(in) && rows_16byte_aligned(out);
+}
+
 template <StereoInput I>
 CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t stream) {
   const dim3 block(kBlockX, kBlockY);
-  if (!is_packed_rgb(kp.out.format)) {
+  if (I == StereoInput::SideBySide && anaglyph_pair_vec(kp.p, kp.in, kp.out)) {
+    const dim3 grid((kp.out.width / kVec + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
+    pack_anaglyph_pair_vec<<<grid, block, 0, stream>>>(kp);
+    P3D_CUDA_TRY_LAUNCH(pack_anaglyph_pair_vec);
+  } else if (!is_packed_rgb(kp.out.format)) {
     const int bw = (kp.out.width + 1) / 2, bh = (kp.out.height + 1) / 2;
     const dim3 grid((bw + kBlockX - 1) / kBlockX, (bh + kBlockY - 1) / kBlockY);
     pack_kernel_yuv<I><<<grid, block, 0, stream>>>(kp);

@@ -3,6 +3,11 @@
 // kernels that ignore pitch are caught.
 #pragma once
 
+#include <cstring>
+#include <vector>
+
+#include <cuda_runtime_api.h>
+#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
 #include "device_buffer.h"
@@ -40,5 +45,63 @@ class DeviceDepth {
 
 // Asserts inside: fails the current test on a CUDA error.
 void check_cuda(const CudaStatus &st);
+
+// An output frame of a packed RGB format in device memory with a chosen
+// stride and start offset, so that the kernels' aligned paths (word and
+// 16-byte stores) and their per-pixel paths (unaligned rows) both run, and
+// with a guard band after the last row. Every byte of the allocation starts
+// as `poison`.
+class DeviceOutput {
+ public:
+  DeviceOutput(PixelFormat f, int w, int h, size_t stride, size_t offset, uint8_t poison) : poison_(poison) {
+    bytes_ = offset + stride * static_cast<size_t>(h) + kGuard;
+    check_cuda(buf_.ensure(bytes_));
+    EXPECT_EQ(cudaSuccess, cudaMemset(buf_.get(), poison, bytes_));
+    view_.format = f;
+    view_.width = w;
+    view_.height = h;
+    view_.plane[0] = buf_.as<uint8_t>() + offset;
+    view_.stride[0] = static_cast<int>(stride);
+    offset_ = offset;
+  }
+  // Row-aligned like a pooled CUDA buffer: 512-byte pitch, aligned start.
+  static DeviceOutput aligned(PixelFormat f, int w, int h, uint8_t poison) {
+    const size_t stride = (4 * static_cast<size_t>(w) + 64 + 511) / 512 * 512;
+    return DeviceOutput(f, w, h, stride, 0, poison);
+  }
+  FrameView view() const { return view_; }
+
+  // The pixels as a host frame, and the number of bytes outside them
+  // (before the first row, row padding, guard band) that lost the poison.
+  struct Result {
+    HostFrame frame;
+    long long writes_outside = 0;
+  };
+  Result download() const {
+    std::vector<uint8_t> all(bytes_);
+    EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
+    EXPECT_EQ(cudaSuccess, cudaMemcpy(all.data(), buf_.get(), bytes_, cudaMemcpyDeviceToHost));
+    Result r{HostFrame(view_.format, view_.width, view_.height, 4)};
+    const FrameView hv = r.frame.view();
+    const size_t row_bytes = 4 * static_cast<size_t>(view_.width), stride = view_.stride[0];
+    auto count_changed = [&](size_t from, size_t to) {
+      for (size_t i = from; i < to; ++i) r.writes_outside += all[i] != poison_;
+    };
+    count_changed(0, offset_);
+    for (int y = 0; y < view_.height; ++y) {
+      const size_t row = offset_ + static_cast<size_t>(y) * stride;
+      std::memcpy(hv.plane[0] + static_cast<size_t>(y) * hv.stride[0], all.data() + row, row_bytes);
+      count_changed(row + row_bytes, y + 1 < view_.height ? row + stride : bytes_);
+    }
+    return r;
+  }
+
+ private:
+  static constexpr size_t kGuard = 256;
+  DeviceBuffer buf_;
+  FrameView view_;
+  size_t bytes_ = 0, offset_ = 0;
+  uint8_t poison_;
+};
 
 }  // namespace p3d::test

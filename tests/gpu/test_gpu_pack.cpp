@@ -59,63 +59,6 @@ std::string describe(const PackParams &p, PixelFormat f, int view_w, int view_h)
 
 uint32_t fresh_seed() { return std::random_device{}(); }
 
-// An output frame in device memory with a chosen stride and start offset, so
-// both the 16-byte-store path (aligned rows) and the per-pixel path
-// (unaligned rows) run, and with a guard band after the last row. Every byte
-// of the allocation starts as `poison`.
-class DeviceOutput {
- public:
-  DeviceOutput(PixelFormat f, int w, int h, size_t stride, size_t offset, uint8_t poison) : poison_(poison) {
-    bytes_ = offset + stride * static_cast<size_t>(h) + kGuard;
-    test::check_cuda(buf_.ensure(bytes_));
-    EXPECT_EQ(cudaSuccess, cudaMemset(buf_.get(), poison, bytes_));
-    view_.format = f;
-    view_.width = w;
-    view_.height = h;
-    view_.plane[0] = buf_.as<uint8_t>() + offset;
-    view_.stride[0] = static_cast<int>(stride);
-    offset_ = offset;
-  }
-  // Row-aligned like a pooled CUDA buffer: 512-byte pitch, aligned start.
-  static DeviceOutput aligned(PixelFormat f, int w, int h, uint8_t poison) {
-    const size_t stride = (4 * static_cast<size_t>(w) + 64 + 511) / 512 * 512;
-    return DeviceOutput(f, w, h, stride, 0, poison);
-  }
-  FrameView view() const { return view_; }
-
-  // The pixels as a host frame, and the number of bytes outside them
-  // (before the first row, row padding, guard band) that lost the poison.
-  struct Result {
-    HostFrame frame;
-    long long writes_outside = 0;
-  };
-  Result download() const {
-    std::vector<uint8_t> all(bytes_);
-    EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
-    EXPECT_EQ(cudaSuccess, cudaMemcpy(all.data(), buf_.get(), bytes_, cudaMemcpyDeviceToHost));
-    Result r{HostFrame(view_.format, view_.width, view_.height, 4)};
-    const FrameView hv = r.frame.view();
-    const size_t row_bytes = 4 * static_cast<size_t>(view_.width), stride = view_.stride[0];
-    auto count_changed = [&](size_t from, size_t to) {
-      for (size_t i = from; i < to; ++i) r.writes_outside += all[i] != poison_;
-    };
-    count_changed(0, offset_);
-    for (int y = 0; y < view_.height; ++y) {
-      const size_t row = offset_ + static_cast<size_t>(y) * stride;
-      std::memcpy(hv.plane[0] + static_cast<size_t>(y) * hv.stride[0], all.data() + row, row_bytes);
-      count_changed(row + row_bytes, y + 1 < view_.height ? row + stride : bytes_);
-    }
-    return r;
-  }
-
- private:
-  static constexpr size_t kGuard = 256;
-  DeviceBuffer buf_;
-  FrameView view_;
-  size_t bytes_ = 0, offset_ = 0;
-  uint8_t poison_;
-};
-
 // Output size for `in` holding the pair as p.input says.
 void out_size(const PackParams &p, const HostFrame &in, int *w, int *h) {
   int vw = 0, vh = 0;
@@ -163,11 +106,11 @@ class GpuPack : public ::testing::Test {
 
   // GPU result of `in` (already on the device as `din`) into `out`, compared
   // byte for byte with the CPU; no write may land outside the pixels.
-  void expect_exact(const PackParams &p, const HostFrame &in, const test::DeviceFrame &din, DeviceOutput &out,
+  void expect_exact(const PackParams &p, const HostFrame &in, const test::DeviceFrame &din, test::DeviceOutput &out,
                     const std::string &what) {
     test::check_cuda(pack_gpu(p, din.view(), out.view(), stream_));
     ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_)) << what;
-    const DeviceOutput::Result got = out.download();
+    const test::DeviceOutput::Result got = out.download();
     std::string where;
     EXPECT_EQ(raw_diff(got.frame, cpu_pack(p, in), &where), 0) << what << ": " << where;
     EXPECT_EQ(got.writes_outside, 0) << what;
@@ -179,7 +122,7 @@ class GpuPack : public ::testing::Test {
     for (const PackParams &p : params) {
       int w = 0, h = 0;
       out_size(p, in, &w, &h);
-      DeviceOutput out = DeviceOutput::aligned(in.format(), w, h, 0xA5);
+      test::DeviceOutput out = test::DeviceOutput::aligned(in.format(), w, h, 0xA5);
       expect_exact(p, in, din, out, what + " " + describe(p, in.format(), in.width() / 2, in.height()));
       if (HasFailure()) return;  // one precise report beats hundreds of copies
     }
@@ -262,7 +205,7 @@ TEST_F(GpuPack, UnalignedOutputRows) {
         const size_t tight = 4 * static_cast<size_t>(w);
         const size_t layouts[][2] = {{tight, 4}, {tight + 4, 0}, {tight + 12, 8}};
         for (const auto &l : layouts) {
-          DeviceOutput out(f, w, h, l[0], l[1], 0x5A);
+          test::DeviceOutput out(f, w, h, l[0], l[1], 0x5A);
           expect_exact(p, in, din, out,
                        describe(p, f, s[0], s[1]) + " stride " + std::to_string(l[0]) + " offset " +
                            std::to_string(l[1]));
@@ -285,7 +228,7 @@ TEST_F(GpuPack, PoisonedOutputsAreFullyWritten) {
       for (uint8_t poison : {uint8_t(0x00), uint8_t(0xFF)}) {
         int w = 0, h = 0;
         pack_size(p.layout, 129, 45, &w, &h);
-        DeviceOutput out = DeviceOutput::aligned(f, w, h, poison);
+        test::DeviceOutput out = test::DeviceOutput::aligned(f, w, h, poison);
         expect_exact(p, in, din, out, describe(p, f, 129, 45) + " poison " + std::to_string(poison));
         if (HasFailure()) return;
       }
@@ -438,9 +381,9 @@ TEST_F(GpuPack, RejectsMismatchedFramesWithoutWriting) {
   const test::DeviceFrame din = test::DeviceFrame::upload(in);
   PackParams p;
   p.layout = PackLayout::SideBySideHalf;
-  DeviceOutput wrong_size = DeviceOutput::aligned(PixelFormat::RGBA, 16, 4, 0x33);
+  test::DeviceOutput wrong_size = test::DeviceOutput::aligned(PixelFormat::RGBA, 16, 4, 0x33);
   EXPECT_EQ(pack_gpu(p, din.view(), wrong_size.view(), stream_).code, cudaErrorInvalidValue);
-  DeviceOutput wrong_format = DeviceOutput::aligned(PixelFormat::BGRA, 8, 4, 0x33);
+  test::DeviceOutput wrong_format = test::DeviceOutput::aligned(PixelFormat::BGRA, 8, 4, 0x33);
   EXPECT_EQ(pack_gpu(p, din.view(), wrong_format.view(), stream_).code, cudaErrorInvalidValue);
   ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
   EXPECT_EQ(wrong_size.download().frame.to_bgra().at<cv::Vec4b>(0, 0), cv::Vec4b(0x33, 0x33, 0x33, 0x33));

@@ -169,6 +169,41 @@ TEST_F(GpuWarp, OddSizes) {
   }
 }
 
+// The row kernel stores whole 32-bit pixels where the output rows are
+// 4-byte aligned and byte by byte where they are not (a start or a stride
+// off by 1, 2 or 3 bytes); both give the CPU's pixels and write nothing
+// outside the frame (row padding, guard band).
+TEST_F(GpuWarp, UnalignedOutputRows) {
+  std::mt19937 rng(fresh_seed());
+  const int w = 45, h = 9;
+  HostFrame src(PixelFormat::NV12, w, h);
+  src.fill_random(rng());
+  const cv::Mat depth = random_depth(w, h, DepthKind::Binary, rng());
+  const test::DeviceFrame dsrc = test::DeviceFrame::upload(src);
+  const test::DeviceDepth ddepth = test::DeviceDepth::upload(depth);
+  const size_t tight = 4 * static_cast<size_t>(2 * w);
+  const size_t layouts[][2] = {{tight, 0}, {tight + 4, 4}, {tight, 1}, {tight + 1, 0}, {tight + 6, 3}};
+  for (PixelFormat f : {PixelFormat::RGBA, PixelFormat::BGRx})
+    for (HoleFill fill : kAllFills)
+      for (const auto &l : layouts) {
+        const WarpParams p = warp_params(20.f, 0.5f, StereoView::Both, fill);
+        SCOPED_TRACE(describe(p, src.format(), f, w, h) + " stride " + std::to_string(l[0]) + " offset " +
+                     std::to_string(l[1]));
+        HostFrame cpu(f, 2 * w, h);
+        const long long cpu_holes = warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), cpu.view());
+        ASSERT_GT(cpu_holes, 0);
+        test::DeviceOutput out(f, 2 * w, h, l[0], l[1], 0x5A);
+        long long gpu_holes = -7;
+        test::check_cuda(renderer_.render(p, dsrc.view(), YuvToRgb(), as_const(ddepth.view()), out.view(), stream_,
+                                          &gpu_holes));
+        ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
+        EXPECT_EQ(gpu_holes, cpu_holes);
+        const test::DeviceOutput::Result got = out.download();
+        EXPECT_EQ(first_difference(cpu, got.frame), "");
+        EXPECT_EQ(got.writes_outside, 0);
+      }
+}
+
 // Rows too wide for a z-buffer in shared memory (about 28000 pixels on
 // Hopper) take the global-memory z-buffer; both must agree with the CPU.
 TEST_F(GpuWarp, VeryWideRowsUseGlobalKeys) {
