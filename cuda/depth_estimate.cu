@@ -226,28 +226,45 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
 }
 
 // Border pass: one thread per 4-neighbour pair that crosses a tile border
-// (first the vertical borders, row-major, then the horizontal ones).
+// (first the vertical borders, row-major, then the horizontal ones). A
+// joined pair skips its unite when the pair before it on the same border
+// is joined and each of its blocks is joined to its neighbour there inside
+// one tile (the tile pass linked those): the four blocks are connected
+// already, by induction along the border from its first joined pair, which
+// always unites. Large regions cross a border with one unite instead of
+// one per block of the border (each a chain of global atomics).
 __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx, int by, float edge_threshold,
                                      int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
   const long long e = static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (e >= pairs) return;
-  int a, b;
+  int a, b, step;  // step: from a pair's blocks to those of the pair before it on the border (0: none in the tile)
   if (e < vertical_pairs) {
     const int gy = static_cast<int>(e / (tiles_x - 1));
     const int gx = static_cast<int>(e % (tiles_x - 1) + 1) * kTile;
     b = gy * bx + gx;
     a = b - 1;
+    step = gy % kTile ? bx : 0;
   } else {
     const long long h = e - vertical_pairs;
     const int gy = static_cast<int>(h / bx + 1) * kTile;
     const int gx = static_cast<int>(h % bx);
     b = gy * bx + gx;
     a = b - bx;
+    step = gx % kTile ? 1 : 0;
   }
   float fa[3], fb[3];
   load_feature(smoothed, a, fa);
   load_feature(smoothed, b, fb);
-  if (blocks_joined(fa, fb, edge_threshold)) unite(labels, a, b);
+  if (!blocks_joined(fa, fb, edge_threshold)) return;
+  if (step) {
+    float pa[3], pb[3];
+    load_feature(smoothed, a - step, pa);
+    load_feature(smoothed, b - step, pb);
+    if (blocks_joined(pa, pb, edge_threshold) && blocks_joined(fa, pa, edge_threshold) &&
+        blocks_joined(fb, pb, edge_threshold))
+      return;
+  }
+  unite(labels, a, b);
 }
 
 // ------------------------------------------------------------- steps 3-4 ---
