@@ -143,6 +143,28 @@ TEST_F(GpuPack, EveryParamsEveryFormatRandom) {
 
 // Every input arrangement, either eye first, into every layout (and the
 // linear-light anaglyph, whose tables travel with the launch).
+// The anaglyph of a side-by-side pair whose view width is a multiple of 4
+// takes the kernel with 16-byte loads: every glasses x method x swap x
+// eye order in every packed format, at widths that take it (68, 4) and
+// one that does not (70).
+TEST_F(GpuPack, AnaglyphPairSixteenByteLoads) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::vector<PackParams> anaglyphs;
+  for (PackParams p : every_params())
+    if (p.layout == PackLayout::Anaglyph)
+      for (bool rf : {false, true}) {
+        p.input_right_first = rf;
+        anaglyphs.push_back(p);
+      }
+  for (int w : {68, 4, 70})
+    for (PixelFormat f : kPackedFormats) {
+      HostFrame in(f, 2 * w, 9, 8);
+      in.fill_random(seed + w);
+      expect_exact_all(in, anaglyphs, "anaglyph pair");
+    }
+}
+
 TEST_F(GpuPack, EveryInputArrangement) {
   const uint32_t seed = fresh_seed();
   SCOPED_TRACE("seed " + std::to_string(seed));
