@@ -12,6 +12,7 @@
 // outer, dx inner) through bilateral_accumulate() on the same host-made
 // weights, so the result is bit-identical to the CPU's.
 #include "bilateral_gpu.h"
+#include "launch_bounds.cuh"
 
 #include <array>
 #include <cstdint>
@@ -203,13 +204,14 @@ __device__ __forceinline__ float pass_unclipped(int centre, const float (&space_
   return sum_wd / sum_w;
 }
 
-// At least 6 blocks an SM: at most 40 registers a thread, where the
-// compiler took 58 and so ran 4 blocks (4K filter 0.133 -> 0.120 ms on an
-// H100; a bound of 5 blocks gave 0.124).
+// As many blocks as an SM holds threads for (6 from sm_80 up, 4 on sm_75;
+// cuda/launch_bounds.cuh): at most 40 registers a thread, where the
+// compiler took 58 and so ran 4 blocks on an H100 (4K filter 0.133 -> 0.120
+// ms; a bound of 5 blocks gave 0.124).
 template <int R>
-__global__ void __launch_bounds__(kThreads, 6) separable_kernel(FrameView guide, ImageView<const float> depth_in,
-                                                             ImageView<float> depth_out,
-                                                             const float *__restrict__ tables) {
+__global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
+    separable_kernel(FrameView guide, ImageView<const float> depth_in, ImageView<float> depth_out,
+                     const float *__restrict__ tables) {
   using G = SeparableGeometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
   Texel *tile = reinterpret_cast<Texel *>(smem);

@@ -11,6 +11,8 @@
 
 #include <utility>
 
+#include "launch_bounds.cuh"
+
 namespace p3d {
 namespace {
 
@@ -280,19 +282,14 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
 // shared-memory carveout. The kernel is instruction bound (ncu: SM 61 %,
 // DRAM 9 %), and the third row per SM took the 4K warp from 0.286 to
 // 0.230 ms on an H100 (8K, whose rows need 92 KB, is unchanged).
-// Turing (sm_75) holds 1024 threads an SM, so two such blocks there (the
-// bound would be ignored, with a ptxas warning).
+// Turing (sm_75) holds 1024 threads an SM, so two such blocks there
+// (cuda/launch_bounds.cuh).
 constexpr int kRowThreadsMax = 512;
-#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ == 750
-#define P3D_ROW_BLOCKS_PER_SM 2
-#else
-#define P3D_ROW_BLOCKS_PER_SM 3
-#endif
 template <bool kSharedKeys>
-__global__ void __launch_bounds__(kRowThreadsMax, P3D_ROW_BLOCKS_PER_SM) warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out,
-                                EyeShifts eyes, float D, float convergence, HoleFill fill,
-                                unsigned long long *global_keys, uint8_t *mask, uint8_t *state, Rgba *anchor,
-                                uint8_t *chunk_holes, unsigned long long *total, bool words) {
+__global__ void __launch_bounds__(kRowThreadsMax, P3D_THREADS_PER_SM / kRowThreadsMax)
+    warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out, EyeShifts eyes, float D,
+                    float convergence, HoleFill fill, unsigned long long *global_keys, uint8_t *mask, uint8_t *state,
+                    Rgba *anchor, uint8_t *chunk_holes, unsigned long long *total, bool words) {
   extern __shared__ unsigned long long smem[];
   __shared__ int row_holes;
   RowJob j;
