@@ -227,7 +227,7 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
   const int tid = threadIdx.y * kBlockX + threadIdx.x;
   // The 1-D space weights space(d, 0) in registers: the unclipped taps
   // index them by compile-time constants instead of loading them from
-  // shared memory, whose bandwidth bounds this kernel.
+  // shared memory.
   float space_1d[G::kSide];
 #pragma unroll
   for (int d = 0; d < G::kSide; ++d) space_1d[d] = s_space[R * G::kSide + d];
