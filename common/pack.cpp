@@ -187,6 +187,43 @@ bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameV
 
 namespace {
 
+// The default case, the anaglyph of a side-by-side pair into packed RGB
+// mixed in gamma-encoded R'G'B' (every method but DuboisLinear), a row at a
+// time with the format's channel order and the views' places worked out
+// once instead of per pixel: the same arithmetic as anaglyph() (mat_row,
+// to_u8, alpha from the left view) on the same bytes load_rgba() reads,
+// so the same output (tests/common/test_pack.cpp checks it against
+// pack_pixel() for every method, format and eye order).
+template <bool kBgr, bool kAlpha>
+void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp, const uint8_t *__restrict rp,
+                       uint8_t *__restrict o, int w) {
+  constexpr int ri = kBgr ? 2 : 0, bi = 2 - ri;  // byte offsets of R' and B' (the output has the input's format)
+  for (int x = 0; x < w; ++x) {
+    const float lr = lp[4 * x + ri], lg = lp[4 * x + 1], lb = lp[4 * x + bi];
+    const float rr = rp[4 * x + ri], rg = rp[4 * x + 1], rb = rp[4 * x + bi];
+    o[4 * x + ri] = to_u8(pack_detail::mat_row(am.left, 0, lr, lg, lb) + pack_detail::mat_row(am.right, 0, rr, rg, rb));
+    o[4 * x + 1] = to_u8(pack_detail::mat_row(am.left, 1, lr, lg, lb) + pack_detail::mat_row(am.right, 1, rr, rg, rb));
+    o[4 * x + bi] = to_u8(pack_detail::mat_row(am.left, 2, lr, lg, lb) + pack_detail::mat_row(am.right, 2, rr, rg, rb));
+    o[4 * x + 3] = kAlpha ? lp[4 * x + 3] : 255;
+  }
+}
+
+void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out) {
+  const bool bgr = in.format == PixelFormat::BGRA || in.format == PixelFormat::BGRx;
+  const bool alpha = in.format == PixelFormat::RGBA || in.format == PixelFormat::BGRA;
+  auto row_fn = bgr ? (alpha ? anaglyph_pair_row<true, true> : anaglyph_pair_row<true, false>)
+                    : (alpha ? anaglyph_pair_row<false, true> : anaglyph_pair_row<false, false>);
+  const int w = in.width / 2;
+  const int first_left = (p.swap_eyes ? 1 : 0) ^ (p.input_right_first ? 1 : 0);  // view_pixel's slot of eye 0
+  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
+      row_fn(am, row + 4 * static_cast<size_t>(first_left * w), row + 4 * static_cast<size_t>((first_left ^ 1) * w),
+             out.plane[0] + static_cast<size_t>(y) * out.stride[0], w);
+    }
+  });
+}
+
 // The frame for input arrangement I: one loop instantiation per arrangement
 // (the per-pixel function inlines into it, as in the kernel).
 template <StereoInput I>
@@ -199,6 +236,8 @@ void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const Frame
     });
     return;
   }
+  if (I == StereoInput::SideBySide && params.layout == PackLayout::Anaglyph && !am.linear_light)
+    return anaglyph_pair_rows(params, am, in, out);
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y)
       for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_detail::pack_pixel_for<I>(params, am, in, x, y));

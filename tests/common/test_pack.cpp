@@ -393,6 +393,30 @@ TEST(PackAnaglyph, DuboisFfmpegIsStereo3dsTable) {
 
 // Linear light: the tables are the sRGB transfer, and codes come back to
 // themselves through them (the nearest code of a code's own linear value).
+// pack_cpu runs the side-by-side anaglyph a row at a time (every method but
+// DuboisLinear); it must give pack_pixel()'s pixel, the per-pixel
+// definition the GPU kernels share, for every glasses, method, eye order
+// and packed format, alpha included.
+TEST(PackAnaglyph, RowLoopEqualsThePerPixelFunction) {
+  for (PixelFormat f : kPackedFormats) {
+    HostFrame in(f, 2 * 37, 5, 12);
+    in.fill_random(7 + static_cast<int>(f));
+    for (AnaglyphGlasses g : kAllGlasses)
+      for (AnaglyphMethod m : kAllMethods)
+        for (bool swap : {false, true})
+          for (bool rf : {false, true}) {
+            PackParams p = anaglyph_params(g, m);
+            p.swap_eyes = swap;
+            p.input_right_first = rf;
+            const AnaglyphMatrices am = anaglyph_matrices(g, m);
+            const HostFrame out = pack(p, in, 8);
+            EXPECT_TRUE(all_pixels(out, [&](int x, int y) { return pack_pixel(p, am, in.view(), x, y); }))
+                << test::format_name(f) << " glasses " << int(g) << " method " << int(m) << " swap " << swap
+                << " right first " << rf;
+          }
+  }
+}
+
 TEST(PackAnaglyph, DuboisLinearTables) {
   const AnaglyphMatrices am = anaglyph_matrices(AnaglyphGlasses::RedCyan, AnaglyphMethod::DuboisLinear);
   ASSERT_TRUE(am.linear_light);
