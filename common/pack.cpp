@@ -190,21 +190,21 @@ namespace {
 // The default case, the anaglyph of a side-by-side pair into packed RGB
 // mixed in gamma-encoded R'G'B' (every method but DuboisLinear), a row at a
 // time with the format's channel order and the views' places worked out
-// once instead of per pixel: the same arithmetic as anaglyph() (mat_row,
-// to_u8, alpha from the left view) on the same bytes load_rgba() reads,
-// so the same output (tests/common/test_pack.cpp checks it against
+// once instead of per pixel: anaglyph_gamma(), anaglyph()'s own mix, on the
+// channels load_rgba() would read, written where store_rgba() would write
+// them, so the same output (tests/common/test_pack.cpp checks it against
 // pack_pixel() for every method, format and eye order).
 template <bool kBgr, bool kAlpha>
 void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp, const uint8_t *__restrict rp,
                        uint8_t *__restrict o, int w) {
   constexpr int ri = kBgr ? 2 : 0, bi = 2 - ri;  // byte offsets of R' and B' (the output has the input's format)
+  auto pixel = [](const uint8_t *p) { return Rgba{p[ri], p[1], p[bi], kAlpha ? p[3] : uint8_t{255}}; };
   for (int x = 0; x < w; ++x) {
-    const float lr = lp[4 * x + ri], lg = lp[4 * x + 1], lb = lp[4 * x + bi];
-    const float rr = rp[4 * x + ri], rg = rp[4 * x + 1], rb = rp[4 * x + bi];
-    o[4 * x + ri] = to_u8(pack_detail::mat_row(am.left, 0, lr, lg, lb) + pack_detail::mat_row(am.right, 0, rr, rg, rb));
-    o[4 * x + 1] = to_u8(pack_detail::mat_row(am.left, 1, lr, lg, lb) + pack_detail::mat_row(am.right, 1, rr, rg, rb));
-    o[4 * x + bi] = to_u8(pack_detail::mat_row(am.left, 2, lr, lg, lb) + pack_detail::mat_row(am.right, 2, rr, rg, rb));
-    o[4 * x + 3] = kAlpha ? lp[4 * x + 3] : 255;
+    const Rgba c = pack_detail::anaglyph_gamma(am, pixel(lp + 4 * x), pixel(rp + 4 * x));
+    o[4 * x + ri] = c.r;
+    o[4 * x + 1] = c.g;
+    o[4 * x + bi] = c.b;
+    o[4 * x + 3] = c.a;
   }
 }
 
@@ -213,13 +213,12 @@ void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const F
   const bool alpha = in.format == PixelFormat::RGBA || in.format == PixelFormat::BGRA;
   auto row_fn = bgr ? (alpha ? anaglyph_pair_row<true, true> : anaglyph_pair_row<true, false>)
                     : (alpha ? anaglyph_pair_row<false, true> : anaglyph_pair_row<false, false>);
-  const int w = in.width / 2;
-  const int first_left = (p.swap_eyes ? 1 : 0) ^ (p.input_right_first ? 1 : 0);  // view_pixel's slot of eye 0
+  const size_t left = 4 * static_cast<size_t>(pack_detail::view_slot(p, 0) * (in.width / 2));
+  const size_t right = 4 * static_cast<size_t>(pack_detail::view_slot(p, 1) * (in.width / 2));
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
-      row_fn(am, row + 4 * static_cast<size_t>(first_left * w), row + 4 * static_cast<size_t>((first_left ^ 1) * w),
-             out.plane[0] + static_cast<size_t>(y) * out.stride[0], w);
+      row_fn(am, row + left, row + right, out.plane[0] + static_cast<size_t>(y) * out.stride[0], in.width / 2);
     }
   });
 }

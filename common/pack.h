@@ -235,14 +235,21 @@ P3D_HD Rgba checker_pixel(const FrameView &in, int slot, int x, int y) {
               static_cast<uint8_t>((b + n / 2) / n), static_cast<uint8_t>((a + n / 2) / n)};
 }
 
+// Where the output's left (eye 0) or right (eye 1) view lies in the input
+// frame: 0 first (left half, top half, even rows or columns, (X + Y) even),
+// 1 second. swap_eyes and input_right_first each exchange the two.
+P3D_HD int view_slot(const PackParams &p, int eye) {
+  const int view = eye ^ (p.swap_eyes ? 1 : 0);
+  return view ^ (p.input_right_first ? 1 : 0);
+}
+
 // Pixel (x, y) of the left (eye 0) or right (eye 1) view as the output
 // shows it (swap_eyes exchanges them), read from the input arrangement I
 // (a template argument, so the kernel of the common case, a side-by-side
 // pair, carries no code for the others).
 template <StereoInput I>
 P3D_HD Rgba view_pixel(const PackParams &p, const FrameView &in, int eye, int x, int y) {
-  const int view = eye ^ (p.swap_eyes ? 1 : 0);
-  const int slot = view ^ (p.input_right_first ? 1 : 0);  // 0: first in the frame
+  const int slot = view_slot(p, eye);
   int a = 0, b = 0;
   switch (I) {
     case StereoInput::TopBottom: return pixel_at(in, x, y + slot * (in.height / 2));
@@ -284,10 +291,21 @@ P3D_HD uint8_t linear_to_code(const AnaglyphMatrices &am, float v) {
   return static_cast<uint8_t>(lo);
 }
 
-P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {
+// The mix on gamma-encoded R'G'B' (every method but DuboisLinear).
+P3D_HD Rgba anaglyph_gamma(const AnaglyphMatrices &am, Rgba l, Rgba r) {
   Rgba o;
   o.a = l.a;
+  const float lr = l.r, lg = l.g, lb = l.b, rr = r.r, rg = r.g, rb = r.b;
+  o.r = to_u8(mat_row(am.left, 0, lr, lg, lb) + mat_row(am.right, 0, rr, rg, rb));
+  o.g = to_u8(mat_row(am.left, 1, lr, lg, lb) + mat_row(am.right, 1, rr, rg, rb));
+  o.b = to_u8(mat_row(am.left, 2, lr, lg, lb) + mat_row(am.right, 2, rr, rg, rb));
+  return o;
+}
+
+P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {
   if (am.linear_light) {
+    Rgba o;
+    o.a = l.a;
     const float lr = am.to_linear[l.r], lg = am.to_linear[l.g], lb = am.to_linear[l.b];
     const float rr = am.to_linear[r.r], rg = am.to_linear[r.g], rb = am.to_linear[r.b];
     float c[3];
@@ -300,11 +318,7 @@ P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {
     o.b = linear_to_code(am, c[2]);
     return o;
   }
-  const float lr = l.r, lg = l.g, lb = l.b, rr = r.r, rg = r.g, rb = r.b;
-  o.r = to_u8(mat_row(am.left, 0, lr, lg, lb) + mat_row(am.right, 0, rr, rg, rb));
-  o.g = to_u8(mat_row(am.left, 1, lr, lg, lb) + mat_row(am.right, 1, rr, rg, rb));
-  o.b = to_u8(mat_row(am.left, 2, lr, lg, lb) + mat_row(am.right, 2, rr, rg, rb));
-  return o;
+  return anaglyph_gamma(am, l, r);
 }
 
 // A half format along one axis: output index i of an axis of n samples per

@@ -64,11 +64,10 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x0 >= kp.out.width || y >= kp.out.height) return;
   const int w = kp.in.width / 2;
-  const int first_left = (kp.p.swap_eyes ? 1 : 0) ^ (kp.p.input_right_first ? 1 : 0);  // view_pixel's slot of eye 0
   const uint8_t *row = kp.in.plane[0] + static_cast<size_t>(y) * kp.in.stride[0];
   uint4 eye[2];
-  eye[0] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + first_left * w));
-  eye[1] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + (first_left ^ 1) * w));
+  for (int e = 0; e < 2; ++e)
+    eye[e] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + pack_detail::view_slot(kp.p, e) * w));
   FrameView view[2] = {kp.in, kp.in};
   for (int e = 0; e < 2; ++e) {
     view[e].plane[0] = reinterpret_cast<uint8_t *>(&eye[e]);
@@ -80,7 +79,8 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   reg.stride[0] = 4 * kVec;
 #pragma unroll
   for (int i = 0; i < kVec; ++i)
-    store_rgba(reg, i, 0, pack_detail::anaglyph(kp.am, pack_detail::pixel_at(view[0], i, 0), pack_detail::pixel_at(view[1], i, 0)));
+    store_rgba(reg, i, 0,
+               pack_detail::anaglyph(kp.am, pack_detail::pixel_at(view[0], i, 0), pack_detail::pixel_at(view[1], i, 0)));
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
 }
 
