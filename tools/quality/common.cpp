@@ -219,7 +219,9 @@ bool load_aloe(const std::string &dir, double scale, Aloe &a, std::string &err) 
 long long render_right(const Aloe &a, const cv::Mat &depth, HoleFill fill, HostFrame &out) {
   WarpParams p = a.warp;
   p.fill = fill;
-  static WarpCpuScratch scratch;  // kept between renders, as pseudo3dwarp keeps it between frames
+  // Kept between renders, as pseudo3dwarp keeps it between frames; one per
+  // thread, so that renders from parallel jobs never share the planes.
+  thread_local WarpCpuScratch scratch;
   return warp_render_cpu(p, a.left_frame.view(), YuvToRgb(), depth_view_of(depth), out.view(), scratch);
 }
 
