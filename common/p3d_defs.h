@@ -43,6 +43,20 @@ P3D_HD T clamp_value(T v, T lo, T hi) {
   return v < lo ? lo : (v > hi ? hi : v);
 }
 
+// ceilf(v) as an int, for |v| < 2^31 (the caller's range; exact there).
+// The device has an instruction for it. The host code is built for plain
+// x86-64, which has no rounding instruction before SSE4.1, and there ceilf
+// is a branchy sequence of about 18 instructions; truncating and adding one
+// where that fell below v gives the same integer for a few.
+P3D_HD int ceil_to_int(float v) {
+#ifdef __CUDA_ARCH__
+  return static_cast<int>(ceilf(v));
+#else
+  const int i = static_cast<int>(v);  // toward zero: v's ceiling, or one below it for positive non-integers
+  return static_cast<float>(i) < v ? i + 1 : i;
+#endif
+}
+
 // Round a float to the nearest 8-bit level, saturating. floorf(x + 0.5f) is
 // used on both sides (instead of lrintf/__float2int_rn) so that host and
 // device round halves the same way.

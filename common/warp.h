@@ -254,10 +254,10 @@ struct WarpSpan {
 };
 
 P3D_HD WarpSpan warp_span(const WarpSource &s, int width) {
-  const int X0 = static_cast<int>(ceilf(s.t0 - 0.5f));
+  const int X0 = ceil_to_int(s.t0 - 0.5f);
   int last = X0;
   if (s.connected) {
-    const int end = static_cast<int>(ceilf(s.t1)) - 1;
+    const int end = ceil_to_int(s.t1) - 1;
     if (end > last) last = end;
   }
   WarpSpan r;

@@ -350,6 +350,29 @@ TEST(WarpHelpers, SpanIsTheRunOfCoveredTargets) {
   }
 }
 
+// warp_span rounds with ceil_to_int, which the host computes without
+// ceilf: it must give ceilf's integer for every value a target can take.
+// Random values over the widest targets (8192-pixel rows, 25 % disparity),
+// the integers and half-integers there with their float neighbours, signed
+// zeros and the ends of the int-exact float range.
+TEST(WarpHelpers, CeilToIntIsCeilf) {
+  auto expect_ceil = [](float v) { ASSERT_EQ(ceil_to_int(v), static_cast<int>(std::ceil(v))) << v; };
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> wide(-12000.f, 12000.f), unit(-2.f, 2.f);
+  for (int i = 0; i < 1000000; ++i) {
+    expect_ceil(wide(rng));
+    expect_ceil(unit(rng));
+  }
+  for (int k = -24000; k <= 24000; ++k) {
+    const float v = static_cast<float>(k) / 2.f;
+    expect_ceil(v);
+    expect_ceil(std::nextafter(v, -1e9f));
+    expect_ceil(std::nextafter(v, 1e9f));
+  }
+  for (float v : {0.f, -0.f, 1e-30f, -1e-30f, 8388607.5f, -8388607.5f, 16777216.f, -16777216.f, 2.1e9f, -2.1e9f})
+    expect_ceil(v);
+}
+
 TEST(WarpHelpers, KeysOrderByDepthThenPosition) {
   EXPECT_GT(warp_key(0.5f, 3.f), warp_key(0.25f, 60.f));
   EXPECT_GT(warp_key(0.5f, 3.5f), warp_key(0.5f, 3.f));
