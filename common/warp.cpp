@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -32,14 +33,32 @@ struct Eye {
   int col0;
 };
 
-// The source row y converted once to R'G'B'A (load_rgba), as the GPU does
-// in shared memory: both eyes sample it (sample_row), so a pixel is
-// converted once instead of twice per eye.
+// The source row y converted once to R'G'B'A (load_rgba), as rgba_word()
+// words, as the GPU holds it in shared memory: both eyes sample it
+// (sample_word), so a pixel is converted once instead of twice per eye.
 struct SourceRow {
-  std::vector<Rgba> rgba;
-  explicit SourceRow(int width) : rgba(static_cast<size_t>(width)) {}
+  std::vector<uint32_t> words;
+  explicit SourceRow(int width) : words(static_cast<size_t>(width)) {}
   void load(const WarpJob &j, int y) {
-    for (int x = 0; x < j.width; ++x) rgba[x] = load_rgba(j.src, x, y, j.m);
+    for (int x = 0; x < j.width; ++x) words[x] = rgba_word(load_rgba(j.src, x, y, j.m));
+  }
+};
+
+// Where one eye's row y goes in the output (packed RGB, warp_frames_fit):
+// store_rgba() of a word, as one 4-byte copy with r and b swapped for the
+// BGR orders. The row pointer and the order are fixed per row, where
+// store_rgba() would read them again for every pixel (its byte stores may
+// alias the frame description).
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "rgba_word() words are stored in memory order");
+struct OutputRow {
+  uint8_t *p;
+  bool bgr;
+  OutputRow(const FrameView &out, int col0, int y)
+      : p(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + 4 * static_cast<size_t>(col0)),
+        bgr(out.format == PixelFormat::BGRA || out.format == PixelFormat::BGRx) {}
+  void put(int x, uint32_t w) const {
+    if (bgr) w = (w & 0xff00ff00u) | (w >> 16 & 0xffu) | (w & 0xffu) << 16;
+    std::memcpy(p + 4 * static_cast<size_t>(x), &w, 4);
   }
 };
 
@@ -82,13 +101,16 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
 // Returns the row's hole count.
 long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &src,
                       const std::vector<unsigned long long> &keys) {
+  const OutputRow out(j.out, eye.col0, y);
+  const uint32_t *row = src.words.data();
+  const bool paint = j.params.fill == HoleFill::None;
   long long holes = 0;
   for (int X = 0; X < j.width; ++X) {
     if (keys[X] != 0) {
-      store_rgba(j.out, eye.col0 + X, y, sample_row(src.rgba.data(), j.width, keys[X]));
+      out.put(X, sample_word(row, j.width, keys[X]));
     } else {
       ++holes;
-      if (j.params.fill == HoleFill::None) store_rgba(j.out, eye.col0 + X, y, kHoleColour);
+      if (paint) out.put(X, rgba_word(kHoleColour));
     }
   }
   return holes;
@@ -192,7 +214,8 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long lo
       for (int e = 0; e < 2; ++e) {
         const Eye &eye = eyes[e];
         if (eye.shift == 0.f) {
-          for (int x = 0; x < j.width; ++x) store_rgba(j.out, eye.col0 + x, y, src.rgba[x]);
+          const OutputRow out(j.out, eye.col0, y);
+          for (int x = 0; x < j.width; ++x) out.put(x, src.words[x]);
           continue;
         }
         scatter_row(j, eye, y, row);

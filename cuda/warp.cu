@@ -83,34 +83,9 @@ __device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W
 }
 
 // ---- Pixels as 32-bit words --------------------------------------------------
-// The source row in shared memory holds load_rgba()'s Rgba values as
-// little-endian words r | g << 8 | b << 16 | a << 24 (Rgba's memory order).
-// Resolving a covered pixel is then two 32-bit loads, two channels per
-// multiply and one 32-bit store instead of byte loads, four channel
-// formulas and four byte stores (4K warp 0.287 -> 0.285 ms on an H100).
-__device__ uint32_t rgba_word(Rgba c) {
-  return static_cast<uint32_t>(c.r) | static_cast<uint32_t>(c.g) << 8 | static_cast<uint32_t>(c.b) << 16 |
-         static_cast<uint32_t>(c.a) << 24;
-}
-__device__ Rgba word_rgba(uint32_t w) {
-  return Rgba{static_cast<uint8_t>(w), static_cast<uint8_t>(w >> 8), static_cast<uint8_t>(w >> 16),
-              static_cast<uint8_t>(w >> 24)};
-}
-
-// sample_row() on words: per channel (a (256 - k) + b k + 128) >> 8, which
-// is sample_channel()'s (256 a + (b - a) k + 128) >> 8 with no negative
-// term, and at most 255 * 256 + 128 < 2^16, so the two 16-bit fields of
-// each product never carry into each other.
-__device__ uint32_t sample_word(const uint32_t *row, int width, unsigned long long key) {
-  const unsigned q = static_cast<unsigned>(key & 0xffffffffu) - 1u;
-  const int x0 = static_cast<int>(q >> 8);
-  if (x0 >= width - 1) return row[width - 1];
-  const unsigned k = q & 255u, k0 = 256u - k;
-  const uint32_t a = row[x0], b = row[x0 + 1];
-  const uint32_t rb = (((a & 0xff00ffu) * k0 + (b & 0xff00ffu) * k + 0x800080u) >> 8) & 0xff00ffu;
-  const uint32_t ga = (((a >> 8) & 0xff00ffu) * k0 + ((b >> 8) & 0xff00ffu) * k + 0x800080u) & 0xff00ff00u;
-  return rb | ga;
-}
+// The source row in shared memory holds rgba_word() of each load_rgba()
+// value, and covered pixels are resolved with sample_word() (common/warp.h)
+// and stored with one 32-bit store (4K warp 0.287 -> 0.285 ms on an H100).
 
 // store_rgba() of a word: one 32-bit store when the frame's rows are
 // 4-byte aligned (`words`, checked once by the launcher), r and b swapped

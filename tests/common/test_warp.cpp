@@ -323,6 +323,30 @@ TEST(WarpHelpers, IntegerSamplingEqualsTheFloatFormulaEverywhere) {
   }
 }
 
+// sample_word (the CPU's and the GPU's resolve loops) is sample_row on
+// rgba_word() words: every channel value pair at every fraction k, four
+// pairs per word, plus the row's last pixel and the round trip of words.
+TEST(WarpHelpers, SampleWordIsSampleRow) {
+  std::mt19937 rng(31);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (int a = 0; a < 256; ++a)
+    for (int b = 0; b < 256; ++b) {
+      const Rgba ca{static_cast<uint8_t>(a), static_cast<uint8_t>(byte(rng)), static_cast<uint8_t>(b),
+                    static_cast<uint8_t>(byte(rng))};
+      const Rgba cb{static_cast<uint8_t>(b), static_cast<uint8_t>(byte(rng)), static_cast<uint8_t>(a),
+                    static_cast<uint8_t>(byte(rng))};
+      const Rgba row[3] = {ca, cb, ca};
+      const uint32_t words[3] = {rgba_word(ca), rgba_word(cb), rgba_word(ca)};
+      ASSERT_TRUE(equal(word_rgba(words[1]), cb));
+      for (int k = 0; k < 256; k += (a + b) % 7 + 1) {
+        const unsigned long long key = warp_key(0.5f, static_cast<float>(k) / 256.f);
+        ASSERT_EQ(sample_word(words, 3, key), rgba_word(sample_row(row, 3, key))) << a << " " << b << " " << k;
+      }
+      const unsigned long long last = warp_key(0.5f, 2.f);
+      ASSERT_EQ(sample_word(words, 3, last), rgba_word(sample_row(row, 3, last)));
+    }
+}
+
 // warp_span is a closed form of "the run of targets warp_covers() accepts,
 // starting at the footprint": compare it with walking warp_covers() for
 // random, integer and half-integer targets, connected or not.
