@@ -252,7 +252,15 @@ TEST_F(Convert, ExistingOutputNeedsForce) {
 TEST_F(Convert, UsageErrorsAreOneLine) {
   for (const std::vector<std::string> &args :
        {std::vector<std::string>{fx().aac_mp4, fx().dir + "/x.avi"}, {fx().aac_mp4, fx().dir + "/x.mp4", "--bogus"},
-        {fx().aac_mp4, fx().dir + "/x.mp4", "--layout", "sideways"}, {fx().aac_mp4}}) {
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--layout", "sideways"}, {fx().aac_mp4},
+        // Values that strtod or GStreamer would take but no user means.
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--preset", "fastest"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--max-disparity", ""},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--convergence", "0x1"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--max-disparity", "nan"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--start", "0x1"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--start", "1:99"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--duration", "1e1"}}) {
     const ToolRun r = run_convert(args);
     EXPECT_EQ(r.status, 2) << args.back();
     EXPECT_EQ(line_count(r.err), 1) << r.err;
@@ -260,6 +268,98 @@ TEST_F(Convert, UsageErrorsAreOneLine) {
   const ToolRun ext = run_convert({fx().aac_mp4, fx().dir + "/x.avi"});
   EXPECT_NE(ext.err.find("x.avi"), std::string::npos) << ext.err;
   EXPECT_FALSE(g_file_test((fx().dir + "/x.mp4").c_str(), G_FILE_TEST_EXISTS));
+}
+
+// The input under another name (./, a symbolic link) is still the input:
+// --force must not replace it, nor may --depth-out replace the input or
+// OUTPUT.
+TEST_F(Convert, InputUnderAnotherNameIsRefused) {
+  const std::string in = fx().dir + "/own.mp4", link = fx().dir + "/own-link.mp4";
+  g_remove(in.c_str());
+  g_remove(link.c_str());
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=5 ! video/x-raw,width=64,height=48 ! x264enc ! mp4mux ! filesink "
+                      "location=" + in),
+            "");
+  const std::vector<uint8_t> before = read_bytes(in);
+  ASSERT_EQ(symlink(in.c_str(), link.c_str()), 0);
+  const std::string dotted = fx().dir + "/./own.mp4";
+  for (const std::vector<std::string> &args : {std::vector<std::string>{in, dotted, "--force"}, {link, in, "--force"}}) {
+    const ToolRun r = run_convert(args);
+    EXPECT_EQ(r.status, 2) << args[1];
+    EXPECT_NE(r.err.find("is the input too"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(read_bytes(in), before);
+  const std::string photo = fx().dir + "/own.png", out = fx().dir + "/own-sbs.png";
+  ASSERT_TRUE(cv::imwrite(photo, cv::Mat(24, 32, CV_8UC3, cv::Scalar(40, 90, 160))));
+  const ToolRun depth_in = run_convert({photo, out, "--depth-out", fx().dir + "/./own.png", "--force"});
+  EXPECT_EQ(depth_in.status, 2) << depth_in.err;
+  const ToolRun depth_out = run_convert({photo, out, "--depth-out", fx().dir + "/./own-sbs.png", "--force"});
+  EXPECT_EQ(depth_out.status, 2) << depth_out.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+}
+
+// --start past the end: an error and no file, not an empty "success".
+TEST_F(Convert, StartPastTheEndIsAnError) {
+  const std::string out = fx().dir + "/past-end.mp4";
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({fx().aac_mp4, out, "--start", "30", "--quiet"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("past the end"), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
+}
+
+// A file cut short converts what it holds and says that the end is
+// missing, rather than reporting the full length as done.
+TEST_F(Convert, TruncatedInputIsReported) {
+  const std::string cut = fx().dir + "/cut.mkv", out = fx().dir + "/from-cut.mkv";
+  g_remove(out.c_str());
+  const std::vector<uint8_t> whole = read_bytes(fx().long_mkv);
+  ASSERT_GT(whole.size(), 1000u);
+  std::ofstream(cut, std::ios::binary).write(reinterpret_cast<const char *>(whole.data()),
+                                             static_cast<std::streamsize>(whole.size() / 2));
+  const ToolRun r = run_convert({cut, out, "--quiet", "--preset", "ultrafast"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("truncated"), std::string::npos) << r.err;
+  const ReadBack rb = read_back(out);
+  EXPECT_GT(rb.video_frames, 0);
+  EXPECT_LT(rb.video_frames, 500);
+}
+
+// 4:2:0 encoders take even sizes only: an odd picture loses its last column
+// and row, says so, and converts in every layout that encodes as 4:2:0.
+TEST_F(Convert, OddSizeIsCroppedToEven) {
+  const std::string in = fx().dir + "/odd-85x49.mkv";
+  g_remove(in.c_str());
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=5 ! video/x-raw,width=85,height=49,framerate=25/1 ! jpegenc ! "
+                      "matroskamux ! filesink location=" + in),
+            "");
+  for (const std::string layout : {"side-by-side-half", "top-bottom", "checkerboard"}) {
+    const std::string out = fx().dir + "/odd-" + layout + ".mp4";
+    g_remove(out.c_str());
+    const ToolRun r = run_convert({in, out, "--layout", layout, "--preset", "ultrafast"});
+    ASSERT_EQ(r.status, 0) << layout << ": " << r.err;
+    EXPECT_NE(r.err.find("odd width or height"), std::string::npos) << r.err;
+    const ReadBack rb = read_back(out);
+    EXPECT_EQ(rb.video_frames, 5) << layout;
+    EXPECT_EQ(rb.width, 84) << layout;
+    EXPECT_EQ(rb.height, layout == "top-bottom" ? 96 : 48) << layout;
+  }
+}
+
+// Progress goes to stderr; a reader that closes it (a pipe into `head`)
+// must neither kill the conversion (SIGPIPE) nor leave its temporary file.
+TEST_F(Convert, ClosedStderrPipeDoesNotStopTheConversion) {
+  const std::string out = fx().dir + "/piped.mp4", status = fx().dir + "/piped.status";
+  g_remove(out.c_str());
+  const std::string cmd = "{ '" + convert_program() + "' '" + fx().aac_mp4 + "' '" + out + "' 2>&1; echo $? > '" +
+                          status + "'; } | true";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(slurp(status), "0\n");
+  EXPECT_EQ(read_back(out).video_frames, 50);
+  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
 }
 
 TEST_F(Convert, UndecodableInputFailsCleanly) {
@@ -485,6 +585,24 @@ TEST_F(Convert, PhotoJpsIsTheCrossEyedPair) {
   EXPECT_GT(cv::PSNR(jps_left_half, right), 30);
   EXPECT_GT(cv::PSNR(jps_right_half, left), 30);
   EXPECT_GT(cv::PSNR(jps_left_half, right), cv::PSNR(jps_left_half, left) + 1);
+}
+
+// JPEG holds full-range Y'CbCr: black stays 0 and white 255 (TV range
+// would read back as 16 and 235, a washed-out picture), in every JPEG the
+// converter writes (.jpg here; .jps and .mpo share the encoder).
+TEST_F(Convert, PhotoJpegKeepsFullRange) {
+  cv::Mat bw(64, 128, CV_8UC3, cv::Scalar(0, 0, 0));
+  bw.colRange(64, 128).setTo(cv::Scalar(255, 255, 255));
+  const std::string in = fx().dir + "/black-white.png", out = fx().dir + "/black-white.jpg";
+  ASSERT_TRUE(cv::imwrite(in, bw));
+  g_remove(out.c_str());
+  // Flat depth: both views are the picture, so the halves keep their values.
+  const ToolRun r = run_convert({in, out, "--layout", "left", "--hypothesis", "flat", "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const cv::Mat m = cv::imread(out, cv::IMREAD_GRAYSCALE);
+  ASSERT_EQ(m.size(), bw.size());
+  EXPECT_LE(cv::mean(m(cv::Rect(8, 8, 40, 48)))[0], 2.0);
+  EXPECT_GE(cv::mean(m(cv::Rect(80, 8, 40, 48)))[0], 253.0);
 }
 
 TEST_F(Convert, PhotoPngIsThePackedPicture) {

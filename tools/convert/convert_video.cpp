@@ -103,6 +103,8 @@ struct Job {
       *error = "cannot seek for --start/--duration (the file is not seekable)";
       return false;
     }
+    if (chain.cropped_to_even())
+      note("the picture's odd width or height loses its last column or row (the encoder's 4:2:0 needs even sizes)");
     if (!o.quiet) print_plan();
     return true;
   }
@@ -190,11 +192,25 @@ bool convert_video(const Options &o, std::string *error) {
       *error = (r.from_filesink ? o.output : o.input) + ": " + r.error;
     return false;
   }
+  if (job.progress.frames() == 0) {
+    job.progress.abandon();
+    *error = o.input + ": no video frames to convert" +
+             (o.start > 0 ? std::string(" (--start is at or past the end of the video)") : std::string());
+    return false;
+  }
+  // A frame's position is where it starts: a last frame a second or more
+  // short of the announced end means frames are missing at the end.
+  const GstClockTime short_by = job.progress.shortfall();
   if (o.kind == OutputKind::Mkv &&
       !set_mkv_container_stereo_mode(out.temp_path(), job.layout, right_view_first(o), error))
     return false;
   if (!out.commit(error)) return false;
   job.progress.finish();
+  if (short_by >= GST_SECOND)
+    std::fprintf(stderr,
+                 "pseudo3d-convert: warning: %s: the video ended %s before the end its file announces (a truncated "
+                 "file, or sound that outlasts the picture)\n",
+                 o.input.c_str(), format_clock(static_cast<double>(short_by) / GST_SECOND).c_str());
   if (!o.quiet) {
     const double secs = job.progress.seconds();
     std::fprintf(stderr, "pseudo3d-convert: wrote %s: %llu frames in %s (%.1f frames/s)\n", o.output.c_str(),

@@ -6,20 +6,10 @@ namespace p3d::convert {
 
 namespace {
 
-// x264/x265 preset names, fastest first; NVENC's presets are mapped from them.
-const char *const kPresets[] = {"ultrafast", "superfast", "veryfast", "faster", "fast",
-                                "medium",    "slow",      "slower",   "veryslow", "placebo"};
-
 bool have(const char *factory) {
   GstElementFactory *f = gst_element_factory_find(factory);
   if (f) gst_object_unref(f);
   return f != nullptr;
-}
-
-bool known_preset(const std::string &p) {
-  for (const char *n : kPresets)
-    if (p == n) return true;
-  return false;
 }
 
 // Whether the encoder's sink template lists a raw format.
@@ -52,7 +42,8 @@ void set_if_valid(GstElement *e, const char *property, const char *value) {
   g_value_unset(&v);
 }
 
-// NVENC presets of 1.22's nvh264enc/nvh265enc for the x264 names.
+// NVENC presets of 1.22's nvh264enc/nvh265enc for the x264 names (options.cpp
+// accepts those only).
 const char *nvenc_preset(const std::string &p) {
   if (p == "ultrafast" || p == "superfast" || p == "veryfast" || p == "faster") return "hp";
   if (p == "slow" || p == "slower" || p == "veryslow" || p == "placebo") return "hq";
@@ -69,11 +60,6 @@ bool is_stereo_layout(const std::string &layout) {
 
 bool choose_encoder(const Options &o, Processing processing, const std::string &layout, EncoderChoice *c,
                     std::string *error) {
-  if (!o.preset.empty() && !known_preset(o.preset)) {
-    *error = "invalid value '" + o.preset + "' for --preset (ultrafast, superfast, veryfast, faster, fast, medium, "
-             "slow, slower, veryslow, placebo)";
-    return false;
-  }
   const bool h264 = o.codec == Codec::H264;
   const char *sw = h264 ? "x264enc" : "x265enc";
   const char *hw = h264 ? "nvh264enc" : "nvh265enc";

@@ -21,8 +21,7 @@ struct EncoderChoice {
 };
 
 // Picks the encoder for the codec, the processing in use and the layout.
-// False with *error when no encoder for the codec is installed or --preset
-// names none of its presets.
+// False with *error when no encoder for the codec is installed.
 bool choose_encoder(const Options &o, Processing processing, const std::string &layout, EncoderChoice *choice,
                     std::string *error);
 

@@ -145,8 +145,13 @@ bool read_image(const std::string &path, int exif_orientation, Image *out, std::
 bool encode_image(const Image &image, const std::string &codec, bool full_chroma, std::vector<uint8_t> *bytes,
                   std::string *error) {
   std::string tail;
+  // JPEG (JFIF) means full-range Y'CbCr, and every reader decodes it so;
+  // videoconvert's default for YUV is TV range (16-235), which would wash
+  // every picture out. colorimetry 1:4:0:0 is full range, BT.601 matrix:
+  // what jpegdec itself reports.
   if (codec == "jpeg")
-    tail = std::string("videoconvert ! video/x-raw,format=") + (full_chroma ? "Y444" : "I420") + " ! jpegenc quality=95";
+    tail = std::string("videoconvert ! video/x-raw,format=") + (full_chroma ? "Y444" : "I420") +
+           ",colorimetry=1:4:0:0 ! jpegenc quality=95";
   else if (image.format == "GRAY16_BE")
     tail = "pngenc";
   else

@@ -15,7 +15,9 @@
 #include <gst/gst.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -53,6 +55,43 @@ bool input_readable(const std::string &path, std::string *error) {
   return true;
 }
 
+// Whether two paths name one file: the same inode where both exist, else
+// the same canonical folder and name (an output not written yet).
+bool same_file(const std::string &a, const std::string &b) {
+  struct stat sa, sb;
+  const bool ea = stat(a.c_str(), &sa) == 0, eb = stat(b.c_str(), &sb) == 0;
+  if (ea && eb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (ea != eb) return false;
+  auto canonical = [](const std::string &p) {
+    const size_t slash = p.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
+    char *real = realpath(dir.c_str(), nullptr);
+    const std::string r = real ? std::string(real) + "/" + p.substr(slash == std::string::npos ? 0 : slash + 1) : p;
+    std::free(real);
+    return r;
+  };
+  return canonical(a) == canonical(b);
+}
+
+// OUTPUT and --depth-out may be neither the input nor each other: --force
+// would otherwise replace the film or photo being converted.
+bool distinct_files(const p3d::convert::Options &o, std::string *error) {
+  if (same_file(o.input, o.output)) {
+    *error = o.output + ": is the input too; choose another name";
+    return false;
+  }
+  if (o.depth_out.empty()) return true;
+  if (same_file(o.input, o.depth_out)) {
+    *error = o.depth_out + ": --depth-out is the input too; choose another name";
+    return false;
+  }
+  if (same_file(o.output, o.depth_out)) {
+    *error = o.depth_out + ": --depth-out is OUTPUT too; choose another name";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -65,7 +104,10 @@ int main(int argc, char **argv) {
     case ParseResult::Run: break;
   }
   if (!input_readable(o.input, &error)) return fail(error, 1);
-  if (!o.benchmark && o.input == o.output) return fail(o.output + ": is the input too; choose another name", 2);
+  if (!o.benchmark && !distinct_files(o, &error)) return fail(error, 2);
+  // Progress and messages go to stderr; a reader that goes away (a pipe
+  // into `head`) must not kill the conversion and leave its temporary file.
+  std::signal(SIGPIPE, SIG_IGN);
   install_interrupt_cleanup();
 
   gst_init(&argc, &argv);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 
 #include "config.h"
 
@@ -33,6 +34,15 @@ const StageOption kStageOptions[] = {
     {"layout", true},        {"glasses", true},     {"anaglyph-method", true}, {"swap-eyes", false},
     {"max-disparity", true}, {"convergence", true}, {"hypothesis", true},
 };
+
+// x264/x265 preset names, fastest first; the NVENC encoders get theirs
+// mapped from them (encoder.cpp).
+const char *const kPresets[] = {"ultrafast", "superfast", "veryfast", "faster", "fast",
+                                "medium",    "slow",      "slower",   "veryslow", "placebo"};
+
+bool known_preset(const std::string &p) {
+  return std::any_of(std::begin(kPresets), std::end(kPresets), [&](const char *n) { return p == n; });
+}
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -78,19 +88,33 @@ bool Options::has_stage_value(const std::string &name) const {
   return std::any_of(stage_values.begin(), stage_values.end(), [&](const auto &kv) { return kv.first == name; });
 }
 
+bool is_plain_decimal(const std::string &s, bool allow_sign) {
+  size_t i = allow_sign && !s.empty() && s[0] == '-' ? 1 : 0;
+  int digits = 0, dots = 0;
+  for (; i < s.size(); ++i) {
+    if (std::isdigit(static_cast<unsigned char>(s[i])))
+      ++digits;
+    else if (s[i] == '.')
+      ++dots;
+    else
+      return false;
+  }
+  return digits > 0 && dots <= 1;
+}
+
 bool parse_time(const std::string &s, GstClockTime *t) {
-  // Up to three ':'-separated fields, the last one may have a fraction.
+  // Up to three ':'-separated fields, the last one may have a fraction;
+  // minutes and seconds after a ':' stay below 60.
   double total = 0;
   size_t pos = 0;
   int fields = 0;
   while (true) {
     const size_t colon = s.find(':', pos);
     const std::string part = s.substr(pos, colon == std::string::npos ? std::string::npos : colon - pos);
-    char *end = nullptr;
-    const double v = std::strtod(part.c_str(), &end);
     const bool last = colon == std::string::npos;
-    if (part.empty() || *end != '\0' || !std::isfinite(v) || v < 0 || (!last && part.find('.') != std::string::npos))
-      return false;
+    if (!is_plain_decimal(part, false) || (!last && part.find('.') != std::string::npos)) return false;
+    const double v = std::strtod(part.c_str(), nullptr);
+    if (!std::isfinite(v) || (fields > 0 && v >= 60)) return false;
     total = total * 60 + v;
     if (++fields > 3) return false;
     if (last) break;
@@ -115,7 +139,7 @@ void print_usage(FILE *f) {
       "                        row-interleaved, column-interleaved, checkerboard, left, right\n"
       "                        (default: side-by-side-half for video, side-by-side for photos)\n"
       "  --glasses G           red-cyan, green-magenta, amber-blue (anaglyph)\n"
-      "  --anaglyph-method M   dubois, color, half-color, gray\n"
+      "  --anaglyph-method M   dubois, color, half-color, gray, dubois-ffmpeg, dubois-linear\n"
       "  --swap-eyes           right view first\n"
       "  --max-disparity P     parallax in percent of the width (default 3)\n"
       "  --convergence C       depth on the screen plane, 0 (far) to 1 (near) (default 0.5)\n"
@@ -212,7 +236,8 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
       } else if (name == "crf") {
         ok = parse_int(v, 0, 51, &o->crf);
       } else if (name == "preset") {
-        o->preset = v;  // checked against the encoder's presets (encoder.h)
+        ok = known_preset(v);
+        o->preset = v;
       } else if (name == "start") {
         ok = parse_time(v, &o->start);
       } else if (name == "duration") {
@@ -230,6 +255,7 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
       }
       if (!ok) {
         *error = "invalid value '" + v + "' for " + arg;
+        if (name == "preset") *error += " (ultrafast, superfast, veryfast, faster, fast, medium, slow, slower, veryslow, placebo)";
         return ParseResult::ExitUsage;
       }
       if (name == "codec" || name == "crf" || name == "preset" || name == "start" || name == "duration") {

@@ -59,4 +59,9 @@ void print_usage(FILE *f);
 // "90", "1:30", "01:02:03.5" -> nanoseconds; false if malformed.
 bool parse_time(const std::string &s, GstClockTime *t);
 
+// Whether s is a plain decimal number: digits with at most one '.', a
+// leading '-' where allow_sign. strtod and GStreamer's deserialisers also
+// take "", hex, exponents, "inf" and "nan", which no user means here.
+bool is_plain_decimal(const std::string &s, bool allow_sign);
+
 }  // namespace p3d::convert

@@ -88,6 +88,11 @@ void Progress::abandon() {
   set_terminal_line_open(false);
 }
 
+GstClockTime Progress::shortfall() const {
+  const uint64_t reached = position_.load();
+  return GST_CLOCK_TIME_IS_VALID(total_) && frames_.load() > 0 && reached < total_ ? total_ - reached : 0;
+}
+
 void Progress::finish() {
   if (!enabled_) return;
   if (GST_CLOCK_TIME_IS_VALID(total_)) position_.store(total_);  // the piece is done

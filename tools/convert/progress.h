@@ -30,6 +30,10 @@ class Progress {
   void abandon();
 
   uint64_t frames() const { return frames_.load(); }
+  // Media time from the last frame converted to the end set_total()
+  // announced (0 when unknown or reached). Before finish(), which counts
+  // the piece as done.
+  GstClockTime shortfall() const;
   // Seconds from the first frame to now.
   double seconds() const;
   std::string line() const;  // the current status, without decoration

@@ -75,7 +75,10 @@ bool check_stage_values(const Options &o, std::string *error) {
     }
     GValue v = G_VALUE_INIT;
     g_value_init(&v, p->value_type);
-    const bool parsed = gst_value_deserialize(&v, kv.second.c_str());
+    const bool number = G_IS_PARAM_SPEC_FLOAT(p) || G_IS_PARAM_SPEC_DOUBLE(p) || G_IS_PARAM_SPEC_INT(p) ||
+                        G_IS_PARAM_SPEC_UINT(p);
+    const bool parsed =
+        (!number || is_plain_decimal(kv.second, true)) && gst_value_deserialize(&v, kv.second.c_str());
     // g_param_value_validate() returns TRUE when it had to clamp the value.
     const bool in_range = parsed && !g_param_value_validate(p, &v);
     g_value_unset(&v);

@@ -1,5 +1,7 @@
 #include "video_chain.h"
 
+#include <gst/video/video.h>
+
 #include "progress.h"
 #include "stage_settings.h"
 
@@ -77,6 +79,7 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   // videoconvert after it then passes frames through. Other encoder
   // formats (Y444 for anaglyphs) still go through videoconvert.
   const bool packed_yuv = raw_format == "I420" || raw_format == "NV12";
+  subsampled_ = packed_yuv;
   GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL)
                             : gst_caps_from_string("video/x-raw");
   g_object_set(to_system, "caps", sys, NULL);
@@ -117,7 +120,21 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   g_object_set(vconv, "n-threads", 0u, NULL);
   gst_bin_add(GST_BIN(bin_), vconv);
   gst_element_sync_state_with_parent(vconv);
-  return gst_element_link_many(head_, vconv, convert_, NULL);
+  // 4:2:0 encoders refuse odd sizes (x264: "Can not initialize"), and every
+  // layout of an even picture is even: the last column or row of an odd one
+  // is cropped before the 3D stages.
+  GstVideoInfo info;
+  const bool known = gst_video_info_from_caps(&info, caps);
+  const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
+  const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
+  if (!subsampled_ || (crop_right == 0 && crop_bottom == 0)) return gst_element_link_many(head_, vconv, convert_, NULL);
+  GstElement *crop = gst_element_factory_make("videocrop", nullptr);
+  if (!crop) return false;
+  g_object_set(crop, "right", crop_right, "bottom", crop_bottom, NULL);
+  gst_bin_add(GST_BIN(bin_), crop);
+  gst_element_sync_state_with_parent(crop);
+  cropped_ = true;
+  return gst_element_link_many(head_, vconv, crop, convert_, NULL);
 }
 
 void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start) {

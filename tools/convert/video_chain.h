@@ -36,6 +36,8 @@ class VideoChain {
   GstElement *tail() const { return tail_; }       // links to the encoder
   GstElement *converter() const { return convert_; }
   bool on_gpu_memory() const { return cuda_input_; }  // decoded frames arrive in CUDA memory
+  // The odd width or height cropped to even for a 4:2:0 encoder (attach()).
+  bool cropped_to_even() const { return cropped_; }
 
   ~VideoChain();
 
@@ -43,7 +45,8 @@ class VideoChain {
   GstElement *bin_ = nullptr, *head_ = nullptr, *convert_ = nullptr, *tail_ = nullptr;
   GstPad *head_sink_ = nullptr;
   Processing processing_ = Processing::Cpu;
-  bool cuda_input_ = false;
+  bool subsampled_ = false;  // the encoder takes 4:2:0, which needs even sizes
+  bool cuda_input_ = false, cropped_ = false;
 };
 
 // What the video chain takes from decoders for a processing: CUDA memory
