@@ -87,9 +87,30 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
   return true;
 }
 
+namespace {
+
+// x265enc (1.22) opens a new encoder on every flush, and fails with "Can
+// not initialize x265 encoder" when it has had no caps yet: the flushing
+// seek of --start/--duration reaches it before the first frame does. An
+// encoder without caps has nothing to flush, so such flushes stop at its
+// sink pad (START and STOP alike: no caps can arrive while flushing).
+GstPadProbeReturn drop_flush_before_caps(GstPad *pad, GstPadProbeInfo *info, gpointer) {
+  const GstEventType t = GST_EVENT_TYPE(GST_PAD_PROBE_INFO_EVENT(info));
+  if ((t == GST_EVENT_FLUSH_START || t == GST_EVENT_FLUSH_STOP) && !gst_pad_has_current_caps(pad))
+    return GST_PAD_PROBE_DROP;
+  return GST_PAD_PROBE_OK;
+}
+
+}  // namespace
+
 GstElement *make_encoder(const EncoderChoice &c, const Options &o) {
   GstElement *e = gst_element_factory_make(c.factory.c_str(), "encoder");
   if (!e) return nullptr;
+  GstPad *sink = gst_element_get_static_pad(e, "sink");
+  if (sink) {
+    gst_pad_add_probe(sink, GST_PAD_PROBE_TYPE_EVENT_FLUSH, drop_flush_before_caps, nullptr, nullptr);
+    gst_object_unref(sink);
+  }
   const int crf = o.crf >= 0 ? o.crf : default_crf(o.codec);
   const std::string preset = o.preset.empty() ? "medium" : o.preset;
   if (c.factory == "x264enc") {
