@@ -61,7 +61,7 @@ void unite(std::vector<int> &parent, int a, int b) {
 
 }  // namespace
 
-void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold,
+void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold, bool yuv,
                        std::vector<int> &labels) {
   const int n = blocks_x * blocks_y;
   labels.resize(n);
@@ -70,8 +70,8 @@ void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blo
     for (int i = 0; i < blocks_x; ++i) {
       const int k = j * blocks_x + i;
       const float *f = &features[static_cast<size_t>(k) * 3];
-      if (i + 1 < blocks_x && blocks_joined(f, f + 3, edge_threshold)) unite(labels, k, k + 1);
-      if (j + 1 < blocks_y && blocks_joined(f, f + static_cast<size_t>(blocks_x) * 3, edge_threshold))
+      if (i + 1 < blocks_x && blocks_joined(f, f + 3, edge_threshold, yuv)) unite(labels, k, k + 1);
+      if (j + 1 < blocks_y && blocks_joined(f, f + static_cast<size_t>(blocks_x) * 3, edge_threshold, yuv))
         unite(labels, k, k + blocks_x);
     }
   for (int k = 0; k < n; ++k) labels[k] = find_root(labels, k);
@@ -167,7 +167,7 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
     for (size_t k = static_cast<size_t>(range.start) * row_values; k < static_cast<size_t>(range.end) * row_values; k += 3)
       smooth_block_feature(cut, params.feature_smoothing, &features[k], &smoothed_[k]);
   });
-  region_labels_cpu(smoothed_, bx, by, params.edge_threshold, labels_);
+  region_labels_cpu(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), labels_);
   block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
 
   block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values

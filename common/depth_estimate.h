@@ -10,7 +10,9 @@
 //     feature f is the mean of load_native3() over its pixels: integer sums
 //     per channel, then mean = (float)sum / (float)count.
 //  2. Edges. Two 4-connected blocks belong to one region when
-//     |ds0| + |ds1| + |ds2| < edge_threshold, s being the blocks' smoothed
+//     |ds0| + |ds1| + |ds2| < edge_threshold (ds in R'G'B' levels: on Y'CbCr
+//     frames the difference is converted first, blocks_joined()), s being
+//     the blocks' smoothed
 //     features (step 5's smooth_block_feature(): s = f on a still picture, a
 //     cut and with feature_smoothing 0; otherwise f averaged over the frames
 //     since the block last moved, so that camera noise does not flip edges).
@@ -67,7 +69,7 @@ enum class Hypothesis : int {
 struct DepthParams {
   Hypothesis hypothesis = Hypothesis::TopBottom;
   int block_size = 0;              // pixels, 2..64; 0 = auto (effective_block_size())
-  float edge_threshold = 24.f;     // L1 of 8-bit channel means; 0 = every block its own region
+  float edge_threshold = 24.f;     // L1 of 8-bit R'G'B' channel means; 0 = every block its own region
   float region_weight = 0.9f;      // 0..1: share of the region's depth in a block's depth
   float ground_contact = 1.f;      // 0..1: share of the region's nearest block (vs its mean), step 4
   float temporal_smoothing = 0.5f; // 0..0.99: weight of the previous depth (0 = none)
@@ -122,9 +124,24 @@ P3D_HD int block_extent(int b, int block, int pixels) {
 // Step 1: one channel's mean from its integer sum.
 P3D_HD float block_mean(uint32_t sum, int count) { return static_cast<float>(sum) / static_cast<float>(count); }
 
-// Step 2: whether two 4-connected blocks with features a[3], b[3] share a region.
-P3D_HD bool blocks_joined(const float *a, const float *b, float edge_threshold) {
-  return fabsf(a[0] - b[0]) + fabsf(a[1] - b[1]) + fabsf(a[2] - b[2]) < edge_threshold;
+// Step 2: whether two 4-connected blocks with features a[3], b[3] share a
+// region. The threshold is an L1 distance of R'G'B' levels whatever the
+// frame's format: on Y'CbCr frames (`yuv`) the feature difference goes
+// through the Y'CbCr -> R'G'B' matrix first (BT.601 limited range, the
+// default YuvToRgb: an edge test needs no exact colorimetry). Compared raw,
+// a grey step of d levels would count 0.86 d instead of 3 d, and decoded
+// video (I420, NV12) grouped nearly the whole picture into one region
+// (Aloe's rho 0.647 as I420 against 0.838 as RGBA, docs/quality.md).
+P3D_HD bool blocks_joined(const float *a, const float *b, float edge_threshold, bool yuv) {
+  float d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+  if (yuv) {
+    const YuvToRgb m;
+    const float yn = d0 * m.y_scale, cb = d1 * m.c_scale, cr = d2 * m.c_scale;
+    d0 = yn + m.rv * cr;
+    d1 = yn + m.gu * cb + m.gv * cr;
+    d2 = yn + m.bu * cb;
+  }
+  return fabsf(d0) + fabsf(d1) + fabsf(d2) < edge_threshold;
 }
 
 // Step 3: normalised centre of block b along an axis (computed in double as the
@@ -236,7 +253,8 @@ class DepthEstimatorCpu {
 // Stateless helpers the estimator is built from (exposed for tests and for
 // the GPU tests that compare intermediate results).
 void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features);
-void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold,
+// yuv: the features are Y'CbCr means (blocks_joined()).
+void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold, bool yuv,
                        std::vector<int> &labels);
 void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
                      int block_size, const DepthParams &params, std::vector<float> &block_depth);

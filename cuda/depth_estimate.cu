@@ -165,7 +165,7 @@ __device__ TemporalDecision device_decision(const DepthDeviceState *state, const
 // neighbours, which are joined vertically). Large regions, whose every
 // block used to unite twice, now cost about one unite per run and row.
 __global__ void tile_labels_kernel(const float *__restrict__ features, float *__restrict__ smoothed, int bx, int by,
-                                   DepthParams params, bool have_state, const DepthDeviceState *state, int *labels,
+                                   DepthParams params, bool yuv, bool have_state, const DepthDeviceState *state, int *labels,
                                    unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
   __shared__ int parent[kTile * kTile];
   __shared__ float feat[kTile * kTile][3];
@@ -191,8 +191,8 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
     const int l = ly * kTile + lx, gy = y0 + ly;
     const bool in = gx < bx && gy < by;
-    const bool left = in && lx > 0 && blocks_joined(feat[l], feat[l - 1], edge_threshold);
-    const bool up = in && ly > 0 && blocks_joined(feat[l], feat[l - kTile], edge_threshold);
+    const bool left = in && lx > 0 && blocks_joined(feat[l], feat[l - 1], edge_threshold, yuv);
+    const bool up = in && ly > 0 && blocks_joined(feat[l], feat[l - kTile], edge_threshold, yuv);
     const unsigned lb = __ballot_sync(kFullMask, left), ub = __ballot_sync(kFullMask, up);
     if (lx == 0) {
       left_bits[ly] = lb;
@@ -234,7 +234,7 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
 // always unites. Large regions cross a border with one unite instead of
 // one per block of the border (each a chain of global atomics).
 __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx, int by, float edge_threshold,
-                                     int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
+                                     bool yuv, int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
   const long long e = static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (e >= pairs) return;
   int a, b, step;  // step: from a pair's blocks to those of the pair before it on the border (0: none in the tile)
@@ -255,13 +255,13 @@ __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx,
   float fa[3], fb[3];
   load_feature(smoothed, a, fa);
   load_feature(smoothed, b, fb);
-  if (!blocks_joined(fa, fb, edge_threshold)) return;
+  if (!blocks_joined(fa, fb, edge_threshold, yuv)) return;
   if (step) {
     float pa[3], pb[3];
     load_feature(smoothed, a - step, pa);
     load_feature(smoothed, b - step, pb);
-    if (blocks_joined(pa, pb, edge_threshold) && blocks_joined(fa, pa, edge_threshold) &&
-        blocks_joined(fb, pb, edge_threshold))
+    if (blocks_joined(pa, pb, edge_threshold, yuv) && blocks_joined(fa, pa, edge_threshold, yuv) &&
+        blocks_joined(fb, pb, edge_threshold, yuv))
       return;
   }
   unite(labels, a, b);
@@ -435,16 +435,17 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   P3D_CUDA_TRY_LAUNCH(block_features_kernel);
 
   // Step 2.
+  const bool yuv = !is_packed_rgb(frame.format);
   const int tiles_x = blocks_along(bx, kTile), tiles_y = blocks_along(by, kTile);
   tile_labels_kernel<<<dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream>>>(
-      features_.as<float>(), smoothed_features_.as<float>(), bx, by, params, same_grid, state, labels_.as<int>(),
+      features_.as<float>(), smoothed_features_.as<float>(), bx, by, params, yuv, same_grid, state, labels_.as<int>(),
       region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(), region_max_.as<uint32_t>());
   P3D_CUDA_TRY_LAUNCH(tile_labels_kernel);
   const long long vertical_pairs = static_cast<long long>(tiles_x - 1) * by;
   const long long pairs = vertical_pairs + static_cast<long long>(tiles_y - 1) * bx;
   if (pairs > 0) {
     border_labels_kernel<<<grid_for(pairs, kThreads), kThreads, 0, stream>>>(
-        smoothed_features_.as<float>(), bx, by, params.edge_threshold, labels_.as<int>(), tiles_x, vertical_pairs,
+        smoothed_features_.as<float>(), bx, by, params.edge_threshold, yuv, labels_.as<int>(), tiles_x, vertical_pairs,
         pairs);
     P3D_CUDA_TRY_LAUNCH(border_labels_kernel);
   }

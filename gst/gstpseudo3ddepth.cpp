@@ -319,8 +319,9 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
   g_object_class_install_property(
       gobject_class, PROP_EDGE_THRESHOLD,
       g_param_spec_float("edge-threshold", "Edge threshold",
-                         "Colour difference (sum over 3 channels of 8-bit block means) at which neighbouring "
-                         "blocks are split by an edge; 0 makes every block its own region",
+                         "Colour difference (sum over R'G'B' of 8-bit block means; YUV input is converted, so it means "
+                         "the same in every format) at which neighbouring blocks are split by an edge; 0 makes every "
+                         "block its own region",
                          0.f, 765.f, d.edge_threshold, flags));
   g_object_class_install_property(
       gobject_class, PROP_REGION_WEIGHT,

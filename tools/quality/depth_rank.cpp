@@ -35,10 +35,15 @@ std::vector<int> rank_sample(const cv::Mat &gt) {
   return known;
 }
 
+const char *pixel_format_name(PixelFormat f) {
+  return f == PixelFormat::I420 ? "I420" : f == PixelFormat::NV12 ? "NV12" : "RGBA";
+}
+
 struct RankCase {
   const char *cue;  // what this case changes: "defaults", "previous", a parameter name
   DepthParams depth;
   int radius;  // 0: no filter
+  PixelFormat format = PixelFormat::RGBA;  // how the picture reaches the estimator and the filter
 };
 
 std::vector<RankCase> rank_cases() {
@@ -75,6 +80,13 @@ std::vector<RankCase> rank_cases() {
     c.depth.edge_threshold = e;
     cases.push_back(c);
   }
+  // The picture as decoders deliver it (4:2:0 Y'CbCr, BT.601): the depth
+  // should not depend on the format it arrives in.
+  for (const PixelFormat f : {PixelFormat::I420, PixelFormat::NV12}) {
+    RankCase c{"input_format", DepthParams(), 5};
+    c.format = f;
+    cases.push_back(c);
+  }
   return cases;
 }
 
@@ -82,12 +94,15 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs, const 
   const std::vector<int> sample = rank_sample(a.gt);
   std::vector<double> gt_values(sample.size()), est_values(sample.size());
   for (size_t i = 0; i < sample.size(); ++i) gt_values[i] = a.gt.ptr<uint8_t>()[sample[i]];
-  const FrameView frame = a.left_frame.view();
   const std::vector<RankCase> cases = rank_cases();
+  std::vector<HostFrame> frames;  // the picture in each case's format
+  for (const RankCase &c : cases)
+    frames.push_back(c.format == PixelFormat::RGBA ? a.left_frame : HostFrame::from_bgr(a.left, c.format));
   std::vector<cv::Mat> depths(cases.size());
   std::vector<std::function<void()>> jobs;
   for (size_t k = 0; k < cases.size(); ++k)
     jobs.push_back([&, k] {
+      const FrameView frame = frames[k].view();
       depths[k] = estimated_depth(cases[k].depth, frame);
       if (cases[k].radius > 0) depths[k] = filter_depth(filter, frame, depths[k]);
     });
@@ -104,7 +119,7 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs, const 
     // rounding would otherwise turn it into a random one.
     const double rho = hi - lo > 1e-4 ? spearman(est_values, gt_values) : std::numeric_limits<double>::quiet_NaN();
     JsonLine j;
-    j.str("kind", "depth_rank").str("scale", scale).str("cue", c.cue);
+    j.str("kind", "depth_rank").str("scale", scale).str("cue", c.cue).str("format", pixel_format_name(c.format));
     j.integer("width", a.left.cols).integer("height", a.left.rows);
     j.str("hypothesis", hypothesis_name(c.depth.hypothesis)).integer("block_size", c.depth.block_size);
     j.integer("effective_block_size", effective_block_size(c.depth, a.left.cols, a.left.rows));
@@ -114,8 +129,8 @@ void measure_scale(Writer &w, const Aloe &a, const char *scale, int runs, const 
     j.integer("samples", static_cast<long long>(sample.size())).num("spearman", rho);
     j.num("time_ms", t[k].median_ms()).num("min_ms", t[k].min_ms());
     w.emit(j);
-    std::printf("depth %-4s %-14s %-11s B %2d (%d) edge %4.1f rw %.2f gc %.2f radius %d  rho %+.4f  %7.1f ms\n", scale,
-                c.cue, hypothesis_name(c.depth.hypothesis), c.depth.block_size,
+    std::printf("depth %-4s %-14s %-4s %-11s B %2d (%d) edge %4.1f rw %.2f gc %.2f radius %d  rho %+.4f  %7.1f ms\n",
+                scale, c.cue, pixel_format_name(c.format), hypothesis_name(c.depth.hypothesis), c.depth.block_size,
                 effective_block_size(c.depth, a.left.cols, a.left.rows), c.depth.edge_threshold,
                 c.depth.region_weight, c.depth.ground_contact, c.radius, rho, t[k].median_ms());
     std::fflush(stdout);
