@@ -326,6 +326,17 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
   return TRUE;
 }
 
+// The element the user placed: a stage inside pseudo3dconvert is known to
+// the user by the bin's name, not by its hidden child's ("depth").
+static const gchar *placed_element_name(GstElement *e) {
+  GstObject *parent = GST_OBJECT_PARENT(e);
+  if (parent && GST_IS_ELEMENT(parent)) {
+    GstElementFactory *f = gst_element_get_factory(GST_ELEMENT(parent));
+    if (f && g_strcmp0(GST_OBJECT_NAME(f), "pseudo3dconvert") == 0) return GST_ELEMENT_NAME(parent);
+  }
+  return GST_ELEMENT_NAME(e);
+}
+
 static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *incaps, GstCaps *outcaps) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   GstVideoInfo in, out;
@@ -351,7 +362,7 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
     accepted = gst_pseudo3d_base_refuse_caps(self, "Interlaced video is not supported",
                                              "interlace-mode %s; put deinterlace before %s",
                                              gst_video_interlace_mode_to_string(GST_VIDEO_INFO_INTERLACE_MODE(&in)),
-                                             GST_ELEMENT_NAME(self));
+                                             placed_element_name(GST_ELEMENT(self)));
   else
     accepted = !klass->set_info || klass->set_info(self, incaps, &in, outcaps, &out);
   self->negotiating_caps = nullptr;

@@ -91,10 +91,16 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   if (method == GST_PSEUDO3D_DEPTH_METHOD_RGBD) {
     // 4:2:0 halves must start on a chroma sample: the colour half's width must be even.
     if (out_w * 2 != in_w || (!GST_VIDEO_FORMAT_INFO_IS_RGB(in->finfo) && out_w % 2 != 0)) {
+      // Name the rule the caps broke: an even YUV width whose half is odd
+      // is twice as wide as its half, and said so before.
+      const bool halves = out_w * 2 == in_w;
       return gst_pseudo3d_base_refuse_caps(
-          base, "RGBD input must be twice as wide as its colour half",
-          "input %dx%d %s; YUV formats need a width that is a multiple of 4, RGB formats an even width", in_w,
-          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_NAME(in));
+          base,
+          halves ? "RGBD input in a YUV format needs a width that is a multiple of 4"
+                 : "RGBD input must be twice as wide as its colour half",
+          "input %dx%d %s; YUV formats need a width that is a multiple of 4 (the colour half must start on a "
+          "chroma sample), RGB formats an even width",
+          in_w, GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_NAME(in));
     }
   } else if (out_w != in_w) {
     return gst_pseudo3d_base_refuse_caps(base, "Output caps do not fit method=edges", "input width %d, output width %d",

@@ -263,7 +263,9 @@ TEST(Depth, RgbdSplitsColourAndDepth) {
 }
 
 // 4:2:0 RGBD halves must start on a chroma sample: 14 wide is refused with
-// the element's own reason, once; 16 wide is accepted.
+// the element's own reason, once, and that reason is the width rule (14 is
+// twice 7, so "must be twice as wide as its colour half" would be wrong);
+// 16 wide is accepted.
 TEST(Depth, RgbdRejectsUnsplittableYuvWidth) {
   GstHarness *h = gst_harness_new_parse("pseudo3ddepth method=rgbd");
   BusMessages bus(h->element);
@@ -272,8 +274,8 @@ TEST(Depth, RgbdRejectsUnsplittableYuvWidth) {
   EXPECT_NE(gst_harness_push(h, buffer_from_frame(test_frame(PixelFormat::NV12, 14, 8, 1))), GST_FLOW_OK);
   const std::vector<std::string> errors = bus.take(GST_MESSAGE_ERROR);
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_NE(errors[0].find("RGBD input must be twice as wide as its colour half"), std::string::npos) << errors[0];
-  EXPECT_NE(errors[0].find("multiple of 4"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("RGBD input in a YUV format needs a width that is a multiple of 4"), std::string::npos)
+      << errors[0];
   gst_harness_teardown(h);
   GstHarness *ok = gst_harness_new_parse("pseudo3ddepth method=rgbd");
   gst_harness_set_src_caps_str(ok, raw_caps(PixelFormat::NV12, 16, 8).c_str());
@@ -292,6 +294,16 @@ TEST(Depth, InterlacedInputIsRefused) {
   EXPECT_NE(errors[0].find("Interlaced video is not supported"), std::string::npos) << errors[0];
   EXPECT_NE(errors[0].find("deinterlace"), std::string::npos) << errors[0];
   gst_harness_teardown(h);
+}
+
+// Inside pseudo3dconvert the refusal names the element the user placed,
+// not the bin's hidden child ("put deinterlace before depth").
+TEST(Convert, InterlacedRefusalNamesTheBin) {
+  const std::string err = run_to_eos(
+      "videotestsrc num-buffers=2 ! video/x-raw,width=64,height=48,interlace-mode=interleaved ! "
+      "pseudo3dconvert name=conv3d ! fakesink");
+  EXPECT_NE(err.find("Interlaced video is not supported"), std::string::npos) << err;
+  EXPECT_NE(err.find("put deinterlace before conv3d"), std::string::npos) << err;
 }
 
 // The caps admit what the kernels accept: frames up to 8192 pixels a side
