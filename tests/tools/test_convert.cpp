@@ -367,6 +367,24 @@ TEST_F(Convert, OddSizeIsCroppedToEven) {
   }
 }
 
+// A phone video stored sideways with a rotation tag comes out upright (the
+// depth hypotheses describe the upright scene, and the output carries no
+// rotation): 160x120 stored, rotated 90 degrees, converted to 120x160.
+TEST_F(Convert, RotatedVideoIsTurnedUpright) {
+  if (!have_program("ffmpeg")) GTEST_SKIP() << "no ffmpeg to tag a rotation";
+  const std::string rotated = fx().dir + "/rotated-90.mp4", out = fx().dir + "/from-rotated.mp4";
+  g_remove(rotated.c_str());
+  g_remove(out.c_str());
+  const std::string tag = "ffmpeg -v error -y -i '" + fx().aac_mp4 + "' -c copy -metadata:s:v rotate=90 '" + rotated + "'";
+  ASSERT_EQ(std::system(tag.c_str()), 0);
+  const ToolRun r = run_convert({rotated, out, "--layout", "top-bottom-half", "--quiet", "--preset", "ultrafast"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const ReadBack rb = read_back(out);
+  EXPECT_EQ(rb.width, 120);
+  EXPECT_EQ(rb.height, 160);
+  EXPECT_EQ(rb.video_frames, 50);
+}
+
 // Progress goes to stderr; a reader that closes it (a pipe into `head`)
 // must neither kill the conversion (SIGPIPE) nor leave its temporary file.
 TEST_F(Convert, ClosedStderrPipeDoesNotStopTheConversion) {

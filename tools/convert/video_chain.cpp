@@ -122,19 +122,33 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   gst_element_sync_state_with_parent(vconv);
   // 4:2:0 encoders refuse odd sizes (x264: "Can not initialize"), and every
   // layout of an even picture is even: the last column or row of an odd one
-  // is cropped before the 3D stages.
+  // is cropped before the 3D stages (and before a rotation, whose sizes it
+  // was measured in).
   GstVideoInfo info;
   const bool known = gst_video_info_from_caps(&info, caps);
   const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
   const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
-  if (!subsampled_ || (crop_right == 0 && crop_bottom == 0)) return gst_element_link_many(head_, vconv, convert_, NULL);
-  GstElement *crop = gst_element_factory_make("videocrop", nullptr);
-  if (!crop) return false;
-  g_object_set(crop, "right", crop_right, "bottom", crop_bottom, NULL);
-  gst_bin_add(GST_BIN(bin_), crop);
-  gst_element_sync_state_with_parent(crop);
-  cropped_ = true;
-  return gst_element_link_many(head_, vconv, crop, convert_, NULL);
+  GstElement *last = vconv;
+  if (subsampled_ && (crop_right != 0 || crop_bottom != 0)) {
+    GstElement *crop = gst_element_factory_make("videocrop", nullptr);
+    if (!crop) return false;
+    g_object_set(crop, "right", crop_right, "bottom", crop_bottom, NULL);
+    gst_bin_add(GST_BIN(bin_), crop);
+    gst_element_sync_state_with_parent(crop);
+    if (!gst_element_link(last, crop)) return false;
+    last = crop;
+    cropped_ = true;
+  }
+  // Phone videos are stored sideways with a rotation tag: turn the picture
+  // upright (videoflip follows the stream's image-orientation tag and passes
+  // frames through untouched without one), since the depth hypotheses
+  // describe the upright scene and the output carries no rotation.
+  GstElement *flip = gst_element_factory_make("videoflip", nullptr);
+  if (!flip) return false;
+  gst_util_set_object_arg(G_OBJECT(flip), "video-direction", "auto");
+  gst_bin_add(GST_BIN(bin_), flip);
+  gst_element_sync_state_with_parent(flip);
+  return gst_element_link_many(head_, vconv, NULL) && gst_element_link_many(last, flip, convert_, NULL);
 }
 
 void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start) {

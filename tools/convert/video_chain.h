@@ -1,6 +1,9 @@
 // The video branch between decodebin and the encoder:
-//   queue ! [videoconvert] ! pseudo3dconvert ! video/x-raw ! queue !
-//   videoconvert ! video/x-raw,format=F ! (encoder, or fakesink to benchmark)
+//   queue ! [videoconvert ! (videocrop) ! videoflip] ! pseudo3dconvert !
+//   video/x-raw ! queue ! videoconvert ! video/x-raw,format=F !
+//   (encoder, or fakesink to benchmark)
+// (the bracket on system memory: videocrop for odd sizes and 4:2:0
+// encoders, videoflip turning rotation-tagged video upright)
 // On the GPU path NVDEC's CUDA memory goes straight into pseudo3dconvert,
 // which keeps every stage on the device and downloads once; the formats the
 // stages do not take get a videoconvert in front. The queues let decoding,
