@@ -10,22 +10,22 @@
  *    (x264enc frame-packing=auto) always marks the first view as the left
  *    one, so right-view-first content (pseudo3dpack swap-eyes=true) would
  *    otherwise be shown with its depth reversed.
- *  * For H.264 it hides the multiview caps from the muxer
- *    (multiview-mode=mono), so the stereo packing travels in the SEI alone
- *    (x264 writes it): GStreamer 1.22's mp4mux
+ *  * It hides the multiview caps from the muxer (multiview-mode=mono), so
+ *    the stereo packing travels in the SEI alone (x264 writes it):
+ *    GStreamer 1.22's mp4mux
  *    writes the eye order of its svmi box inverted, and matroskamux writes a
  *    wrong StereoMode for right-view-first side-by-side, none for
  *    interleaved layouts, and a display size that GStreamer reads per frame
  *    and ffmpeg per view. h264parse (GStreamer) and ffmpeg both read the
  *    SEI. pseudo3d-mkvstereo adds a correct StereoMode to a finished
  *    Matroska file for players that only read the container.
- *  * H.265 left-view-first caps pass unchanged: x265enc (1.22) writes no
- *    frame-packing SEI, so the muxer's own signalling (Matroska's
- *    StereoMode; 1.22's mp4mux writes none for H.265) is all the file can
- *    carry. Right-view-first H.265 goes out
- *    as mono with a warning: both muxers would write the wrong eye order,
- *    and no signalling is better than reversed depth (pseudo3d-mkvstereo
- *    adds a correct StereoMode to a finished Matroska file).
+ *  * For H.265 it does the same, and says so once per caps with a
+ *    warning: x265enc (1.22) writes no frame-packing SEI, and the muxers'
+ *    own signalling is wrong for ffmpeg (matroskamux's display size, read
+ *    per view: SAR 1:2 for top-bottom, 2:1 for side-by-side) or absent
+ *    (mp4mux), so the file carries no stereo signalling. pseudo3d-mkvstereo
+ *    adds a correct StereoMode to the finished Matroska file; H.264 carries
+ *    the SEI.
  *
  * The pixel-aspect-ratio is left alone: send the frame's own (1/1 for
  * square pixels) with the half-aspect flag, as pseudo3dpack does.
@@ -74,15 +74,12 @@ static bool right_view_first(const GstStructure *s) {
          (flags & mask & GST_VIDEO_MULTIVIEW_FLAGS_RIGHT_VIEW_FIRST) != 0;
 }
 
-// Downstream an H.264 stream is mono as far as caps go (the SEI carries the
-// packing), and so is a right-view-first H.265 one; a left-view-first H.265
-// stream keeps its multiview caps. Upstream it may be anything.
+// Downstream the stream is mono as far as caps go; upstream it may be anything.
 static GstCaps *gst_pseudo3d_signal_transform_caps(GstBaseTransform *, GstPadDirection direction, GstCaps *caps,
                                                    GstCaps *filter) {
   GstCaps *out = gst_caps_copy(caps);
   for (guint i = 0; i < gst_caps_get_size(out); ++i) {
     GstStructure *s = gst_caps_get_structure(out, i);
-    if (direction == GST_PAD_SINK && gst_structure_has_name(s, "video/x-h265") && !right_view_first(s)) continue;
     gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
     if (direction == GST_PAD_SINK) gst_structure_set(s, "multiview-mode", G_TYPE_STRING, "mono", NULL);
   }
@@ -123,10 +120,11 @@ static gboolean gst_pseudo3d_signal_set_caps(GstBaseTransform *trans, GstCaps *i
   self->right_first = right_view_first(s);
   GST_INFO_OBJECT(self, "%s stream, %s", self->stereo ? "stereo" : "2D",
                   self->right_first ? "right view first" : "left view first");
-  if (self->stereo && self->right_first && self->syntax == p3d::gst::NalSyntax::H265)
-    GST_ELEMENT_WARNING(self, STREAM, FORMAT, ("Right-view-first H.265 is written without stereo signalling"),
-                        ("x265enc writes no frame-packing SEI and the muxers would write the eye order reversed; "
-                         "use swap-eyes=false, H.264, or pseudo3d-mkvstereo on the finished Matroska file"));
+  if (self->stereo && self->syntax == p3d::gst::NalSyntax::H265)
+    GST_ELEMENT_WARNING(self, STREAM, FORMAT, ("H.265 stereo: the muxer gets no stereo signalling"),
+                        ("only a frame-packing SEI in the stream carries the layout, and x265enc writes none; the "
+                         "muxers' own signalling is wrong for ffmpeg (Matroska's display size) or absent (MP4): "
+                         "use H.264, or pseudo3d-mkvstereo on the finished Matroska file"));
   // A left-first stereo stream usually needs no rewrite (x264 writes left
   // first); the buffers are still checked, so other encoders are corrected too.
   return TRUE;
@@ -162,7 +160,7 @@ static void gst_pseudo3d_signal_class_init(GstPseudo3DSignalClass *klass) {
   GstBaseTransformClass *trans_class = GST_BASE_TRANSFORM_CLASS(klass);
   gst_element_class_set_static_metadata(
       element_class, "pseudo3d stereo signalling for muxers", "Codec/Parser/Video",
-      "Writes the eye order into the H.264/H.265 frame-packing SEI and keeps H.264's multiview caps from the muxer, so "
+      "Writes the eye order into the H.264/H.265 frame-packing SEI and keeps the multiview caps from the muxer, so "
       "MP4 and Matroska files read back right in GStreamer and ffmpeg",
       "pseudo3d developers");
   gst_element_class_add_static_pad_template(element_class, &sink_template);

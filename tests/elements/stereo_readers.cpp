@@ -54,11 +54,11 @@ std::string quoted(const std::string &path) { return "\"" + path + "\""; }
 
 }  // namespace
 
-GstStereo gst_parsed_stereo(const std::string &file, const std::string &parser) {
+GstStereo gst_parsed_stereo(const std::string &file) {
   GstStereo r;
   const bool mp4 = g_str_has_suffix(file.c_str(), ".mp4") || g_str_has_suffix(file.c_str(), ".mov");
   const std::string launch = "filesrc location=" + quoted(file) + (mp4 ? " ! qtdemux name=d" : " ! matroskademux name=d") +
-                             " d.video_0 ! " + parser + " name=p ! fakesink sync=false";
+                             " d.video_0 ! h264parse name=p ! fakesink sync=false";
   r.error = run_to_eos(launch, 60, [&](GstElement *pipeline) {
     GstElement *p = gst_bin_get_by_name(GST_BIN(pipeline), "p");
     if (!p) return;

@@ -26,7 +26,7 @@ struct GstStereo {
   unsigned flags = 0;  // GstVideoMultiviewFlags (0x1 right view first, 0x4000 half aspect)
   int par_n = 0, par_d = 0;
 };
-GstStereo gst_parsed_stereo(const std::string &file, const std::string &parser = "h264parse");
+GstStereo gst_parsed_stereo(const std::string &file);
 // Video frames decodebin delivers up to EOS; -1 with *error on failure.
 // has_audio: the file has an audio track too (it needs a sink as well).
 int gst_decoded_frames(const std::string &file, bool has_audio, std::string *error);

@@ -296,6 +296,37 @@ TEST(Depth, InterlacedInputIsRefused) {
   gst_harness_teardown(h);
 }
 
+// An H.265 stereo stream leaves pseudo3dsignal as mono, like H.264, but
+// x265enc writes no frame-packing SEI, so the file would carry no stereo
+// signalling at all: the element says so, once per caps, instead of
+// dropping it silently. H.264 gets no such warning (x264 writes the SEI).
+TEST(Signal, H265StereoIsMonoWithAWarning) {
+  for (const char *codec : {"video/x-h265", "video/x-h264"}) {
+    GstHarness *h = gst_harness_new("pseudo3dsignal");
+    BusMessages bus(h->element);
+    gst_harness_set_src_caps_str(h, (std::string(codec) +
+                                     ", stream-format=byte-stream, alignment=au, width=64, height=96, "
+                                     "multiview-mode=top-bottom, multiview-flags=(GstVideoMultiviewFlagsSet)0:ffffffff")
+                                        .c_str());
+    const uint8_t start[] = {0, 0, 0, 1, 0x40, 0x01, 0x0c};  // a NAL start, nothing the SEI scan acts on
+    ASSERT_EQ(gst_harness_push(h, gst_buffer_new_memdup(start, sizeof start)), GST_FLOW_OK);
+    ASSERT_EQ(gst_harness_push(h, gst_buffer_new_memdup(start, sizeof start)), GST_FLOW_OK);
+    GstCaps *out = gst_pad_get_current_caps(h->sinkpad);
+    ASSERT_NE(out, nullptr);
+    EXPECT_STREQ(gst_structure_get_string(gst_caps_get_structure(out, 0), "multiview-mode"), "mono") << codec;
+    gst_caps_unref(out);
+    const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
+    if (std::string(codec) == "video/x-h265") {
+      ASSERT_EQ(warnings.size(), 1u);
+      EXPECT_NE(warnings[0].find("no stereo signalling"), std::string::npos) << warnings[0];
+      EXPECT_NE(warnings[0].find("pseudo3d-mkvstereo"), std::string::npos) << warnings[0];
+    } else {
+      EXPECT_TRUE(warnings.empty()) << warnings[0];
+    }
+    gst_harness_teardown(h);
+  }
+}
+
 // Inside pseudo3dconvert the refusal names the element the user placed,
 // not the bin's hidden child ("put deinterlace before depth").
 TEST(Convert, InterlacedRefusalNamesTheBin) {

@@ -70,7 +70,9 @@ struct Job {
         return;
       }
       source.gate_pad(pad, false);
-      if (!chain.attach(pad, caps)) post_error(pipeline, "could not link the decoded video to the 3D conversion");
+      if (!chain.attach(pad, caps))
+        post_error(pipeline, chain.refusal().empty() ? "could not link the decoded video to the 3D conversion"
+                                                     : chain.refusal());
       return;
     }
     const StreamRoute route = route_stream(caps, o.kind);
@@ -198,7 +200,7 @@ bool convert_video(const Options &o, std::string *error) {
              (o.start > 0 ? std::string(" (--start is at or past the end of the video)") : std::string());
     return false;
   }
-  // A frame's position is where it starts: a last frame a second or more
+  // Frames are counted by where they end: a last frame a second or more
   // short of the announced end means frames are missing at the end.
   const GstClockTime short_by = job.progress.shortfall();
   if (o.kind == OutputKind::Mkv &&

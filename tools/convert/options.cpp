@@ -50,9 +50,9 @@ std::string lower(std::string s) {
 }
 
 bool parse_int(const std::string &s, int lo, int hi, int *v) {
-  char *end = nullptr;
-  const long x = std::strtol(s.c_str(), &end, 10);
-  if (s.empty() || *end != '\0' || x < lo || x > hi) return false;
+  if (!is_plain_decimal(s, lo < 0) || s.find('.') != std::string::npos || s.size() > 9) return false;
+  const long x = std::strtol(s.c_str(), nullptr, 10);
+  if (x < lo || x > hi) return false;
   *v = static_cast<int>(x);
   return true;
 }
@@ -120,6 +120,8 @@ bool parse_time(const std::string &s, GstClockTime *t) {
     if (last) break;
     pos = colon + 1;
   }
+  // Up to a year: beyond it llround() leaves the range of a clock time.
+  if (total > 366.0 * 24 * 3600) return false;
   *t = static_cast<GstClockTime>(std::llround(total * GST_SECOND));
   return true;
 }

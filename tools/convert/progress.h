@@ -19,8 +19,8 @@ class Progress {
 
   // Media time the conversion covers (GST_CLOCK_TIME_NONE: unknown).
   void set_total(GstClockTime total) { total_ = total; }
-  // One frame done at `position` (media time from the start of the piece
-  // converted). Any thread.
+  // One frame done, ending at `position` (media time from the start of the
+  // piece converted). Any thread.
   void frame(GstClockTime position);
   // Prints when due. The main loop calls it a few times a second.
   void tick();

@@ -22,10 +22,15 @@ GstPadProbeReturn count_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
     if (GST_EVENT_TYPE(ev) == GST_EVENT_SEGMENT) gst_event_copy_segment(ev, &c->segment);
     return GST_PAD_PROBE_OK;
   }
-  const GstClockTime pts = GST_BUFFER_PTS(GST_PAD_PROBE_INFO_BUFFER(info));
+  // Where the frame ends (its start where it has no duration): a last
+  // frame held for seconds (a slideshow, variable frame rate) still
+  // reaches the end of the piece.
+  GstBuffer *buf = GST_PAD_PROBE_INFO_BUFFER(info);
+  GstClockTime end = GST_BUFFER_PTS(buf);
+  if (GST_CLOCK_TIME_IS_VALID(end) && GST_BUFFER_DURATION_IS_VALID(buf)) end += GST_BUFFER_DURATION(buf);
   GstClockTime pos = GST_CLOCK_TIME_NONE;
-  if (GST_CLOCK_TIME_IS_VALID(pts) && c->segment.format == GST_FORMAT_TIME) {
-    const guint64 st = gst_segment_to_stream_time(&c->segment, GST_FORMAT_TIME, pts);
+  if (GST_CLOCK_TIME_IS_VALID(end) && c->segment.format == GST_FORMAT_TIME) {
+    const guint64 st = gst_segment_to_stream_time(&c->segment, GST_FORMAT_TIME, end);
     if (st != GST_CLOCK_TIME_NONE) pos = st > c->start ? st - c->start : 0;
   }
   c->progress->frame(pos);
@@ -111,8 +116,21 @@ GstCaps *VideoChain::accepted_caps() const { return video_caps_for(processing_);
 bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   GstCapsFeatures *features = gst_caps_get_features(caps, 0);
   cuda_input_ = features && gst_caps_features_contains(features, "memory:CUDAMemory");
+  if (cuda_input_) {
+    // NVDEC's CUDA frames are not cropped (no CUDA crop in 1.22's nvcodec):
+    // refuse an odd size here, with the reason, rather than let x264 fail
+    // with "Can not initialize".
+    GstVideoInfo cuda_info;
+    if (subsampled_ && gst_video_info_from_caps(&cuda_info, caps) &&
+        (GST_VIDEO_INFO_WIDTH(&cuda_info) % 2 || GST_VIDEO_INFO_HEIGHT(&cuda_info) % 2)) {
+      refusal_ = "the GPU path cannot crop an odd-sized picture (" + std::to_string(GST_VIDEO_INFO_WIDTH(&cuda_info)) +
+                 "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(&cuda_info)) +
+                 ") to the even size the 4:2:0 encoder needs: use --processing cpu";
+      return false;
+    }
+    return gst_pad_link(decoded, head_sink_) == GST_PAD_LINK_OK && gst_element_link(head_, convert_);
+  }
   if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
-  if (cuda_input_) return gst_element_link(head_, convert_);
   // System memory: videoconvert passes the formats the stages take through
   // untouched and converts the rest (10-bit, 4:2:2...).
   GstElement *vconv = gst_element_factory_make("videoconvert", nullptr);

@@ -27,8 +27,10 @@ class VideoChain {
   // the encoder takes (I420, Y444).
   bool build(GstElement *bin, const Options &o, Processing processing, const std::string &raw_format,
              std::string *error);
-  // Links decodebin's video pad (streaming thread).
+  // Links decodebin's video pad (streaming thread). False: not linked,
+  // with refusal() saying why when the chain refused the stream.
   bool attach(GstPad *decoded, const GstCaps *caps);
+  const std::string &refusal() const { return refusal_; }
   // What the chain takes, for decoders' caps queries (new ref).
   GstCaps *accepted_caps() const;
   // Counts frames reaching the encoder into `progress`, with their position
@@ -50,6 +52,7 @@ class VideoChain {
   Processing processing_ = Processing::Cpu;
   bool subsampled_ = false;  // the encoder takes 4:2:0, which needs even sizes
   bool cuda_input_ = false, cropped_ = false;
+  std::string refusal_;
 };
 
 // What the video chain takes from decoders for a processing: CUDA memory
