@@ -390,8 +390,11 @@ TEST_F(Convert, RotatedVideoIsTurnedUpright) {
   const std::string tag = "ffmpeg -v error -y -i '" + fx().aac_mp4 + "' -c copy -metadata:s:v rotate=90 '" + rotated + "'";
   ASSERT_EQ(std::system(tag.c_str()), 0);
   // Newer ffmpeg releases tag rotations with -display_rotation instead.
-  if (ffprobe_stream(rotated, "v:0", "stream_side_data=rotation").find("rotation=") == std::string::npos)
-    GTEST_SKIP() << "this ffmpeg wrote no rotation";
+  std::string probe;
+  run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries", "stream_side_data=rotation", "-of",
+               "default=nw=1", rotated},
+              &probe);
+  if (probe.find("rotation=") == std::string::npos) GTEST_SKIP() << "this ffmpeg wrote no rotation: " << probe;
   // The CPU path: NVDEC's CUDA frames reach the 3D stages as stored.
   const ToolRun r = run_convert(
       {rotated, out, "--layout", "top-bottom-half", "--quiet", "--preset", "ultrafast", "--processing", "cpu"});
