@@ -1,6 +1,7 @@
 #include "convert_video.h"
 
 #include <gst/pbutils/pbutils.h>
+#include <sys/stat.h>
 
 #include <atomic>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include "output_file.h"
 #include "progress.h"
 #include "stage_settings.h"
+#include "stall_watch.h"
 #include "stream_copy.h"
 #include "video_chain.h"
 
@@ -184,8 +186,22 @@ bool convert_video(const Options &o, std::string *error) {
   if (!out.open(o.output, o.force, error)) return false;
   if (!job.build(out.temp_path(), error)) return false;
 
+  // Two minutes without a frame: longer than any frame takes (an 8K frame
+  // is about 1.5 s through the CPU stages), short enough to end a hang.
+  struct stat in_st;
+  const bool watch = stat(o.input.c_str(), &in_st) == 0 && S_ISREG(in_st.st_mode);
+  StallWatch stall(120);
+  bool stall_posted = false;
   const LoopResult r = run_main_loop(
-      job.pipeline, [&job](std::string *e) { return job.ready(e); }, [&job]() { job.progress.tick(); });
+      job.pipeline, [&job](std::string *e) { return job.ready(e); },
+      [&]() {
+        job.progress.tick();
+        if (watch && !stall_posted && stall.stalled(job.progress.frames(), g_get_monotonic_time())) {
+          stall_posted = true;
+          post_error(job.pipeline, "no frame came for " + format_clock(stall.limit_seconds()) +
+                                       ": the decoders stalled (a damaged file?)");
+        }
+      });
   if (!r.ok) {
     job.progress.abandon();
     if (!r.missing_plugin.empty() && !job.video_linked)
