@@ -73,6 +73,7 @@ struct _GstPseudo3DDepthMux {
   gboolean have_video_info, have_depth_info;
   GstBuffer *depth;       // the depth picture in use, or null
   gboolean depth_stale;   // it came before a flush: a new one replaces it at once
+  gboolean warned_unlinked;  // the unlinked depth pad was reported (until stop)
   MuxState *state;
 };
 
@@ -328,6 +329,7 @@ static GstFlowReturn gst_pseudo3d_depth_mux_flush(GstAggregator *agg) {
 static void forget_depth(GstPseudo3DDepthMux *self) {
   gst_buffer_replace(&self->depth, nullptr);
   self->depth_stale = FALSE;
+  self->warned_unlinked = FALSE;
   self->have_video_info = self->have_depth_info = FALSE;
   self->state->plane.reset();
   self->state->plane_source = nullptr;
@@ -433,9 +435,25 @@ static GstAggregatorPad *new_sink_pad(GstPseudo3DDepthMux *self, const char *nam
   return pad;
 }
 
+// A frame reaching the video pad while nothing is linked to the depth pad
+// waits for depth that cannot come (GstAggregator does not call aggregate()
+// until every pad has data): say so once, as a warning, since a depth
+// branch that links late (decodebin's pads) is still welcome.
+static GstPadProbeReturn warn_if_depth_unlinked(GstPad *, GstPadProbeInfo *, gpointer data) {
+  GstPseudo3DDepthMux *self = GST_PSEUDO3D_DEPTH_MUX(data);
+  if (!self->warned_unlinked && !gst_pad_is_linked(GST_PAD(self->depth_pad))) {
+    self->warned_unlinked = TRUE;
+    GST_ELEMENT_WARNING(self, CORE, PAD, ("The depth pad is not linked: the frames wait for depth"),
+                        ("link a depth stream to the depth pad (one still picture serves a whole video), or use "
+                         "pseudo3ddepth to estimate depth from the frames"));
+  }
+  return GST_PAD_PROBE_OK;
+}
+
 static void gst_pseudo3d_depth_mux_init(GstPseudo3DDepthMux *self) {
   self->state = new MuxState();
   self->params = p3d::DepthImportParams();
   self->video_pad = new_sink_pad(self, "video");
   self->depth_pad = new_sink_pad(self, "depth");
+  gst_pad_add_probe(GST_PAD(self->video_pad), GST_PAD_PROBE_TYPE_BUFFER, warn_if_depth_unlinked, self, nullptr);
 }

@@ -229,6 +229,40 @@ TEST(DepthMux, NoDepthAtAllIsAnError) {
   EXPECT_NE(errors[0].find("without a depth picture"), std::string::npos) << errors[0];
 }
 
+// Nothing linked to the depth pad: GstAggregator waits for data on every
+// pad, so the frames wait for good. The element says why, once, as a
+// warning (a depth branch may still link late); with the depth pad linked
+// it says nothing.
+TEST(DepthMux, UnlinkedDepthPadIsReported) {
+  for (const bool linked : {false, true}) {
+    const std::string depth = linked ? " videotestsrc pattern=gradient ! video/x-raw,format=GRAY8,width=16,height=12 ! m.depth"
+                                     : "";
+    GstElement *p = gst_parse_launch(("videotestsrc num-buffers=5 ! video/x-raw,width=64,height=48 ! m.video "
+                                      "pseudo3ddepthmux name=m ! fakesink" + depth).c_str(),
+                                     nullptr);
+    ASSERT_NE(p, nullptr);
+    GstBus *bus = gst_element_get_bus(p);
+    gst_element_set_state(p, GST_STATE_PAUSED);
+    // Linked: the pipeline prerolls and nothing is said; unlinked: the
+    // warning. No ASSERT until the pipeline is stopped: a waiting pipeline
+    // left running would hang the process at gst_deinit().
+    GstMessage *msg = gst_bus_timed_pop_filtered(
+        bus, 10 * GST_SECOND,
+        static_cast<GstMessageType>(GST_MESSAGE_WARNING | GST_MESSAGE_ERROR | GST_MESSAGE_ASYNC_DONE));
+    const GstMessageType type = msg ? GST_MESSAGE_TYPE(msg) : GST_MESSAGE_UNKNOWN;
+    const std::string text = msg && type != GST_MESSAGE_ASYNC_DONE ? message_text(msg) : "";
+    if (msg) gst_message_unref(msg);
+    gst_element_set_state(p, GST_STATE_NULL);
+    gst_object_unref(bus);
+    gst_object_unref(p);
+    EXPECT_EQ(type, linked ? GST_MESSAGE_ASYNC_DONE : GST_MESSAGE_WARNING)
+        << (linked ? "linked: " : "unlinked: ") << (msg ? text : std::string("nothing in 10 s"));
+    if (!linked) {
+      EXPECT_NE(text.find("depth pad is not linked"), std::string::npos) << text;
+    }
+  }
+}
+
 // metric with near >= far cannot mean anything: an error naming both.
 TEST(DepthMux, MetricNeedsNearBelowFar) {
   Mux m("convention=metric near=5000 far=1000");
