@@ -1,7 +1,6 @@
 #include "convert_video.h"
 
 #include <gst/pbutils/pbutils.h>
-#include <sys/stat.h>
 
 #include <atomic>
 #include <cstdio>
@@ -188,8 +187,7 @@ bool convert_video(const Options &o, std::string *error) {
 
   // Two minutes without a frame: longer than any frame takes (an 8K frame
   // is about 1.5 s through the CPU stages), short enough to end a hang.
-  struct stat in_st;
-  const bool watch = stat(o.input.c_str(), &in_st) == 0 && S_ISREG(in_st.st_mode);
+  const bool watch = !job.source.reads_stream();
   StallWatch stall(120);
   bool stall_posted = false;
   const LoopResult r = run_main_loop(

@@ -58,6 +58,8 @@ class MediaSource {
   GstClockTime total_time(GstPad *pad) const;
 
   std::string video_decoder() const;
+  // Whether build() reads a FIFO or device (fdsrc) rather than a file.
+  bool reads_stream() const { return fd_ >= 0; }
   // decodebin's missing-plugin description, if one was posted ("" if not).
   static std::string missing_plugin(GstMessage *msg);
 

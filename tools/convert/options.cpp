@@ -44,6 +44,12 @@ bool known_preset(const std::string &p) {
   return std::any_of(std::begin(kPresets), std::end(kPresets), [&](const char *n) { return p == n; });
 }
 
+std::string preset_names() {
+  std::string s;
+  for (const char *n : kPresets) s += std::string(s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
   return s;
@@ -257,7 +263,7 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
       }
       if (!ok) {
         *error = "invalid value '" + v + "' for " + arg;
-        if (name == "preset") *error += " (ultrafast, superfast, veryfast, faster, fast, medium, slow, slower, veryslow, placebo)";
+        if (name == "preset") *error += " (" + preset_names() + ")";
         return ParseResult::ExitUsage;
       }
       if (name == "codec" || name == "crf" || name == "preset" || name == "start" || name == "duration") {

@@ -2,6 +2,9 @@
 
 #include <gst/video/video.h>
 
+#include <string>
+#include <vector>
+
 #include "progress.h"
 #include "stage_settings.h"
 
@@ -40,6 +43,16 @@ GstPadProbeReturn count_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
 GstElement *make(const char *factory, std::string *missing) {
   GstElement *e = gst_element_factory_make(factory, nullptr);
   if (!e && missing->empty()) *missing = factory;
+  return e;
+}
+
+// A new element of `factory` in `bin`, in the bin's state (streaming
+// thread: the bin already runs); null if missing.
+GstElement *add_to_bin(GstElement *bin, const char *factory) {
+  GstElement *e = gst_element_factory_make(factory, nullptr);
+  if (!e) return nullptr;
+  gst_bin_add(GST_BIN(bin), e);
+  gst_element_sync_state_with_parent(e);
   return e;
 }
 
@@ -116,15 +129,20 @@ GstCaps *VideoChain::accepted_caps() const { return video_caps_for(processing_);
 bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   GstCapsFeatures *features = gst_caps_get_features(caps, 0);
   cuda_input_ = features && gst_caps_features_contains(features, "memory:CUDAMemory");
+  // 4:2:0 encoders refuse odd sizes (x264: "Can not initialize"), and every
+  // layout of an even picture is even: the last column or row of an odd one
+  // is cropped before the 3D stages (and before a rotation, whose sizes it
+  // was measured in).
+  GstVideoInfo info;
+  const bool known = subsampled_ && gst_video_info_from_caps(&info, caps);
+  const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
+  const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
   if (cuda_input_) {
     // NVDEC's CUDA frames are not cropped (no CUDA crop in 1.22's nvcodec):
-    // refuse an odd size here, with the reason, rather than let x264 fail
-    // with "Can not initialize".
-    GstVideoInfo cuda_info;
-    if (subsampled_ && gst_video_info_from_caps(&cuda_info, caps) &&
-        (GST_VIDEO_INFO_WIDTH(&cuda_info) % 2 || GST_VIDEO_INFO_HEIGHT(&cuda_info) % 2)) {
-      refusal_ = "the GPU path cannot crop an odd-sized picture (" + std::to_string(GST_VIDEO_INFO_WIDTH(&cuda_info)) +
-                 "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(&cuda_info)) +
+    // refuse an odd size here, with the reason, rather than let x264 fail.
+    if (crop_right || crop_bottom) {
+      refusal_ = "the GPU path cannot crop an odd-sized picture (" + std::to_string(GST_VIDEO_INFO_WIDTH(&info)) + "x" +
+                 std::to_string(GST_VIDEO_INFO_HEIGHT(&info)) +
                  ") to the even size the 4:2:0 encoder needs: use --processing cpu";
       return false;
     }
@@ -133,40 +151,29 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
   // System memory: videoconvert passes the formats the stages take through
   // untouched and converts the rest (10-bit, 4:2:2...).
-  GstElement *vconv = gst_element_factory_make("videoconvert", nullptr);
+  GstElement *vconv = add_to_bin(bin_, "videoconvert");
   if (!vconv) return false;
   g_object_set(vconv, "n-threads", 0u, NULL);
-  gst_bin_add(GST_BIN(bin_), vconv);
-  gst_element_sync_state_with_parent(vconv);
-  // 4:2:0 encoders refuse odd sizes (x264: "Can not initialize"), and every
-  // layout of an even picture is even: the last column or row of an odd one
-  // is cropped before the 3D stages (and before a rotation, whose sizes it
-  // was measured in).
-  GstVideoInfo info;
-  const bool known = gst_video_info_from_caps(&info, caps);
-  const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
-  const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
-  GstElement *last = vconv;
-  if (subsampled_ && (crop_right != 0 || crop_bottom != 0)) {
-    GstElement *crop = gst_element_factory_make("videocrop", nullptr);
+  std::vector<GstElement *> links = {head_, vconv};
+  if (crop_right || crop_bottom) {
+    GstElement *crop = add_to_bin(bin_, "videocrop");
     if (!crop) return false;
     g_object_set(crop, "right", crop_right, "bottom", crop_bottom, NULL);
-    gst_bin_add(GST_BIN(bin_), crop);
-    gst_element_sync_state_with_parent(crop);
-    if (!gst_element_link(last, crop)) return false;
-    last = crop;
+    links.push_back(crop);
     cropped_ = true;
   }
   // Phone videos are stored sideways with a rotation tag: turn the picture
   // upright (videoflip follows the stream's image-orientation tag and passes
   // frames through untouched without one), since the depth hypotheses
   // describe the upright scene and the output carries no rotation.
-  GstElement *flip = gst_element_factory_make("videoflip", nullptr);
+  GstElement *flip = add_to_bin(bin_, "videoflip");
   if (!flip) return false;
   gst_util_set_object_arg(G_OBJECT(flip), "video-direction", "auto");
-  gst_bin_add(GST_BIN(bin_), flip);
-  gst_element_sync_state_with_parent(flip);
-  return gst_element_link_many(head_, vconv, NULL) && gst_element_link_many(last, flip, convert_, NULL);
+  links.push_back(flip);
+  links.push_back(convert_);
+  for (size_t i = 0; i + 1 < links.size(); ++i)
+    if (!gst_element_link(links[i], links[i + 1])) return false;
+  return true;
 }
 
 void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start) {
