@@ -46,6 +46,17 @@ std::string ffmpeg_stereo3d(const std::string &file) {
   return all.empty() ? "" : all.front();
 }
 
+// A run that failed as every failure must: status 1, one line on stderr
+// naming `mention`, neither OUTPUT nor a temporary file left in `dir`.
+void expect_clean_failure(const ToolRun &r, const std::string &out, const std::string &mention,
+                          const std::string &dir) {
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(mention), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+  EXPECT_TRUE(files_containing(dir, ".p3d-").empty());
+}
+
 std::string slurp(const std::string &path) {
   std::ifstream f(path);
   return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
@@ -246,11 +257,7 @@ TEST_F(Convert, H265PieceConverts) {
 TEST_F(Convert, MissingInputIsOneLineAndNoOutput) {
   const std::string out = fx().dir + "/never.mp4";
   g_remove(out.c_str());
-  const ToolRun r = run_convert({fx().dir + "/no-such-film.mp4", out});
-  EXPECT_EQ(r.status, 1);
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("no-such-film.mp4"), std::string::npos) << r.err;
-  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+  expect_clean_failure(run_convert({fx().dir + "/no-such-film.mp4", out}), out, "no-such-film.mp4", fx().dir);
 }
 
 TEST_F(Convert, ExistingOutputNeedsForce) {
@@ -322,12 +329,7 @@ TEST_F(Convert, InputUnderAnotherNameIsRefused) {
 TEST_F(Convert, StartPastTheEndIsAnError) {
   const std::string out = fx().dir + "/past-end.mp4";
   g_remove(out.c_str());
-  const ToolRun r = run_convert({fx().aac_mp4, out, "--start", "30", "--quiet"});
-  EXPECT_EQ(r.status, 1);
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("past the end"), std::string::npos) << r.err;
-  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
-  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
+  expect_clean_failure(run_convert({fx().aac_mp4, out, "--start", "30", "--quiet"}), out, "past the end", fx().dir);
 }
 
 // A file cut short converts what it holds and says that the end is
@@ -428,12 +430,7 @@ TEST_F(Convert, UndecodableInputFailsCleanly) {
   const std::string bad = fx().dir + "/not-a-film.mp4", out = fx().dir + "/from-bad.mkv";
   { std::ofstream(bad) << "this is no video\n"; }
   g_remove(out.c_str());
-  const ToolRun r = run_convert({bad, out});
-  EXPECT_EQ(r.status, 1);
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("not-a-film.mp4"), std::string::npos) << r.err;
-  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
-  EXPECT_TRUE(files_containing(fx().dir, ".p3d-").empty());
+  expect_clean_failure(run_convert({bad, out}), out, "not-a-film.mp4", fx().dir);
 }
 
 // Ctrl-C in the middle: the input comes through a FIFO that stops after
