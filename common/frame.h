@@ -13,6 +13,10 @@ namespace p3d {
 enum class PixelFormat : int { NV12 = 0, I420, RGBA, BGRA, RGBx, BGRx };
 
 P3D_HD bool is_packed_rgb(PixelFormat f) { return f != PixelFormat::NV12 && f != PixelFormat::I420; }
+// Packed RGB formats whose bytes run B, G, R: their r and b trade places.
+P3D_HD bool is_bgr_order(PixelFormat f) { return f == PixelFormat::BGRA || f == PixelFormat::BGRx; }
+// Packed RGB formats whose fourth byte is alpha (RGBx/BGRx: padding, read as 255).
+P3D_HD bool has_alpha(PixelFormat f) { return f == PixelFormat::RGBA || f == PixelFormat::BGRA; }
 
 // The largest source frame side the stages accept (8K DCI, 8192): the GPU
 // warp keeps a source row in shared memory, which bounds the width on every
@@ -67,52 +71,85 @@ RgbToYuv rgb_to_yuv_params(double kr, double kb, bool full_range);
 // (BT.601; only used on R'G'B' values, so it is colorimetry independent).
 P3D_HD float rgb_luma(float r, float g, float b) { return 0.299f * r + 0.587f * g + 0.114f * b; }
 
+// The Cb/Cr sample (u, v) of pixel (x, y) of a 4:2:0 frame (NV12 or I420):
+// the pixels 2k and 2k + 1 of rows 2j and 2j + 1 share it.
+P3D_HD void load_chroma(const FrameView &f, int x, int y, int *u, int *v) {
+  if (f.format == PixelFormat::NV12) {
+    const uint8_t *c = f.plane[1] + static_cast<size_t>(y / 2) * f.stride[1] + 2 * (x / 2);
+    *u = c[0];
+    *v = c[1];
+  } else {
+    *u = f.plane[1][static_cast<size_t>(y / 2) * f.stride[1] + x / 2];
+    *v = f.plane[2][static_cast<size_t>(y / 2) * f.stride[2] + x / 2];
+  }
+}
+
+// The chroma products of one Cb/Cr sample (YuvToRgb's rv Cr, gu Cb, gv Cr,
+// bu Cb), which the pixels sharing the sample share: yuv_rgba() adds them
+// to each pixel's Yn in the order load_rgba() always did, so a pixel pair
+// converted with one ChromaTerms has the bytes of two load_rgba() calls.
+struct ChromaTerms {
+  float r, gu, gv, b;
+};
+P3D_HD ChromaTerms chroma_terms(int u, int v, const YuvToRgb &m) {
+  const float cb = (static_cast<float>(u) - 128.f) * m.c_scale;
+  const float cr = (static_cast<float>(v) - 128.f) * m.c_scale;
+  return ChromaTerms{m.rv * cr, m.gu * cb, m.gv * cr, m.bu * cb};
+}
+P3D_HD Rgba yuv_rgba(int luma, const ChromaTerms &c, const YuvToRgb &m) {
+  const float yn = (static_cast<float>(luma) - m.y_offset) * m.y_scale;
+  return Rgba{to_u8(yn + c.r), to_u8(yn + c.gu + c.gv), to_u8(yn + c.b), 255};
+}
+
 // Read pixel (x, y) of any supported format as R'G'B'A (alpha 255 where the
 // format has none).
 P3D_HD Rgba load_rgba(const FrameView &f, int x, int y, const YuvToRgb &m) {
-  Rgba o;
-  switch (f.format) {
-    case PixelFormat::RGBA:
-    case PixelFormat::RGBx:
-    case PixelFormat::BGRA:
-    case PixelFormat::BGRx: {
-      const uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
-      const bool bgr = f.format == PixelFormat::BGRA || f.format == PixelFormat::BGRx;
-      const bool alpha = f.format == PixelFormat::RGBA || f.format == PixelFormat::BGRA;
-      o.r = bgr ? p[2] : p[0];
-      o.g = p[1];
-      o.b = bgr ? p[0] : p[2];
-      o.a = alpha ? p[3] : 255;
-      return o;
-    }
-    default: {
-      const int yv = f.plane[0][static_cast<size_t>(y) * f.stride[0] + x];
-      int u, v;
-      if (f.format == PixelFormat::NV12) {
-        const uint8_t *c = f.plane[1] + static_cast<size_t>(y / 2) * f.stride[1] + 2 * (x / 2);
-        u = c[0];
-        v = c[1];
-      } else {
-        u = f.plane[1][static_cast<size_t>(y / 2) * f.stride[1] + x / 2];
-        v = f.plane[2][static_cast<size_t>(y / 2) * f.stride[2] + x / 2];
-      }
-      const float yn = (static_cast<float>(yv) - m.y_offset) * m.y_scale;
-      const float cb = (static_cast<float>(u) - 128.f) * m.c_scale;
-      const float cr = (static_cast<float>(v) - 128.f) * m.c_scale;
-      o.r = to_u8(yn + m.rv * cr);
-      o.g = to_u8(yn + m.gu * cb + m.gv * cr);
-      o.b = to_u8(yn + m.bu * cb);
-      o.a = 255;
-      return o;
-    }
+  if (is_packed_rgb(f.format)) {
+    const uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
+    const bool bgr = is_bgr_order(f.format), alpha = has_alpha(f.format);
+    return Rgba{bgr ? p[2] : p[0], p[1], bgr ? p[0] : p[2], alpha ? p[3] : static_cast<uint8_t>(255)};
   }
+  int u, v;
+  load_chroma(f, x, y, &u, &v);
+  return yuv_rgba(f.plane[0][static_cast<size_t>(y) * f.stride[0] + x], chroma_terms(u, v, m), m);
+}
+
+// Rgba as a little-endian word r | g << 8 | b << 16 | a << 24 (Rgba's
+// memory order) and back: rows of converted pixels are kept as words so
+// that a pixel moves, and two channels are multiplied, in one operation.
+P3D_HD uint32_t rgba_word(Rgba c) {
+  return static_cast<uint32_t>(c.r) | static_cast<uint32_t>(c.g) << 8 | static_cast<uint32_t>(c.b) << 16 |
+         static_cast<uint32_t>(c.a) << 24;
+}
+P3D_HD Rgba word_rgba(uint32_t w) {
+  return Rgba{static_cast<uint8_t>(w), static_cast<uint8_t>(w >> 8), static_cast<uint8_t>(w >> 16),
+              static_cast<uint8_t>(w >> 24)};
+}
+
+// rgba_word(load_rgba()) of pixels x and x + 1 of row y into w[0] and w[1]
+// (x even; x + 1 == width: w[0] only). A 4:2:0 pair shares its chroma
+// sample, read and multiplied once: the warp converts each source row this
+// way (common/warp.cpp, cuda/warp.cu).
+P3D_HD void load_rgba_pair_words(const FrameView &f, int x, int y, const YuvToRgb &m, uint32_t *w) {
+  const bool second = x + 1 < f.width;
+  if (is_packed_rgb(f.format)) {
+    w[0] = rgba_word(load_rgba(f, x, y, m));
+    if (second) w[1] = rgba_word(load_rgba(f, x + 1, y, m));
+    return;
+  }
+  int u, v;
+  load_chroma(f, x, y, &u, &v);
+  const ChromaTerms c = chroma_terms(u, v, m);
+  const uint8_t *luma = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + x;
+  w[0] = rgba_word(yuv_rgba(luma[0], c, m));
+  if (second) w[1] = rgba_word(yuv_rgba(luma[1], c, m));
 }
 
 // Write an R'G'B'A pixel into a packed RGB frame (other formats: no-op).
 P3D_HD void store_rgba(const FrameView &f, int x, int y, Rgba c) {
   if (!is_packed_rgb(f.format)) return;
   uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
-  const bool bgr = f.format == PixelFormat::BGRA || f.format == PixelFormat::BGRx;
+  const bool bgr = is_bgr_order(f.format);
   p[0] = bgr ? c.b : c.r;
   p[1] = c.g;
   p[2] = bgr ? c.r : c.b;
@@ -175,14 +212,7 @@ P3D_HD void load_native3(const FrameView &f, int x, int y, int out[3]) {
     return;
   }
   out[0] = f.plane[0][static_cast<size_t>(y) * f.stride[0] + x];
-  if (f.format == PixelFormat::NV12) {
-    const uint8_t *c = f.plane[1] + static_cast<size_t>(y / 2) * f.stride[1] + 2 * (x / 2);
-    out[1] = c[0];
-    out[2] = c[1];
-  } else {
-    out[1] = f.plane[1][static_cast<size_t>(y / 2) * f.stride[1] + x / 2];
-    out[2] = f.plane[2][static_cast<size_t>(y / 2) * f.stride[2] + x / 2];
-  }
+  load_chroma(f, x, y, &out[1], &out[2]);
 }
 
 // Helpers for host code: number of planes and the size of plane i.

@@ -209,8 +209,7 @@ void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp,
 }
 
 void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out) {
-  const bool bgr = in.format == PixelFormat::BGRA || in.format == PixelFormat::BGRx;
-  const bool alpha = in.format == PixelFormat::RGBA || in.format == PixelFormat::BGRA;
+  const bool bgr = is_bgr_order(in.format), alpha = has_alpha(in.format);
   auto row_fn = bgr ? (alpha ? anaglyph_pair_row<true, true> : anaglyph_pair_row<true, false>)
                     : (alpha ? anaglyph_pair_row<false, true> : anaglyph_pair_row<false, false>);
   const size_t left = 4 * static_cast<size_t>(pack_detail::view_slot(p, 0) * (in.width / 2));

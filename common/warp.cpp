@@ -36,11 +36,12 @@ struct Eye {
 // The source row y converted once to R'G'B'A (load_rgba), as rgba_word()
 // words, as the GPU holds it in shared memory: both eyes sample it
 // (sample_word), so a pixel is converted once instead of twice per eye.
+// A pair at a time, as the GPU does: a 4:2:0 pair shares its chroma.
 struct SourceRow {
   std::vector<uint32_t> words;
   explicit SourceRow(int width) : words(static_cast<size_t>(width)) {}
   void load(const WarpJob &j, int y) {
-    for (int x = 0; x < j.width; ++x) words[x] = rgba_word(load_rgba(j.src, x, y, j.m));
+    for (int x = 0; x < j.width; x += 2) load_rgba_pair_words(j.src, x, y, j.m, words.data() + x);
   }
 };
 
@@ -55,7 +56,7 @@ struct OutputRow {
   bool bgr;
   OutputRow(const FrameView &out, int col0, int y)
       : p(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + 4 * static_cast<size_t>(col0)),
-        bgr(out.format == PixelFormat::BGRA || out.format == PixelFormat::BGRx) {}
+        bgr(is_bgr_order(out.format)) {}
   void put(int x, uint32_t w) const {
     if (bgr) w = (w & 0xff00ff00u) | (w >> 16 & 0xffu) | (w & 0xffu) << 16;
     std::memcpy(p + 4 * static_cast<size_t>(x), &w, 4);

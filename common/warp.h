@@ -181,20 +181,6 @@ P3D_HD Rgba sample_row(const Rgba *row, int width, unsigned long long key) {
   return o;
 }
 
-// Rgba as a little-endian word r | g << 8 | b << 16 | a << 24 (Rgba's
-// memory order) and back: source rows are kept as words so that a covered
-// pixel is resolved with two 32-bit loads, two channels per multiply
-// (sample_word) and one 32-bit store instead of byte loads, four channel
-// formulas and four byte stores.
-P3D_HD uint32_t rgba_word(Rgba c) {
-  return static_cast<uint32_t>(c.r) | static_cast<uint32_t>(c.g) << 8 | static_cast<uint32_t>(c.b) << 16 |
-         static_cast<uint32_t>(c.a) << 24;
-}
-P3D_HD Rgba word_rgba(uint32_t w) {
-  return Rgba{static_cast<uint8_t>(w), static_cast<uint8_t>(w >> 8), static_cast<uint8_t>(w >> 16),
-              static_cast<uint8_t>(w >> 24)};
-}
-
 // sample_row() on words: per channel (a (256 - k) + b k + 128) >> 8, which
 // is sample_channel()'s (256 a + (b - a) k + 128) >> 8 with no negative
 // term, and at most 255 * 256 + 128 < 2^16, so the two 16-bit fields of

@@ -1,5 +1,7 @@
 // Colour conversion parameters, packed-format swizzles, luma and plane
 // geometry (common/frame.h, common/colour.cpp).
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "frame.h"
@@ -220,6 +222,57 @@ TEST(ColourChroma, OneChromaSampleServesA2x2Block) {
     EXPECT_EQ(a[1], cu);
     EXPECT_EQ(a[0], v.plane[0][2 * v.stride[0] + 4]);
   }
+}
+
+// load_rgba() of Y'CbCr goes through chroma_terms() and yuv_rgba(), which a
+// 4:2:0 pixel pair shares: the result must be the float formula of
+// YuvToRgb's comment, evaluated as written (left to right, no fused
+// multiply-add), for every Y' and a grid of Cb/Cr under every matrix.
+TEST(ColourYuv, LoadRgbaIsTheWrittenFormula) {
+  const YuvToRgb matrices[] = {YuvToRgb(), yuv_to_rgb_params(0.2126, 0.0722, false),
+                               yuv_to_rgb_params(0.299, 0.114, true), yuv_to_rgb_params(0.2627, 0.0593, true)};
+  HostFrame h(PixelFormat::I420, 2, 2, 0);
+  const FrameView v = h.view();
+  int mismatches = 0;
+  for (const YuvToRgb &m : matrices)
+    for (int y = 0; y < 256; ++y)
+      for (int u = 0; u < 256; u += 3)
+        for (int w = 0; w < 256; w += 5) {
+          v.plane[0][0] = static_cast<uint8_t>(y);
+          v.plane[1][0] = static_cast<uint8_t>(u);
+          v.plane[2][0] = static_cast<uint8_t>(w);
+          const float yn = (static_cast<float>(y) - m.y_offset) * m.y_scale;
+          const float cb = (static_cast<float>(u) - 128.f) * m.c_scale;
+          const float cr = (static_cast<float>(w) - 128.f) * m.c_scale;
+          const Rgba want{to_u8(yn + m.rv * cr), to_u8(yn + m.gu * cb + m.gv * cr), to_u8(yn + m.bu * cb), 255};
+          const Rgba got = load_rgba(v, 0, 0, m);
+          if (rgba_word(got) != rgba_word(want) && ++mismatches <= 5)
+            ADD_FAILURE() << "Y'CbCr " << y << "," << u << "," << w << ": got " << int(got.r) << "," << int(got.g)
+                          << "," << int(got.b) << " want " << int(want.r) << "," << int(want.g) << ","
+                          << int(want.b);
+        }
+  EXPECT_EQ(mismatches, 0);
+}
+
+// The warp converts its source rows a pixel pair at a time
+// (load_rgba_pair_words): the same words as load_rgba() pixel by pixel, for
+// every format, odd widths (the last pixel alone) and padded rows.
+TEST(ColourChroma, PairWordsAreLoadRgbaWords) {
+  const YuvToRgb m = yuv_to_rgb_params(0.2126, 0.0722, false);
+  for (PixelFormat f : test::kAllFormats)
+    for (int width : {1, 2, 7, 64}) {
+      HostFrame h(f, width, 3, 3);
+      h.fill_random(static_cast<uint32_t>(width) * 7 + static_cast<uint32_t>(f));
+      const FrameView v = h.view();
+      for (int y = 0; y < 3; ++y) {
+        std::vector<uint32_t> words(static_cast<size_t>(width) + 1, 0xdeadbeefu);
+        for (int x = 0; x < width; x += 2) load_rgba_pair_words(v, x, y, m, words.data() + x);
+        for (int x = 0; x < width; ++x)
+          ASSERT_EQ(words[x], rgba_word(load_rgba(v, x, y, m)))
+              << test::format_name(f) << " width " << width << " pixel " << x << "," << y;
+        EXPECT_EQ(words[width], 0xdeadbeefu) << "wrote past the row: " << test::format_name(f) << " " << width;
+      }
+    }
 }
 
 TEST(ColourPlanes, PlaneSizesOfOddFrames) {
