@@ -57,14 +57,12 @@ class WarpRendererGpu {
 
  private:
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
-  CudaStatus background_smooth(const FrameView &out, int W, int H, const float shift[2], float D,
-                               const uint8_t *state, const Rgba *anchor, const uint8_t *chunk_holes,
-                               cudaStream_t stream);
 
   // keys_: 2 eyes x H x W keys, only for rows too wide for shared memory.
-  // counters_: total holes, per-step fill counts. scratch_: the two
-  // NeighborAverage hole masks (2 eyes x H x W bytes each). smooth_: the
-  // BackgroundSmooth planes (anchors, states, chunk flags; 2 eyes).
+  // counters_: total holes, per-step fill counts, BackgroundSmooth's tile
+  // count and marks (zeroed every frame). scratch_: the two NeighborAverage
+  // hole masks (2 eyes x H x W bytes each). smooth_: the BackgroundSmooth
+  // planes (anchors, states, chunk flags; 2 eyes) and its tile list.
   DeviceBuffer keys_, counters_, scratch_, smooth_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
 };
