@@ -220,6 +220,49 @@ void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint
   gst_structure_take_value(s, field, &scaled);
 }
 
+// The values x >= 1 with lo <= x * num / den <= hi (floor), as an int or a
+// range: ceil(lo * den / num) .. floor(((hi + 1) * den - 1) / num). None
+// (an odd size doubled): the nearest, lo's own preimage, which set_info()
+// then refuses.
+static void unscale_range(gint lo, gint hi, gint num, gint den, GValue *out) {
+  const gint64 a = CLAMP(((gint64)lo * den + num - 1) / num, 1, G_MAXINT);
+  gint64 b = CLAMP(((gint64)(hi + 1) * den - 1) / num, 1, G_MAXINT);
+  if (b < a) b = a;
+  if (a == b) {
+    g_value_init(out, G_TYPE_INT);
+    g_value_set_int(out, (gint)a);
+  } else {
+    g_value_init(out, GST_TYPE_INT_RANGE);
+    gst_value_set_int_range(out, (gint)a, (gint)b);
+  }
+}
+
+static void unscale_value(const GValue *in, GValue *out, gint num, gint den) {
+  if (G_VALUE_HOLDS_INT(in)) {
+    unscale_range(g_value_get_int(in), g_value_get_int(in), num, den, out);
+  } else if (GST_VALUE_HOLDS_INT_RANGE(in)) {
+    unscale_range(gst_value_get_int_range_min(in), gst_value_get_int_range_max(in), num, den, out);
+  } else if (GST_VALUE_HOLDS_LIST(in)) {
+    g_value_init(out, GST_TYPE_LIST);
+    for (guint i = 0; i < gst_value_list_get_size(in); ++i) {
+      GValue item = G_VALUE_INIT;
+      unscale_value(gst_value_list_get_value(in, i), &item, num, den);
+      gst_value_list_append_and_take_value(out, &item);
+    }
+  } else {
+    g_value_init(out, G_VALUE_TYPE(in));
+    g_value_copy(in, out);
+  }
+}
+
+void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den) {
+  const GValue *v = gst_structure_get_value(s, field);
+  if (!v || num == den) return;
+  GValue unscaled = G_VALUE_INIT;
+  unscale_value(v, &unscaled, num, den);
+  gst_structure_take_value(s, field, &unscaled);
+}
+
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s) {
   GstCaps *caps = gst_caps_new_empty();
   gst_caps_append_structure(caps, s);

@@ -132,6 +132,12 @@ p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::
  * range or a list of them (clamped to 1..G_MAXINT); caps holding one copy
  * of a structure. */
 void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den);
+/* The way back through gst_pseudo3d_scale_field(s, field, num, den): every
+ * value v with v * num / den (rounded down) among the field's values, so
+ * that a size whose forward image is rounded (an odd width halved) still
+ * passes the caps query, and set_info() can refuse it with its reason
+ * instead of a bare not-negotiated. */
+void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den);
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s); /* takes s */
 /* Sets the format field to `formats` ("{ A, B }" or one name) and drops the
  * colorimetry and chroma-site, which belong to the old format family. */

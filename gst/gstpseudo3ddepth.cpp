@@ -78,7 +78,9 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   const bool rgbd = self->state->method.negotiating() == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
   GST_OBJECT_UNLOCK(self);
   GstStructure *s = gst_structure_copy(in);
-  if (rgbd) gst_pseudo3d_scale_field(s, "width", from == GST_PAD_SINK ? 1 : 2, from == GST_PAD_SINK ? 2 : 1);
+  // Towards the sink every width whose half this is, an odd one too: set_info() refuses it with its reason.
+  if (rgbd && from == GST_PAD_SINK) gst_pseudo3d_scale_field(s, "width", 1, 2);
+  if (rgbd && from == GST_PAD_SRC) gst_pseudo3d_unscale_field(s, "width", 1, 2);
   return gst_pseudo3d_caps_of(s);
 }
 

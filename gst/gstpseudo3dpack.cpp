@@ -122,8 +122,13 @@ static GstStructure *transformed(const GstStructure *in, gboolean to_src, p3d::S
   GstStructure *s = gst_structure_copy(in);
   gint wn, wd, hn, hd;
   size_ratio(input, g.layout, &wn, &wd, &hn, &hd);
-  gst_pseudo3d_scale_field(s, "width", to_src ? wn : wd, to_src ? wd : wn);
-  gst_pseudo3d_scale_field(s, "height", to_src ? hn : hd, to_src ? hd : hn);
+  if (to_src) {
+    gst_pseudo3d_scale_field(s, "width", wn, wd);
+    gst_pseudo3d_scale_field(s, "height", hn, hd);
+  } else {  // every input size that gives these: an odd one too, which set_info() refuses with its reason
+    gst_pseudo3d_unscale_field(s, "width", wn, wd);
+    gst_pseudo3d_unscale_field(s, "height", hn, hd);
+  }
   return s;
 }
 

@@ -229,6 +229,34 @@ TEST(Pipeline, BadPropertyValueFailsToParse) {
   EXPECT_NE("", run_to_eos("videotestsrc num-buffers=1 ! pseudo3dpack layout=nonsense ! fakesink"));
 }
 
+// A frame that cannot hold what the element was told it holds (an odd
+// width declared side-by-side, an odd height declared top-bottom, an odd
+// RGBD frame), behind a real source whose caps query carries the size: the
+// element's own reason, not the source's bare not-negotiated. Before, the
+// way back through the caps halved the size and doubled it again, so the
+// query came back empty and set_info() never ran.
+TEST(Pipeline, OddSizedPairsAreRefusedWithTheirReason) {
+  struct Case {
+    const char *element, *caps, *reason;
+  };
+  const Case cases[] = {
+      {"pseudo3dpack input-layout=side-by-side layout=anaglyph", "width=15,height=4", "even width"},
+      {"pseudo3dpack input-layout=top-bottom layout=side-by-side", "width=16,height=5", "even height"},
+      {"pseudo3ddepth method=rgbd", "width=15,height=4", "twice as wide"},
+  };
+  for (const Case &c : cases) {
+    const std::string err = run_to_eos(std::string("videotestsrc num-buffers=1 ! video/x-raw,format=RGBA,") + c.caps +
+                                       " ! " + c.element + " ! fakesink");
+    EXPECT_NE(err.find(c.reason), std::string::npos) << c.element << ": " << err;
+    EXPECT_EQ(err.find("not-negotiated"), std::string::npos) << c.element << ": " << err;
+  }
+  // The same elements still negotiate the even sizes.
+  EXPECT_EQ("", run_to_eos("videotestsrc num-buffers=1 ! video/x-raw,format=RGBA,width=16,height=4 ! "
+                           "pseudo3dpack input-layout=side-by-side layout=anaglyph ! fakesink"));
+  EXPECT_EQ("", run_to_eos("videotestsrc num-buffers=1 ! video/x-raw,format=RGBA,width=16,height=4 ! "
+                           "pseudo3ddepth method=rgbd ! fakesink"));
+}
+
 // processing=gpu without a usable GPU fails to start with a message that
 // says so (skipped where a GPU is present: then it simply runs).
 TEST(Pipeline, ProcessingGpuWithoutGpuIsAClearError) {
