@@ -1,5 +1,6 @@
 #include "gstpseudo3dbase.h"
 
+#include <algorithm>
 #include <cstdarg>
 #include <exception>
 #include <new>
@@ -186,81 +187,69 @@ static gboolean gst_pseudo3d_base_stop(GstBaseTransform *trans) {
 
 /* ---- caps ---- */
 
-static void scale_value(const GValue *in, GValue *out, gint num, gint den) {
-  auto scale = [&](gint v) -> gint {
-    const gint64 r = (gint64)v * num / den;
-    return (gint)CLAMP(r, 1, G_MAXINT);
-  };
-  if (G_VALUE_HOLDS_INT(in)) {
+// The int range lo..hi (an int: lo == hi) into `out`: an int when one value
+// is left, else a range.
+static void set_int_range(GValue *out, gint64 lo, gint64 hi) {
+  if (lo == hi) {
     g_value_init(out, G_TYPE_INT);
-    g_value_set_int(out, scale(g_value_get_int(in)));
-  } else if (GST_VALUE_HOLDS_INT_RANGE(in)) {
+    g_value_set_int(out, (gint)lo);
+  } else {
     g_value_init(out, GST_TYPE_INT_RANGE);
-    gint lo = scale(gst_value_get_int_range_min(in)), hi = scale(gst_value_get_int_range_max(in));
-    if (lo >= hi) hi = lo + 1;
-    gst_value_set_int_range(out, lo, hi);
+    gst_value_set_int_range(out, (gint)lo, (gint)hi);
+  }
+}
+
+// Maps a caps field's value through map(lo, hi, out): an int as the range
+// v..v, an int range, or a list of them, item by item; other values are
+// copied.
+template <typename RangeMap>
+static void map_value(const GValue *in, GValue *out, const RangeMap &map) {
+  if (G_VALUE_HOLDS_INT(in)) {
+    map(g_value_get_int(in), g_value_get_int(in), out);
+  } else if (GST_VALUE_HOLDS_INT_RANGE(in)) {
+    map(gst_value_get_int_range_min(in), gst_value_get_int_range_max(in), out);
   } else if (GST_VALUE_HOLDS_LIST(in)) {
     g_value_init(out, GST_TYPE_LIST);
     for (guint i = 0; i < gst_value_list_get_size(in); ++i) {
       GValue item = G_VALUE_INIT;
-      scale_value(gst_value_list_get_value(in, i), &item, num, den);
+      map_value(gst_value_list_get_value(in, i), &item, map);
       gst_value_list_append_and_take_value(out, &item);
     }
   } else {
     g_value_init(out, G_VALUE_TYPE(in));
     g_value_copy(in, out);
   }
+}
+
+template <typename RangeMap>
+static void map_field(GstStructure *s, const char *field, const RangeMap &map) {
+  const GValue *v = gst_structure_get_value(s, field);
+  if (!v) return;
+  GValue mapped = G_VALUE_INIT;
+  map_value(v, &mapped, map);
+  gst_structure_take_value(s, field, &mapped);
 }
 
 void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den) {
-  const GValue *v = gst_structure_get_value(s, field);
-  if (!v || num == den) return;
-  GValue scaled = G_VALUE_INIT;
-  scale_value(v, &scaled, num, den);
-  gst_structure_take_value(s, field, &scaled);
+  if (num == den) return;
+  auto scale = [&](gint v) -> gint64 { return CLAMP((gint64)v * num / den, 1, G_MAXINT); };
+  map_field(s, field, [&](gint lo, gint hi, GValue *out) {
+    if (lo == hi) return set_int_range(out, scale(lo), scale(lo));
+    const gint64 a = scale(lo);  // a range stays a range (but for G_MAXINT itself)
+    set_int_range(out, a, std::max(scale(hi), std::min<gint64>(a + 1, G_MAXINT)));
+  });
 }
 
-// The values x >= 1 with lo <= x * num / den <= hi (floor), as an int or a
-// range: ceil(lo * den / num) .. floor(((hi + 1) * den - 1) / num). None
-// (an odd size doubled): the nearest, lo's own preimage, which set_info()
-// then refuses.
-static void unscale_range(gint lo, gint hi, gint num, gint den, GValue *out) {
-  const gint64 a = CLAMP(((gint64)lo * den + num - 1) / num, 1, G_MAXINT);
-  gint64 b = CLAMP(((gint64)(hi + 1) * den - 1) / num, 1, G_MAXINT);
-  if (b < a) b = a;
-  if (a == b) {
-    g_value_init(out, G_TYPE_INT);
-    g_value_set_int(out, (gint)a);
-  } else {
-    g_value_init(out, GST_TYPE_INT_RANGE);
-    gst_value_set_int_range(out, (gint)a, (gint)b);
-  }
-}
-
-static void unscale_value(const GValue *in, GValue *out, gint num, gint den) {
-  if (G_VALUE_HOLDS_INT(in)) {
-    unscale_range(g_value_get_int(in), g_value_get_int(in), num, den, out);
-  } else if (GST_VALUE_HOLDS_INT_RANGE(in)) {
-    unscale_range(gst_value_get_int_range_min(in), gst_value_get_int_range_max(in), num, den, out);
-  } else if (GST_VALUE_HOLDS_LIST(in)) {
-    g_value_init(out, GST_TYPE_LIST);
-    for (guint i = 0; i < gst_value_list_get_size(in); ++i) {
-      GValue item = G_VALUE_INIT;
-      unscale_value(gst_value_list_get_value(in, i), &item, num, den);
-      gst_value_list_append_and_take_value(out, &item);
-    }
-  } else {
-    g_value_init(out, G_VALUE_TYPE(in));
-    g_value_copy(in, out);
-  }
-}
-
+// The values x >= 1 with lo <= x * num / den <= hi (floor): ceil(lo * den /
+// num) .. floor(((hi + 1) * den - 1) / num). None (an odd size doubled):
+// lo's nearest preimage, which set_info() then refuses.
 void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den) {
-  const GValue *v = gst_structure_get_value(s, field);
-  if (!v || num == den) return;
-  GValue unscaled = G_VALUE_INIT;
-  unscale_value(v, &unscaled, num, den);
-  gst_structure_take_value(s, field, &unscaled);
+  if (num == den) return;
+  map_field(s, field, [&](gint lo, gint hi, GValue *out) {
+    const gint64 a = CLAMP(((gint64)lo * den + num - 1) / num, 1, G_MAXINT);
+    const gint64 b = CLAMP(((gint64)(hi + 1) * den - 1) / num, 1, G_MAXINT);
+    set_int_range(out, a, std::max(a, b));
+  });
 }
 
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s) {
