@@ -195,6 +195,20 @@ TEST_F(Convert, Mp4AnaglyphIs444AndReencodesVorbisToAac) {
   EXPECT_NEAR(out.audio_end - out.audio_start, in.audio_end - in.audio_start, kFrame);
 }
 
+// The summary line names each audio stream by the codec it had: a
+// re-encoded one arrives decoded, and was described by its decoded caps
+// ("Raw 32-bit floating-point audio" for this Vorbis); a copied one by its
+// own caps.
+TEST_F(Convert, SummaryNamesTheCodecAReencodedStreamHad) {
+  const std::string out = fx().dir + "/summary-vorbis.mp4";
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({fx().vorbis_mkv, out, "--preset", "ultrafast"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("audio re-encoded from Vorbis"), std::string::npos) << r.err;
+  ASSERT_EQ(fx().sbs_run.status, 0);
+  EXPECT_NE(fx().sbs_run.err.find("audio copied, MPEG-4 AAC"), std::string::npos) << fx().sbs_run.err;
+}
+
 TEST_F(Convert, FfprobeReadsLayoutEyeOrderAndAudio) {
   if (!have_program("ffprobe") || !have_program("ffmpeg")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
   ASSERT_EQ(fx().sbs_run.status, 0);

@@ -91,8 +91,11 @@ struct Job {
     }
     gst_object_unref(head);
     const bool audio = name.rfind("audio/", 0) == 0;
+    // A re-encoded stream arrives decoded: name the codec it had.
+    GstCaps *encoded = route.action == StreamAction::Encode ? MediaSource::encoded_caps(pad) : nullptr;
     stream(std::string(audio ? "audio " : "subtitles ") +
-           (route.action == StreamAction::Encode ? "re-encoded from " : "copied, ") + codec_name(caps));
+           (route.action == StreamAction::Encode ? "re-encoded from " : "copied, ") + codec_name(encoded ? encoded : caps));
+    if (encoded) gst_caps_unref(encoded);
   }
 
   // Main thread, once every stream is linked.

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 
 namespace p3d::convert {
 
@@ -132,6 +133,33 @@ std::string MediaSource::missing_plugin(GstMessage *msg) {
   std::string s = d ? d : "";
   g_free(d);
   return s;
+}
+
+GstCaps *MediaSource::encoded_caps(GstPad *decoded_pad) {
+  GstPad *pad = GST_IS_GHOST_PAD(decoded_pad) ? gst_ghost_pad_get_target(GST_GHOST_PAD(decoded_pad)) : nullptr;
+  GstCaps *found = nullptr;
+  // decoder ! (decodebin's pad): the decoder's sink caps; a few steps more
+  // for what may sit between (a converter, a queue with one sink pad).
+  for (int step = 0; pad && !found && step < 8; ++step) {
+    GstElement *element = gst_pad_get_parent_element(pad);
+    gst_object_unref(pad);
+    pad = nullptr;
+    if (!element) break;
+    // A demuxer's sink caps name the container, not the stream: stop there.
+    const char *klass = gst_element_get_metadata(element, GST_ELEMENT_METADATA_KLASS);
+    GstPad *sink = klass && strstr(klass, "Demux") ? nullptr : gst_element_get_static_pad(element, "sink");
+    gst_object_unref(element);
+    if (!sink) break;
+    GstCaps *caps = gst_pad_get_current_caps(sink);
+    if (caps && !g_str_has_suffix(gst_structure_get_name(gst_caps_get_structure(caps, 0)), "/x-raw"))
+      found = caps;
+    else if (caps)
+      gst_caps_unref(caps);
+    pad = gst_pad_get_peer(sink);
+    gst_object_unref(sink);
+  }
+  if (pad) gst_object_unref(pad);
+  return found;
 }
 
 gboolean MediaSource::on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self) {

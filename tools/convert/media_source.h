@@ -62,6 +62,10 @@ class MediaSource {
   bool reads_stream() const { return fd_ >= 0; }
   // decodebin's missing-plugin description, if one was posted ("" if not).
   static std::string missing_plugin(GstMessage *msg);
+  // The caps a decoded decodebin pad's stream had before decoding (new ref):
+  // the first caps upstream of it that are not raw; null if none (the
+  // stream came raw), so that a re-encoded stream is named by its codec.
+  static GstCaps *encoded_caps(GstPad *decoded_pad);
 
  private:
   static gboolean on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self);
