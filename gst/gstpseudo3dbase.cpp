@@ -241,13 +241,13 @@ void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint
 }
 
 // The values x >= 1 with lo <= x * num / den <= hi (floor): ceil(lo * den /
-// num) .. floor(((hi + 1) * den - 1) / num). None (an odd size doubled):
-// lo's nearest preimage, which set_info() then refuses.
+// num) .. floor(((hi + 1) * den - 1) / num). None (an odd size, doubled):
+// the smallest x above, whose image the caps then refuse.
 void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den) {
   if (num == den) return;
   map_field(s, field, [&](gint lo, gint hi, GValue *out) {
     const gint64 a = CLAMP(((gint64)lo * den + num - 1) / num, 1, G_MAXINT);
-    const gint64 b = CLAMP(((gint64)(hi + 1) * den - 1) / num, 1, G_MAXINT);
+    const gint64 b = CLAMP((((gint64)hi + 1) * den - 1) / num, 1, G_MAXINT);
     set_int_range(out, a, std::max(a, b));
   });
 }

@@ -136,7 +136,9 @@ void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint
  * value v with v * num / den (rounded down) among the field's values, so
  * that a size whose forward image is rounded (an odd width halved) still
  * passes the caps query, and set_info() can refuse it with its reason
- * instead of a bare not-negotiated. */
+ * instead of a bare not-negotiated. Offer such a structure after the exact
+ * inverse (gst_pseudo3d_scale_field(s, field, den, num)), so that a free
+ * upstream fixates the size that works. */
 void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den);
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s); /* takes s */
 /* Sets the format field to `formats` ("{ A, B }" or one name) and drops the

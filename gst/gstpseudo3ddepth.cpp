@@ -78,10 +78,18 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   const bool rgbd = self->state->method.negotiating() == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
   GST_OBJECT_UNLOCK(self);
   GstStructure *s = gst_structure_copy(in);
-  // Towards the sink every width whose half this is, an odd one too: set_info() refuses it with its reason.
-  if (rgbd && from == GST_PAD_SINK) gst_pseudo3d_scale_field(s, "width", 1, 2);
-  if (rgbd && from == GST_PAD_SRC) gst_pseudo3d_unscale_field(s, "width", 1, 2);
-  return gst_pseudo3d_caps_of(s);
+  if (!rgbd) return gst_pseudo3d_caps_of(s);
+  if (from == GST_PAD_SINK) {
+    gst_pseudo3d_scale_field(s, "width", 1, 2);
+    return gst_pseudo3d_caps_of(s);
+  }
+  // Towards the sink: twice the width first, so that a free upstream
+  // fixates it; then every width whose half this is, an odd one too, which
+  // set_info() refuses with its reason instead of the caps query failing.
+  GstStructure *rounded = gst_structure_copy(s);
+  gst_pseudo3d_scale_field(s, "width", 2, 1);
+  gst_pseudo3d_unscale_field(rounded, "width", 1, 2);
+  return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), rounded);
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {

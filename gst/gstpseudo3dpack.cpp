@@ -116,19 +116,26 @@ static void size_ratio(p3d::StereoInput input, p3d::PackLayout layout, gint *wn,
   *hd = input == p3d::StereoInput::TopBottom ? 2 : 1;
 }
 
-// One input arrangement's variant of a caps structure, towards `to_src` or back.
-static GstStructure *transformed(const GstStructure *in, gboolean to_src, p3d::StereoInput input,
+// How a size goes through the element: towards the source, or back to the
+// input size that gives it exactly, or back to every input size whose
+// rounded image it is (an odd one too, which set_info() refuses with its
+// reason instead of the caps query failing).
+enum class SizeWay { ToSrc, BackExact, BackRounded };
+
+// One input arrangement's variant of a caps structure.
+static GstStructure *transformed(const GstStructure *in, SizeWay way, p3d::StereoInput input,
                                  const PackGeometry &g) {
   GstStructure *s = gst_structure_copy(in);
   gint wn, wd, hn, hd;
   size_ratio(input, g.layout, &wn, &wd, &hn, &hd);
-  if (to_src) {
-    gst_pseudo3d_scale_field(s, "width", wn, wd);
-    gst_pseudo3d_scale_field(s, "height", hn, hd);
-  } else {  // every input size that gives these: an odd one too, which set_info() refuses with its reason
+  if (way == SizeWay::BackRounded) {
     gst_pseudo3d_unscale_field(s, "width", wn, wd);
     gst_pseudo3d_unscale_field(s, "height", hn, hd);
+    return s;
   }
+  const bool to_src = way == SizeWay::ToSrc;
+  gst_pseudo3d_scale_field(s, "width", to_src ? wn : wd, to_src ? wd : wn);
+  gst_pseudo3d_scale_field(s, "height", to_src ? hn : hd, to_src ? hd : hn);
   return s;
 }
 
@@ -161,7 +168,7 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
     // it with a message that says how to declare the layout.
     if (!declared && !p3d::gst::arrangement_from_structure(in, &input, &right_first, &why))
       input = p3d::StereoInput::SideBySide;
-    GstStructure *s = transformed(in, TRUE, input, g);
+    GstStructure *s = transformed(in, SizeWay::ToSrc, input, g);
     p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
     // The input's own format first (kept unless downstream asks otherwise),
     // then 4:2:0 for encoders, in a colorimetry stated rather than left to
@@ -192,18 +199,24 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   // first stereo mode offered here, which would relabel 2D frames as a
   // pair: set_info then refuses them with a message. The arrangements
   // pseudo3dpack reads follow (either eye first).
-  GstStructure *open = transformed(in, FALSE, declared ? input : p3d::StereoInput::SideBySide, g);
-  gst_structure_remove_fields(open, "multiview-mode", "multiview-flags", "views", NULL);
-  if (from_yuv) gst_pseudo3d_set_formats(open, P3D_PACKED_FORMATS);
-  GstCaps *caps = gst_pseudo3d_caps_of(open);
-  if (declared) return caps;
-  for (int a = 0; a <= static_cast<int>(p3d::StereoInput::Checkerboard); ++a) {
-    const auto arrangement = static_cast<p3d::StereoInput>(a);
-    GstStructure *s = transformed(in, FALSE, arrangement, g);
-    if (from_yuv) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
-    p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),
-                                   GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
-    caps = gst_caps_merge_structure(caps, s);
+  // The exact sizes first, so that a free upstream fixates one that works;
+  // then, last, the rounded ones, so that an odd size a fixed upstream
+  // offers passes the query and set_info() says why it is refused.
+  GstCaps *caps = gst_caps_new_empty();
+  for (const SizeWay way : {SizeWay::BackExact, SizeWay::BackRounded}) {
+    GstStructure *open = transformed(in, way, declared ? input : p3d::StereoInput::SideBySide, g);
+    gst_structure_remove_fields(open, "multiview-mode", "multiview-flags", "views", NULL);
+    if (from_yuv) gst_pseudo3d_set_formats(open, P3D_PACKED_FORMATS);
+    caps = gst_caps_merge_structure(caps, open);
+    if (declared) continue;
+    for (int a = 0; a <= static_cast<int>(p3d::StereoInput::Checkerboard); ++a) {
+      const auto arrangement = static_cast<p3d::StereoInput>(a);
+      GstStructure *s = transformed(in, way, arrangement, g);
+      if (from_yuv) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
+      p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),
+                                     GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
+      caps = gst_caps_merge_structure(caps, s);
+    }
   }
   return caps;
 }
