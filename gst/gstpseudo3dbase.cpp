@@ -252,6 +252,18 @@ void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gi
   });
 }
 
+GstStructure *gst_pseudo3d_sizes_back(const GstStructure *in, gint wn, gint wd, gint hn, gint hd, gboolean rounded) {
+  GstStructure *s = gst_structure_copy(in);
+  if (rounded) {
+    gst_pseudo3d_unscale_field(s, "width", wn, wd);
+    gst_pseudo3d_unscale_field(s, "height", hn, hd);
+  } else {
+    gst_pseudo3d_scale_field(s, "width", wd, wn);
+    gst_pseudo3d_scale_field(s, "height", hd, hn);
+  }
+  return s;
+}
+
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s) {
   GstCaps *caps = gst_caps_new_empty();
   gst_caps_append_structure(caps, s);

@@ -136,10 +136,15 @@ void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint
  * value v with v * num / den (rounded down) among the field's values, so
  * that a size whose forward image is rounded (an odd width halved) still
  * passes the caps query, and set_info() can refuse it with its reason
- * instead of a bare not-negotiated. Offer such a structure after the exact
- * inverse (gst_pseudo3d_scale_field(s, field, den, num)), so that a free
- * upstream fixates the size that works. */
+ * instead of a bare not-negotiated. */
 void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den);
+/* A copy of sink-side-bound structure `in` (output sizes) with the input
+ * sizes that give them, for an element whose output width and height are
+ * input * wn / wd and input * hn / hd: the exact inverse, or (`rounded`)
+ * every size whose rounded image they are. A transform towards the sink
+ * offers the exact structures first, so that a free upstream fixates a size
+ * that works, and the rounded ones after them. */
+GstStructure *gst_pseudo3d_sizes_back(const GstStructure *in, gint wn, gint wd, gint hn, gint hd, gboolean rounded);
 GstCaps *gst_pseudo3d_caps_of(GstStructure *s); /* takes s */
 /* Sets the format field to `formats` ("{ A, B }" or one name) and drops the
  * colorimetry and chroma-site, which belong to the old format family. */

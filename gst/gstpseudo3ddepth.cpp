@@ -77,19 +77,15 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   GST_OBJECT_LOCK(self);
   const bool rgbd = self->state->method.negotiating() == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
   GST_OBJECT_UNLOCK(self);
-  GstStructure *s = gst_structure_copy(in);
-  if (!rgbd) return gst_pseudo3d_caps_of(s);
+  if (!rgbd) return gst_pseudo3d_caps_of(gst_structure_copy(in));
   if (from == GST_PAD_SINK) {
+    GstStructure *s = gst_structure_copy(in);
     gst_pseudo3d_scale_field(s, "width", 1, 2);
     return gst_pseudo3d_caps_of(s);
   }
-  // Towards the sink: twice the width first, so that a free upstream
-  // fixates it; then every width whose half this is, an odd one too, which
-  // set_info() refuses with its reason instead of the caps query failing.
-  GstStructure *rounded = gst_structure_copy(s);
-  gst_pseudo3d_scale_field(s, "width", 2, 1);
-  gst_pseudo3d_unscale_field(rounded, "width", 1, 2);
-  return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), rounded);
+  // Towards the sink: twice the width first, then every width whose half this is.
+  return gst_caps_merge_structure(gst_pseudo3d_caps_of(gst_pseudo3d_sizes_back(in, 1, 2, 1, 1, FALSE)),
+                                  gst_pseudo3d_sizes_back(in, 1, 2, 1, 1, TRUE));
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {

@@ -118,24 +118,18 @@ static void size_ratio(p3d::StereoInput input, p3d::PackLayout layout, gint *wn,
 
 // How a size goes through the element: towards the source, or back to the
 // input size that gives it exactly, or back to every input size whose
-// rounded image it is (an odd one too, which set_info() refuses with its
-// reason instead of the caps query failing).
+// rounded image it is (gst_pseudo3d_sizes_back()).
 enum class SizeWay { ToSrc, BackExact, BackRounded };
 
 // One input arrangement's variant of a caps structure.
 static GstStructure *transformed(const GstStructure *in, SizeWay way, p3d::StereoInput input,
                                  const PackGeometry &g) {
-  GstStructure *s = gst_structure_copy(in);
   gint wn, wd, hn, hd;
   size_ratio(input, g.layout, &wn, &wd, &hn, &hd);
-  if (way == SizeWay::BackRounded) {
-    gst_pseudo3d_unscale_field(s, "width", wn, wd);
-    gst_pseudo3d_unscale_field(s, "height", hn, hd);
-    return s;
-  }
-  const bool to_src = way == SizeWay::ToSrc;
-  gst_pseudo3d_scale_field(s, "width", to_src ? wn : wd, to_src ? wd : wn);
-  gst_pseudo3d_scale_field(s, "height", to_src ? hn : hd, to_src ? hd : hn);
+  if (way != SizeWay::ToSrc) return gst_pseudo3d_sizes_back(in, wn, wd, hn, hd, way == SizeWay::BackRounded);
+  GstStructure *s = gst_structure_copy(in);
+  gst_pseudo3d_scale_field(s, "width", wn, wd);
+  gst_pseudo3d_scale_field(s, "height", hn, hd);
   return s;
 }
 
@@ -199,9 +193,7 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   // first stereo mode offered here, which would relabel 2D frames as a
   // pair: set_info then refuses them with a message. The arrangements
   // pseudo3dpack reads follow (either eye first).
-  // The exact sizes first, so that a free upstream fixates one that works;
-  // then, last, the rounded ones, so that an odd size a fixed upstream
-  // offers passes the query and set_info() says why it is refused.
+  // The exact sizes first, then the rounded ones (gst_pseudo3d_sizes_back()).
   GstCaps *caps = gst_caps_new_empty();
   for (const SizeWay way : {SizeWay::BackExact, SizeWay::BackRounded}) {
     GstStructure *open = transformed(in, way, declared ? input : p3d::StereoInput::SideBySide, g);
