@@ -17,6 +17,10 @@
 namespace p3d {
 namespace {
 
+// The CPU's z-buffer holds 64-bit keys for every row: the same order, so
+// the same function, as the GPU's NarrowKeys where those fit.
+using Keys = WideKeys;
+
 struct WarpJob {
   WarpParams params;  // sanitised
   FrameView src;
@@ -69,7 +73,7 @@ struct OutputRow {
 struct RowScratch {
   SourceRow src;
   std::vector<float> depth, target;
-  std::vector<unsigned long long> keys;
+  std::vector<Keys::Word> keys;
   std::vector<int> right, right_clean;  // right_clean: BackgroundSmooth only
   std::vector<uint8_t> clean;           // BackgroundSmooth only
   RowScratch(int width, bool smooth)
@@ -81,8 +85,8 @@ struct RowScratch {
 // Each pixel's depth and target are computed once (warp_source would
 // compute them for x and again for x + 1) and linked with warp_link.
 void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
-  std::vector<unsigned long long> &keys = r.keys;
-  std::fill(keys.begin(), keys.end(), 0ull);
+  std::vector<Keys::Word> &keys = r.keys;
+  std::fill(keys.begin(), keys.end(), Keys::Word{0});
   const float *drow = j.depth.row(y);
   float *d = r.depth.data(), *t = r.target.data();
   for (int x = 0; x < j.width; ++x) {
@@ -93,7 +97,7 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
     const bool has_next = x + 1 < j.width;
     const WarpSource s = warp_link(x, d[x], t[x], has_next ? d[x + 1] : d[x], has_next ? t[x + 1] : t[x], has_next);
     const WarpSpan span = warp_span(s, j.width);
-    for (int X = span.first; X <= span.last; ++X) keys[X] = std::max(keys[X], warp_key_at(s, X, j.width));
+    for (int X = span.first; X <= span.last; ++X) keys[X] = std::max(keys[X], Keys::key(warp_hit_at(s, X, j.width), X));
   }
 }
 
@@ -101,14 +105,14 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
 // holes get kHoleColour for fill=None and are left for the fill otherwise.
 // Returns the row's hole count.
 long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &src,
-                      const std::vector<unsigned long long> &keys) {
+                      const std::vector<Keys::Word> &keys) {
   const OutputRow out(j.out, eye.col0, y);
   const uint32_t *row = src.words.data();
   const bool paint = j.params.fill == HoleFill::None;
   long long holes = 0;
   for (int X = 0; X < j.width; ++X) {
     if (keys[X] != 0) {
-      out.put(X, sample_word(row, j.width, keys[X]));
+      out.put(X, sample_word(row, j.width, Keys::u(keys[X], X)));
     } else {
       ++holes;
       if (paint) out.put(X, rgba_word(kHoleColour));
@@ -119,7 +123,7 @@ long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &
 
 // Background fill of row y: right[X] = nearest non-hole right of X, then a
 // left-to-right pass that knows the nearest non-hole to the left.
-void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vector<unsigned long long> &keys,
+void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vector<Keys::Word> &keys,
                          std::vector<int> &right) {
   const YuvToRgb packed;
   int next = -1;
@@ -134,7 +138,8 @@ void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vec
       continue;
     }
     const int xr = right[X];
-    const int pick = background_source(X, prev, prev >= 0 ? keys[prev] : 0ull, xr, xr >= 0 ? keys[xr] : 0ull);
+    const int pick = background_source(X, prev, key_depth_at<Keys>(keys.data(), prev), xr,
+                                       key_depth_at<Keys>(keys.data(), xr));
     store_rgba(j.out, eye.col0 + X, y, pick >= 0 ? load_rgba(j.out, eye.col0 + pick, y, packed) : kFillBlack);
   }
 }
@@ -157,7 +162,7 @@ struct EyeScratch {
 void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, EyeScratch &s) {
   const YuvToRgb packed;
   const int W = j.width;
-  const std::vector<unsigned long long> &keys = r.keys;
+  const std::vector<Keys::Word> &keys = r.keys;
   uint8_t *clean = r.clean.data();
   int *right_clean = r.right_clean.data(), *right_any = r.right.data();
   int hole = -kSmoothClean - 1;  // the last hole at or left of X
@@ -191,7 +196,8 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, E
     }
     state[X] = kSmoothHole;
     const int xl = smooth_side(near_clean, near_any), xr = smooth_side(right_clean[X], right_any[X]);
-    const int pick = background_source(X, xl, xl >= 0 ? keys[xl] : 0ull, xr, xr >= 0 ? keys[xr] : 0ull);
+    const int pick =
+        background_source(X, xl, key_depth_at<Keys>(keys.data(), xl), xr, key_depth_at<Keys>(keys.data(), xr));
     if (pick < 0) continue;
     state[X] = kSmoothAnchor;
     anchor[X] = load_rgba(j.out, eye.col0 + pick, y, packed);
@@ -208,7 +214,7 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long lo
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
     RowScratch row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
     const SourceRow &src = row.src;
-    const std::vector<unsigned long long> &keys = row.keys;
+    const std::vector<Keys::Word> &keys = row.keys;
     long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
       row.src.load(j, y);

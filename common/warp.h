@@ -14,29 +14,39 @@
 //    when it is connected to x+1 (x+1 < W and 0 < t(x+1) - t(x) <= 1 + kMaxStretch),
 //      t(x) <= X < t(x+1)                            (the surface between them).
 //  * For a covered X the source position is
-//      u = x + (X - t(x)) / (t(x+1) - t(x))  for X >= t(x) on a connected span,
-//      u = x + (X - t(x))                    otherwise,
+//      u = x + (X - t(x)) * (1 / (t(x+1) - t(x)))  for X >= t(x) on a connected span,
+//      u = x + (X - t(x))                          otherwise,
 //    clamped to [0, W-1], and the depth there is depth(x) + (u - x) * (depth(x+1) - depth(x))
 //    on a connected span, depth(x) otherwise.
-//  * Z-buffer: warp_key(depth, u) packs (float bits of depth) << 32 | fixed(u)+1;
-//    the target keeps the largest key (the nearest surface; ties: larger u).
-//    Key 0 = nothing landed = hole. The max is order independent, so the
-//    GPU's atomicMax and the CPU's sequential max agree exactly.
+//  * Z-buffer: a covered X gets a WarpHit of two codes, the depth
+//    round(65535 d) (d clamped to [0, 1]) and the source position
+//    round(256 u) + 1; the target keeps the hit with the larger depth code
+//    (the nearest surface), between equal depth codes the larger u code.
+//    Nothing landed = hole. A key word orders like (depth code, u code):
+//    WideKeys (64 bits) for any row, NarrowKeys (32 bits, u relative to X)
+//    where every hit lies within 127 pixels of its target
+//    (warp_narrow_keys_fit); 0 is the hole in both. The max is order
+//    independent, so the GPU's atomicMax and the CPU's sequential max
+//    agree exactly, whichever word holds the keys.
 //  * Colour: bilinear along the row between floor(u) and floor(u)+1 of the
 //    source (load_rgba), per channel to_u8(a + (b - a) * f) (sample_row, in
 //    exact integer arithmetic).
 // All float maths is written once in the P3D_HD helpers below; cuda/ is
 // compiled with -fmad=false so the host and the device round identically.
 //
-// Precise reading of the rules above (warp_source / warp_span / warp_key_at):
+// Precise reading of the rules above (warp_source / warp_span / warp_hit_at):
 //  * "X >= t(x) on a connected span" means t(x) <= X < t(x+1): a footprint
 //    target past t(x+1) (possible when t(x+1) - t(x) < 0.5) takes the
 //    unit-slope u, so u never runs past the span's far end.
-//  * The colour is sampled at the u stored in the winning key (1/256 pixel
-//    steps), because that is all the GPU's atomicMax keeps.
+//  * The colour is sampled at the u code of the winning hit (1/256 pixel
+//    steps), because that is all the GPU's atomicMax keeps. The depth code
+//    has 16 bits so that a 32-bit key holds it beside u: two surfaces
+//    nearer than 1/65535 in depth are ordered by u, as one surface is.
+//  * The gap's reciprocal is taken once per source pixel (warp_link), so a
+//    target costs a multiply where it cost an IEEE division (both sides
+//    round it alike: -fmad=false, IEEE reciprocal).
 //  * Depth is read through warp_depth(): NaN and values below 0 count as 0
-//    (far), values above 1 as 1, so every target is finite and the key's
-//    depth bits order like the value.
+//    (far), values above 1 as 1, so every target is finite.
 //  * WarpParams are read through warp_sanitize(): max_disparity clamped to
 //    0..kMaxDisparityPercent and convergence to 0..1 (NaN -> 0). With
 //    D == 0 both views are the source, copied.
@@ -53,8 +63,8 @@
 //     - Anchor of every hole X in row y: CL = the nearest clean pixel left of
 //       X, or, when the row has none left of X, the nearest non-hole left of
 //       X; CR likewise to the right (-1: none). The anchor is the colour
-//       (rendered view, before filling) of background_source(X, CL, key(CL),
-//       CR, key(CR)): the farther side, as for Background. No non-hole on
+//       (rendered view, before filling) of background_source(X, CL, depth
+//       code of CL, CR, depth code of CR): the farther side, as for Background. No non-hole on
 //       either side: the hole has no anchor.
 //     - Column sums: every hole (X, y) gets V(X, y), the per-channel sums and
 //       the count of the anchors of its column's run of holes: the holes
@@ -75,7 +85,7 @@
 //    row kernel, where the row's keys are at hand.
 //  * Background: take the nearest non-hole pixel to the left (XL)
 //    and to the right (XR) in the same row of the rendered view; copy the
-//    colour of the farther one (smaller key depth; equal depth: the nearer in
+//    colour of the farther one (smaller depth code; equal depth: the nearer in
 //    distance, then XL). One side missing: the other. Neither: black.
 //  * NeighborAverage (the paper's inpainting): Jacobi iterations; in each,
 //    every remaining hole with at least one non-hole pixel among its 8
@@ -132,43 +142,66 @@ P3D_HD float warp_target(int x, float depth, float shift, float D, float converg
   return static_cast<float>(x) + shift * p;
 }
 
-P3D_HD unsigned long long warp_key(float depth, float u) {
-  // depth >= 0, so its IEEE bits order like the value. +1 keeps key 0 free.
-  union {
-    float f;
-    unsigned int i;
-  } bits;
-  bits.f = depth < 0.f ? 0.f : depth;
-  const unsigned int uq = static_cast<unsigned int>(u * 256.f + 0.5f) + 1u;
-  return (static_cast<unsigned long long>(bits.i) << 32) | uq;
+// A covered target's z-buffer entry: the depth code round(65535 d), d
+// clamped to [0, 1], and the source position code round(256 u) + 1 (0 is
+// never a u code, so a zero key is a hole). Larger depth codes are nearer.
+struct WarpHit {
+  unsigned int depth, u;
+};
+P3D_HD unsigned int warp_depth_code(float d) {
+  return static_cast<unsigned int>(clamp_value(d, 0.f, 1.f) * 65535.f + 0.5f);
 }
-P3D_HD float warp_key_depth(unsigned long long key) {
-  union {
-    float f;
-    unsigned int i;
-  } bits;
-  bits.i = static_cast<unsigned int>(key >> 32);
-  return bits.f;
-}
-P3D_HD float warp_key_u(unsigned long long key) {
-  return static_cast<float>(static_cast<unsigned int>(key & 0xffffffffu) - 1u) / 256.f;
+P3D_HD unsigned int warp_u_code(float u) { return static_cast<unsigned int>(u * 256.f + 0.5f) + 1u; }
+// The u a code stands for (a multiple of 1/256).
+P3D_HD float warp_u_of(unsigned int u_code) { return static_cast<float>(u_code - 1u) / 256.f; }
+
+// Key words: the hit's depth code over its u code, so that the larger word
+// is the larger (depth, u) pair, and 0 is the hole.
+//  * WideKeys, 64 bits: any row (the CPU's z-buffer, and the GPU's where a
+//    hit may lie 128 pixels or more from its target).
+//  * NarrowKeys, 32 bits: the u code relative to the target, u - 256 X +
+//    32768, in the low 16 bits. For |u code - 256 X| <= 32767 that is
+//    1..65535 and orders like u at a fixed X; warp_narrow_keys_fit() says
+//    when every hit of a frame is that near. On the GPU a 32-bit key is one
+//    shared-memory atomicMax instruction, where 64 bits are a
+//    compare-and-swap loop, and it takes half the shared memory.
+struct WideKeys {
+  using Word = unsigned long long;
+  static P3D_HD Word key(WarpHit h, int) { return static_cast<Word>(h.depth) << 32 | h.u; }
+  static P3D_HD unsigned int depth(Word k) { return static_cast<unsigned int>(k >> 32); }
+  static P3D_HD unsigned int u(Word k, int) { return static_cast<unsigned int>(k); }
+};
+struct NarrowKeys {
+  using Word = unsigned int;
+  static P3D_HD Word key(WarpHit h, int X) {
+    return h.depth << 16 | ((h.u - 256u * static_cast<unsigned int>(X) + 32768u) & 0xffffu);
+  }
+  static P3D_HD unsigned int depth(Word k) { return k >> 16; }
+  static P3D_HD unsigned int u(Word k, int X) { return (k & 0xffffu) + 256u * static_cast<unsigned int>(X) - 32768u; }
+};
+
+// The depth code of a row's key at X, 0 for none (X < 0): what
+// background_source() compares.
+template <class Keys>
+P3D_HD unsigned int key_depth_at(const typename Keys::Word *keys, int X) {
+  return X >= 0 ? Keys::depth(keys[X]) : 0u;
 }
 
-// Bilinear colour at the source position u a z-buffer key holds
-// (warp_key_u(key) = q / 256, q = (key & 0xffffffff) - 1), from a source row
+// Bilinear colour at the source position of a u code (u = q / 256,
+// q = u_code - 1), from a source row
 // already converted to R'G'B'A (load_rgba of each pixel): both the CPU and
 // the GPU convert the row once and render both eyes from it. Per channel the
 // colour is to_u8(a + (b - a) * f) between x0 = floor(u) and x0 + 1 (x0
 // alone at the row's end), f = u - x0. Because u is a multiple of 1/256 and
-// lies in [0, width - 1] (warp_key_at clamps it), f = k / 256 with k = q & 255,
+// lies in [0, width - 1] (warp_hit_at clamps it), f = k / 256 with k = q & 255,
 // and every float step of that formula is exact: (b - a) * k / 256 has at
 // most 16 significant bits, a plus it at most 17, so to_u8's floor(v + 0.5)
 // equals the integer (256 a + (b - a) k + 128) >> 8, which is what this
 // computes (tests/common/test_warp.cpp checks every a, b and k against the
 // float formula).
 P3D_HD int sample_channel(int a, int b, int k) { return (256 * a + (b - a) * k + 128) >> 8; }
-P3D_HD Rgba sample_row(const Rgba *row, int width, unsigned long long key) {
-  const unsigned int q = static_cast<unsigned int>(key & 0xffffffffu) - 1u;
+P3D_HD Rgba sample_row(const Rgba *row, int width, unsigned int u_code) {
+  const unsigned int q = u_code - 1u;
   const int x0 = static_cast<int>(q >> 8);
   if (x0 >= width - 1) return row[width - 1];  // u = width - 1 exactly: k is 0
   const int k = static_cast<int>(q & 255u);
@@ -186,8 +219,8 @@ P3D_HD Rgba sample_row(const Rgba *row, int width, unsigned long long key) {
 // term, and at most 255 * 256 + 128 < 2^16, so the two 16-bit fields of
 // each product never carry into each other (tests/common/test_warp.cpp
 // compares it with sample_row()).
-P3D_HD uint32_t sample_word(const uint32_t *row, int width, unsigned long long key) {
-  const unsigned q = static_cast<unsigned>(key & 0xffffffffu) - 1u;
+P3D_HD uint32_t sample_word(const uint32_t *row, int width, unsigned int u_code) {
+  const unsigned q = u_code - 1u;
   const int x0 = static_cast<int>(q >> 8);
   if (x0 >= width - 1) return row[width - 1];
   const unsigned k = q & 255u, k0 = 256u - k;
@@ -224,6 +257,7 @@ struct WarpSource {
   int x;
   float t0, d0;  // pixel x
   float t1, d1;  // pixel x+1 (= x's own values at the row's end)
+  float inv_gap;  // 1 / (t1 - t0) when connected, else 0
   bool connected;
 };
 
@@ -239,6 +273,7 @@ P3D_HD WarpSource warp_link(int x, float d0, float t0, float d1, float t1, bool 
   s.d1 = has_next ? d1 : d0;
   const float gap = t1 - t0;
   s.connected = has_next && gap > 0.f && gap <= 1.f + kMaxStretch;
+  s.inv_gap = s.connected ? 1.f / gap : 0.f;
   return s;
 }
 
@@ -282,27 +317,39 @@ P3D_HD WarpSpan warp_span(const WarpSource &s, int width) {
   return r;
 }
 
-// The z-buffer key x offers target X (X covered by x).
-P3D_HD unsigned long long warp_key_at(const WarpSource &s, int X, int width) {
+// The hit x offers target X (X covered by x).
+P3D_HD WarpHit warp_hit_at(const WarpSource &s, int X, int width) {
   const float xf = static_cast<float>(X);
   const float x = static_cast<float>(s.x);
   const float hi = static_cast<float>(width - 1);
   if (s.connected && xf >= s.t0 && xf < s.t1) {
-    const float u = clamp_value(x + (xf - s.t0) / (s.t1 - s.t0), 0.f, hi);
-    return warp_key(s.d0 + (u - x) * (s.d1 - s.d0), u);
+    const float u = clamp_value(x + (xf - s.t0) * s.inv_gap, 0.f, hi);
+    return WarpHit{warp_depth_code(s.d0 + (u - x) * (s.d1 - s.d0)), warp_u_code(u)};
   }
   const float u = clamp_value(x + (xf - s.t0), 0.f, hi);
-  return warp_key(s.d0, u);
+  return WarpHit{warp_depth_code(s.d0), warp_u_code(u)};
+}
+
+// Whether NarrowKeys hold every hit of a frame: |u - X| < 128 for every
+// covered X, with a margin. A footprint target has u - X = x - t(x) =
+// -s p(x) (clamping u to the row only brings it nearer X), a connected
+// span's u lies in [x, x + 1] for X in [t(x), t(x+1)), so |u - X| <= |s| D
+// max(c, 1 - c) + 1 for shift factor s, parallax p = D (d - c), d in
+// [0, 1]; the u code is then within 256 |u - X| + 2 of 256 X. Read for
+// the sanitised parameters and both eyes' shift factors.
+P3D_HD bool warp_narrow_keys_fit(float shift0, float shift1, float D, float convergence) {
+  const float s0 = shift0 < 0.f ? -shift0 : shift0, s1 = shift1 < 0.f ? -shift1 : shift1;
+  const float c = convergence > 0.5f ? convergence : 1.f - convergence;
+  return (s0 > s1 ? s0 : s1) * D * c <= 120.f;
 }
 
 // Background fill of hole X: xl / xr are the nearest non-holes to its left /
-// right in the row (-1: none) with their keys. Returns the column whose
+// right in the row (-1: none) with their depth codes. Returns the column whose
 // colour fills X, or -1 for black.
-P3D_HD int background_source(int X, int xl, unsigned long long key_l, int xr, unsigned long long key_r) {
+P3D_HD int background_source(int X, int xl, unsigned int depth_l, int xr, unsigned int depth_r) {
   if (xl < 0) return xr;
   if (xr < 0) return xl;
-  const float dl = warp_key_depth(key_l), dr = warp_key_depth(key_r);
-  if (dl != dr) return dl < dr ? xl : xr;
+  if (depth_l != depth_r) return depth_l < depth_r ? xl : xr;
   return xr - X < X - xl ? xr : xl;
 }
 

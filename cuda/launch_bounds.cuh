@@ -11,3 +11,15 @@
 #else
 #define P3D_THREADS_PER_SM 1536
 #endif
+
+// The most threads an SM can hold, for kernels whose blocks are worth
+// packing as tightly as an SM allows (the warp's row kernel, bound by
+// instructions, gains from every further resident block): 2048 on A100
+// (sm_80), Hopper (sm_90) and the data-centre Blackwells (sm_100); 1536 on
+// the others from Ampere on (sm_86, Jetson Orin's sm_87, sm_89, sm_120);
+// 1024 on Turing.
+#if defined(__CUDA_ARCH__) && (__CUDA_ARCH__ == 800 || __CUDA_ARCH__ == 900 || __CUDA_ARCH__ == 1000)
+#define P3D_MAX_THREADS_PER_SM 2048
+#else
+#define P3D_MAX_THREADS_PER_SM P3D_THREADS_PER_SM
+#endif

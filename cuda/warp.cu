@@ -10,6 +10,7 @@
 #include "warp_gpu.h"
 
 #include <utility>
+#include <vector>
 
 #include "launch_bounds.cuh"
 
@@ -33,13 +34,14 @@ constexpr size_t kFilledOffset = sizeof(unsigned long long);
 constexpr size_t kTileCountOffset = kFilledOffset + sizeof(unsigned) * kWarpFillBatch;
 constexpr size_t kTileMarksOffset = kTileCountOffset + sizeof(unsigned);
 
-// Dynamic shared memory of the row kernel: [keys: W x u64 when in shared
-// memory] [the source row, W x RGBA] [per 32-pixel chunk: its hole bits
-// (bit i: pixel 32 c + i is a hole) and its clean bits (BackgroundSmooth)].
+// Dynamic shared memory of the row kernel: [keys: W key words when in
+// shared memory] [the source row, W x RGBA] [per 32-pixel chunk: its hole
+// bits (bit i: pixel 32 c + i is a hole) and its clean bits
+// (BackgroundSmooth)]. key_bytes: a key word's size, 0 for keys in global
+// memory.
 __host__ __device__ int row_chunks(int W) { return (W + 31) / 32; }
-size_t row_smem_bytes(int W, bool shared_keys) {
-  return (shared_keys ? sizeof(unsigned long long) * W : 0) + 4 * static_cast<size_t>(W) +
-         2 * sizeof(unsigned) * static_cast<size_t>(row_chunks(W));
+size_t row_smem_bytes(int W, size_t key_bytes) {
+  return key_bytes * W + 4 * static_cast<size_t>(W) + 2 * sizeof(unsigned) * static_cast<size_t>(row_chunks(W));
 }
 
 // Pixels of chunk c that are in the row: the low W - 32 c bits of the last.
@@ -75,11 +77,12 @@ __device__ int nearest_right(const unsigned *bits, bool invert, int W, int chunk
   return c * 32 + __ffs(m) - 1;
 }
 
-// The colour a covered pixel with `key` has in the output, as load_rgba
-// would read it back: sampled again from the converted source row in shared
-// memory instead of read from global memory; RGBx/BGRx read back alpha 255.
-__device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W, unsigned long long key) {
-  Rgba c = sample_row(src_row, W, key);
+// The colour a covered pixel with u code `u` has in the output, as
+// load_rgba would read it back: sampled again from the converted source row
+// in shared memory instead of read from global memory; RGBx/BGRx read back
+// alpha 255.
+__device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W, unsigned u) {
+  Rgba c = sample_row(src_row, W, u);
   if (!has_alpha(out.format)) c.a = 255;
   return c;
 }
@@ -104,14 +107,15 @@ __device__ void store_word(const FrameView &out, int x, int y, uint32_t w, bool 
 
 // Background fill of one row whose keys are final and whose chunks' hole
 // bits are in hole_bits: each hole's nearest non-holes by bit search.
+template <class Keys>
 __device__ void background_fill_row(const FrameView &out, const Rgba *src_row, int col0, int y,
-                                    const unsigned long long *keys, int W, int chunks, const unsigned *hole_bits) {
+                                    const typename Keys::Word *keys, int W, int chunks, const unsigned *hole_bits) {
   for (int X = threadIdx.x; X < W; X += blockDim.x) {
     const int c = X >> 5, bit = X & 31;
     if (!((hole_bits[c] >> bit) & 1u)) continue;
     const int xl = nearest_left(hole_bits, true, W, c, bit), xr = nearest_right(hole_bits, true, W, chunks, c, bit);
-    const int pick = background_source(X, xl, xl >= 0 ? keys[xl] : 0ull, xr, xr >= 0 ? keys[xr] : 0ull);
-    store_rgba(out, col0 + X, y, pick >= 0 ? rendered_colour(out, src_row, W, keys[pick]) : kFillBlack);
+    const int pick = background_source(X, xl, key_depth_at<Keys>(keys, xl), xr, key_depth_at<Keys>(keys, xr));
+    store_rgba(out, col0 + X, y, pick >= 0 ? rendered_colour(out, src_row, W, Keys::u(keys[pick], pick)) : kFillBlack);
   }
 }
 
@@ -133,13 +137,14 @@ struct SmoothScratch {
 
 // What one block works on: output row y, its converted source row in shared
 // memory, its z-buffer, the chunk arrays of the Background fill.
+template <class Keys>
 struct RowJob {
   FrameView out;
   FrameView row;  // the source row as RGBA bytes in shared memory (y = 0)
   EyeShifts eyes;
   float D, convergence;
   const float *depth_row;
-  unsigned long long *keys;
+  typename Keys::Word *keys;
   unsigned *hole_bits;   // per chunk (kFillBits)
   unsigned *clean_bits;  // per chunk (BackgroundSmooth)
   uint8_t *mask;  // NeighborAverage masks (2 eyes x H x W)
@@ -167,7 +172,8 @@ static_assert(kSmoothClean >= 1 && kSmoothClean < 32, "the clean test reads the 
 // bits), then each hole takes its nearest clean (else non-hole) pixel on
 // either side by bit search, and background_source() picks the anchor.
 // Adds kStateAnchor to the state of the holes that have one.
-__device__ void smooth_anchor_row(const RowJob &j, int eye) {
+template <class Keys>
+__device__ void smooth_anchor_row(const RowJob<Keys> &j, int eye) {
   for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
     const unsigned h = j.hole_bits[c], prev = c > 0 ? j.hole_bits[c - 1] : 0u,
                    next = c + 1 < j.chunks ? j.hole_bits[c + 1] : 0u;
@@ -185,10 +191,11 @@ __device__ void smooth_anchor_row(const RowJob &j, int eye) {
     const int l_clean = l_any < 0 ? -1 : nearest_left(j.clean_bits, false, j.W, c, bit);
     const int r_clean = r_any < 0 ? -1 : nearest_right(j.clean_bits, false, j.W, j.chunks, c, bit);
     const int xl = smooth_side(l_clean, l_any), xr = smooth_side(r_clean, r_any);
-    const int pick = background_source(X, xl, xl >= 0 ? j.keys[xl] : 0ull, xr, xr >= 0 ? j.keys[xr] : 0ull);
+    const int pick = background_source(X, xl, key_depth_at<Keys>(j.keys, xl), xr, key_depth_at<Keys>(j.keys, xr));
     if (pick < 0) continue;
     j.smooth.state[row + X] = kStateHole | kStateAnchor;
-    j.smooth.anchor[row + X] = rendered_colour(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, j.keys[pick]);
+    j.smooth.anchor[row + X] =
+        rendered_colour(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, Keys::u(j.keys[pick], pick));
   }
 }
 
@@ -205,8 +212,8 @@ constexpr bool kFillBits = kFill == HoleFill::Background || kFill == HoleFill::B
 // Renders one eye of the row; every thread of the block calls it. The fill
 // is a template parameter, so that the per-pixel loops carry no test of the
 // fills they do not serve (the row kernel is instruction bound).
-template <HoleFill kFill>
-__device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
+template <class Keys, HoleFill kFill>
+__device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
   const int col0 = eye * j.W;
   const float shift = j.eyes.shift[eye];
   uint8_t *mask_row =
@@ -220,13 +227,13 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
   }
   __syncthreads();  // the previous eye is done with keys and row_holes
   if (threadIdx.x == 0) *row_holes = 0;
-  for (int X = threadIdx.x; X < j.W; X += blockDim.x) j.keys[X] = 0ull;
+  for (int X = threadIdx.x; X < j.W; X += blockDim.x) j.keys[X] = 0;
   __syncthreads();
 
   for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
     const WarpSource s = warp_source(j.depth_row, x, j.W, shift, j.D, j.convergence);
     const WarpSpan span = warp_span(s, j.W);
-    for (int X = span.first; X <= span.last; ++X) atomicMax(j.keys + X, warp_key_at(s, X, j.W));
+    for (int X = span.first; X <= span.last; ++X) atomicMax(j.keys + X, Keys::key(warp_hit_at(s, X, j.W), X));
   }
   __syncthreads();
 
@@ -242,11 +249,11 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
   for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
     const int X = base + lane;
     const bool in = X < j.W;
-    const unsigned long long key = in ? j.keys[X] : 1ull;  // past the row: not a hole
+    const typename Keys::Word key = in ? j.keys[X] : 1u;  // past the row: not a hole
     if (in) {
       if (key != 0) {
-        store_word(j.out, col0 + X, j.y, sample_word(reinterpret_cast<const uint32_t *>(j.row.plane[0]), j.W, key),
-                   j.words);
+        store_word(j.out, col0 + X, j.y,
+                   sample_word(reinterpret_cast<const uint32_t *>(j.row.plane[0]), j.W, Keys::u(key, X)), j.words);
       } else {
         ++holes;
         if (kFill == HoleFill::None) store_word(j.out, col0 + X, j.y, rgba_word(kHoleColour), j.words);
@@ -254,7 +261,7 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
       if (kFill == HoleFill::NeighborAverage) mask_row[X] = key == 0 ? 1 : 0;
     }
     if (kFillBits<kFill>) {
-      const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0ull);
+      const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
       const int c = base >> 5;
       if (lane == 0) j.hole_bits[c] = chunk_holes;
       if (kFill == HoleFill::BackgroundSmooth) {
@@ -273,30 +280,33 @@ __device__ void render_eye(const RowJob &j, int eye, int *row_holes) {
   if (threadIdx.x == 0) atomicAdd(j.total, static_cast<unsigned long long>(row_total));
   if (kFill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye);
   if (kFill == HoleFill::Background)
-    background_fill_row(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), col0, j.y, j.keys, j.W, j.chunks,
-                      j.hole_bits);
+    background_fill_row<Keys>(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), col0, j.y, j.keys, j.W,
+                              j.chunks, j.hole_bits);
 }
 
 // One block = output row blockIdx.x, both eyes one after the other, so the
-// source row is converted once. kSharedKeys: the z-buffer in shared memory,
-// else in global_keys (one W-key row per block).
-// At most 512 threads, 3 blocks per SM: 40 registers a thread (42 without
-// the bound, no spills with it), so that three rows (49 KB of shared memory
-// each at 4K) run at once instead of two; launch_rows asks for the largest
-// shared-memory carveout. The kernel is instruction bound (ncu: SM 61 %,
-// DRAM 9 %), and the third row per SM took the 4K warp from 0.286 to
-// 0.230 ms on an H100 (8K, whose rows need 92 KB, is unchanged).
-// Turing (sm_75) holds 1024 threads an SM, so two such blocks there
-// (cuda/launch_bounds.cuh).
+// source row is converted once. Keys: the key word (NarrowKeys where they
+// fit, common/warp.h). kSharedKeys: the z-buffer in shared memory, else in
+// global_keys (one W-key row per block).
+// At most 512 threads, as many blocks per SM as it holds threads for
+// (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at most 32
+// registers a thread; 3 on the other Ampere to Blackwell parts, 40; 2 on
+// Turing); launch_rows asks for the largest shared-memory carveout. The
+// kernel is instruction bound (ncu, 4K: 75 % of issue slots, DRAM 19 %),
+// so every further resident row helps: the third took the 4K warp from
+// 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB of shared
+// memory a row at 4K) 0.2385 -> 0.2280. With 64-bit keys the spill is
+// 12 bytes in the global-key kernels (rows of about 19000 pixels and more)
+// and none elsewhere.
 constexpr int kRowThreadsMax = 512;
-template <bool kSharedKeys, HoleFill kFill>
-__global__ void __launch_bounds__(kRowThreadsMax, P3D_THREADS_PER_SM / kRowThreadsMax)
+template <class Keys, bool kSharedKeys, HoleFill kFill>
+__global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out, EyeShifts eyes, float D,
-                    float convergence, unsigned long long *global_keys, uint8_t *mask, SmoothScratch smooth,
+                    float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
                     unsigned long long *total, bool words) {
   extern __shared__ unsigned long long smem[];
   __shared__ int row_holes;
-  RowJob j;
+  RowJob<Keys> j;
   j.y = blockIdx.x;
   j.W = src.width;
   j.H = src.height;
@@ -306,8 +316,9 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_THREADS_PER_SM / kRowThrea
   j.D = D;
   j.convergence = convergence;
   j.depth_row = depth.row(j.y);
-  j.keys = kSharedKeys ? smem : global_keys + static_cast<size_t>(j.y) * j.W;
-  uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? smem + j.W : smem);
+  auto *shared_keys = reinterpret_cast<typename Keys::Word *>(smem);
+  j.keys = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(j.y) * j.W;
+  uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? shared_keys + j.W : shared_keys);
   j.hole_bits = reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W));
   j.clean_bits = j.hole_bits + j.chunks;
   j.mask = mask;
@@ -325,8 +336,8 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_THREADS_PER_SM / kRowThrea
   for (int x = 2 * threadIdx.x; x < j.W; x += 2 * blockDim.x)
     load_rgba_pair_words(src, x, j.y, m, reinterpret_cast<uint32_t *>(rgba) + x);
   __syncthreads();
-  render_eye<kFill>(j, 0, &row_holes);
-  render_eye<kFill>(j, 1, &row_holes);
+  render_eye<Keys, kFill>(j, 0, &row_holes);
+  render_eye<Keys, kFill>(j, 1, &row_holes);
 }
 
 // One Jacobi step of NeighborAverage over both eyes: reads mask_in and the
@@ -367,6 +378,8 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
 // memory otherwise: very wide windows only); a tile without a hole returns
 // at once.
 constexpr int kSmoothTileW = 32, kSmoothSub = 8, kSmoothTileThreads = 256, kSmoothTileRowsMax = 32;
+// Windows of at most this many rows up and down take tiles of 16 rows (plan_smooth).
+constexpr int kSmoothShortR = 32;
 static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
 static_assert(kSmoothTileThreads % 32 == 0, "the copy loops go a warp per row");
 __host__ __device__ size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
@@ -546,6 +559,34 @@ __global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *m
 
 dim3 pixel_grid(int W, int H) { return dim3((W + kBlockX - 1) / kBlockX, (H + kBlockY - 1) / kBlockY, 2); }
 
+// Lets `kernel` take `bytes` of dynamic shared memory (past the default
+// 48 KiB only by opting in) and asks for the largest carveout, so that as
+// many blocks share an SM as their shared memory allows. `set` remembers
+// what each kernel was given, so a frame of a size seen before makes no
+// call (the attributes are per kernel and device; a renderer serves one
+// device).
+CudaStatus allow_shared_memory(const void *kernel, size_t bytes, std::vector<std::pair<const void *, size_t>> *set) {
+  for (const auto &k : *set)
+    if (k.first == kernel && k.second >= bytes) return {};
+  if (bytes > 48 * 1024)
+    P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)));
+  P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
+                                    static_cast<int>(cudaSharedmemCarveoutMaxShared)));
+  for (auto &k : *set)
+    if (k.first == kernel) {
+      k.second = bytes;
+      return {};
+    }
+  set->emplace_back(kernel, bytes);
+  return {};
+}
+
+// The z-buffer a frame's row kernel uses: NarrowKeys in shared memory where
+// every hit is near its target (warp_narrow_keys_fit) and the row fits,
+// else WideKeys in shared memory, else WideKeys in global memory (rows of
+// about 19000 pixels and more on Hopper).
+enum class KeyPlace { NarrowShared, WideShared, WideGlobal };
+
 struct RowLaunch {
   FrameView src;
   YuvToRgb m;
@@ -554,6 +595,7 @@ struct RowLaunch {
   EyeShifts eyes;
   float D, convergence;
   HoleFill fill;
+  KeyPlace keys;
   unsigned long long *global_keys;
   uint8_t *mask;
   SmoothScratch smooth;
@@ -561,36 +603,49 @@ struct RowLaunch {
   bool words;
   size_t smem;
   cudaStream_t stream;
+  std::vector<std::pair<const void *, size_t>> *attributes_set;
 };
 
-template <bool kSharedKeys, HoleFill kFill>
+template <class Keys, bool kSharedKeys, HoleFill kFill>
 CudaStatus launch_rows(const RowLaunch &l) {
-  const auto kernel = warp_row_kernel<kSharedKeys, kFill>;
-  if (l.smem > 48 * 1024)  // the default dynamic shared memory limit
-    P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(l.smem)));
-  P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
-                                    static_cast<int>(cudaSharedmemCarveoutMaxShared)));
+  const auto kernel = warp_row_kernel<Keys, kSharedKeys, kFill>;
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), l.smem, l.attributes_set));
   const int threads = l.src.width > 1024 ? kRowThreadsMax : 256;
+  static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
   kernel<<<l.src.height, threads, l.smem, l.stream>>>(l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence,
-                                                      l.global_keys, l.mask, l.smooth, l.total, l.words);
+                                                      reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask,
+                                                      l.smooth, l.total, l.words);
   P3D_CUDA_TRY_LAUNCH(warp_row_kernel);
   return {};
 }
 
 // The row kernel compiled for the run's fill.
-template <bool kSharedKeys>
+template <class Keys, bool kSharedKeys>
 CudaStatus launch_rows_for_fill(const RowLaunch &l) {
   switch (l.fill) {
     case HoleFill::Background:
-      return launch_rows<kSharedKeys, HoleFill::Background>(l);
+      return launch_rows<Keys, kSharedKeys, HoleFill::Background>(l);
     case HoleFill::NeighborAverage:
-      return launch_rows<kSharedKeys, HoleFill::NeighborAverage>(l);
+      return launch_rows<Keys, kSharedKeys, HoleFill::NeighborAverage>(l);
     case HoleFill::None:
-      return launch_rows<kSharedKeys, HoleFill::None>(l);
+      return launch_rows<Keys, kSharedKeys, HoleFill::None>(l);
     case HoleFill::BackgroundSmooth:
-      return launch_rows<kSharedKeys, HoleFill::BackgroundSmooth>(l);
+      return launch_rows<Keys, kSharedKeys, HoleFill::BackgroundSmooth>(l);
   }
   return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
+}
+
+// The row kernel for the run's key place and fill.
+CudaStatus launch_row_kernel(const RowLaunch &l) {
+  switch (l.keys) {
+    case KeyPlace::NarrowShared:
+      return launch_rows_for_fill<NarrowKeys, true>(l);
+    case KeyPlace::WideShared:
+      return launch_rows_for_fill<WideKeys, true>(l);
+    case KeyPlace::WideGlobal:
+      return launch_rows_for_fill<WideKeys, false>(l);
+  }
+  return CudaStatus{cudaErrorInvalidValue, "KeyPlace", __FILE__, __LINE__};
 }
 
 // BackgroundSmooth's sums for a frame: the eyes' radii, the tile rows, and
@@ -609,9 +664,16 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
   const int Rmax = max(eyes.shift[0] == 0.f ? 0 : R0, eyes.shift[1] == 0.f ? 0 : R1), Rx = smooth_fill_radius_x(Rmax);
   p.radius = make_int2(R0, R1);
   p.narrow = Rmax <= kSmoothNarrowRMax;
-  // Tile rows: kSmoothTileRowsMax, fewer when V would pass 64 KB (wide Rx).
+  // Tile rows: 16 for windows of up to kSmoothShortR rows, else
+  // kSmoothTileRowsMax; fewer when V would pass 64 KB (wide Rx). A listed
+  // tile sums all its rows and copies 2R more, and holes are sparse: short
+  // tiles do less work on rows without holes, tall ones copy the 2R rows
+  // fewer times. Measured on an H100 (warp, ms): 1080p (R = 15) 0.0817 with
+  // 32 rows -> 0.0776 with 16; 4K (R = 29) 0.2278 -> 0.2215 (64 rows:
+  // 0.250); 8K (R = 58) 0.897 with 32 rows, 0.959 with 16.
   const size_t v_pixel = p.narrow ? TileSums<true>::kPixelBytes : TileSums<false>::kPixelBytes;
-  const int S = max(1, min(kSmoothTileRowsMax, static_cast<int>(65536 / (smooth_tile_columns(Rx) * v_pixel))));
+  const int rows = Rmax <= kSmoothShortR ? 16 : kSmoothTileRowsMax;
+  const int S = max(1, min(rows, static_cast<int>(65536 / (smooth_tile_columns(Rx) * v_pixel))));
   p.tile_rows = S;
   p.tiles_x = (W + kSmoothTileW - 1) / kSmoothTileW;
   p.tiles_y = (H + S - 1) / S;
@@ -625,14 +687,10 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 // and listed the tiles with holes: one smooth_tile_kernel, a block for every
 // tile the list may hold (the host does not read the count). No host sync.
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
-                         cudaStream_t stream) {
+                         cudaStream_t stream, std::vector<std::pair<const void *, size_t>> *attributes_set) {
   const auto kernel = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true> : smooth_tile_kernel<true, false>)
                                   : (plan.staged ? smooth_tile_kernel<false, true> : smooth_tile_kernel<false, false>);
-  if (plan.smem > 48 * 1024)
-    P3D_CUDA_TRY(
-        cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(plan.smem)));
-  P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
-                                    static_cast<int>(cudaSharedmemCarveoutMaxShared)));
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), plan.smem, attributes_set));
   kernel<<<static_cast<unsigned>(plan.tiles()), kSmoothTileThreads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
   P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
   return {};
@@ -661,12 +719,18 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     P3D_CUDA_TRY(cudaDeviceGetAttribute(&smem_optin_, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
   }
   // 64 bytes: room for the kernel's static __shared__ counter.
-  const bool shared_keys = row_smem_bytes(W, true) + 64 <= static_cast<size_t>(smem_optin_);
-  const size_t smem = row_smem_bytes(W, shared_keys);
-  if (smem + 64 > static_cast<size_t>(smem_optin_))  // rows wider than ~50000 pixels on Hopper
+  auto fits = [&](size_t key_bytes) { return row_smem_bytes(W, key_bytes) + 64 <= static_cast<size_t>(smem_optin_); };
+  const bool narrow = warp_narrow_keys_fit(eyes.shift[0], eyes.shift[1], D, p.convergence) &&
+                      fits(sizeof(NarrowKeys::Word));
+  const bool wide_shared = !narrow && fits(sizeof(WideKeys::Word));
+  const KeyPlace keys = narrow ? KeyPlace::NarrowShared : wide_shared ? KeyPlace::WideShared : KeyPlace::WideGlobal;
+  const size_t smem =
+      row_smem_bytes(W, narrow ? sizeof(NarrowKeys::Word) : wide_shared ? sizeof(WideKeys::Word) : 0);
+  if (!fits(0))  // rows wider than ~50000 pixels on Hopper
     return CudaStatus{cudaErrorInvalidValue, "row_smem_bytes(W) <= cudaDevAttrMaxSharedMemoryPerBlockOptin", __FILE__,
                       __LINE__};
-  if (!shared_keys) P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(unsigned long long)));
+  if (keys == KeyPlace::WideGlobal)
+    P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(WideKeys::Word)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
   const size_t plane = 2 * static_cast<size_t>(W) * H;                                      // both eyes
   const size_t chunk_flags = 2 * static_cast<size_t>(H) * row_chunks(W);  // both eyes
@@ -695,11 +759,11 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     sc.tiles_y = plan.tiles_y;
   }
   const bool words = reinterpret_cast<uintptr_t>(out.plane[0]) % 4 == 0 && out.stride[0] % 4 == 0;
-  const RowLaunch launch{src,  m,    depth, out,   eyes, D,   p.convergence, p.fill, keys_.as<unsigned long long>(),
-                         mask, sc, total, words, smem, stream};
-  P3D_CUDA_TRY_STATUS(shared_keys ? launch_rows_for_fill<true>(launch) : launch_rows_for_fill<false>(launch));
+  const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
+                         keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, &attributes_set_};
+  P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
-  if (smooth) P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream));
+  if (smooth) P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, &attributes_set_));
 
   if (holes_out) {
     unsigned long long h = 0;

@@ -5,9 +5,11 @@
 // Per frame, all on `stream`: one block per output row y renders both eyes
 // of it: the source row is converted once (load_rgba) into shared memory,
 // then per warped eye it clears its z-buffer (shared memory; global memory
-// only for rows too wide for it, about 28000 pixels on Hopper; rows wider
-// than about 50000 pixels are refused with cudaErrorInvalidValue), scatters
-// the depth row (atomicMax on 64-bit keys), resolves colours and holes
+// only for rows too wide for it, from about 28000 pixels on Hopper with
+// 32-bit keys, 19000 with 64-bit ones; rows wider than about 50000 pixels
+// are refused with cudaErrorInvalidValue), scatters
+// the depth row (atomicMax on 32-bit keys where every hit lies within 127
+// pixels of its target, 64-bit ones otherwise), resolves colours and holes
 // (kHoleColour for fill=None), adds the row's holes to a device counter and,
 // for Background, fills the row's holes: a ballot per 32-pixel chunk gives
 // its hole bits, and each hole finds its nearest non-holes by searching
@@ -32,6 +34,9 @@
 // Buffers grow on demand and are reused: no per-frame allocation once the
 // largest frame has been seen. One renderer serves one stream at a time.
 #pragma once
+
+#include <utility>
+#include <vector>
 
 #include "../common/warp.h"
 #include "cuda_check.h"
@@ -58,13 +63,17 @@ class WarpRendererGpu {
  private:
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
 
-  // keys_: 2 eyes x H x W keys, only for rows too wide for shared memory.
+  // keys_: H x W 64-bit keys (a row per block, both eyes in turn), only for
+  // rows too wide for shared memory.
   // counters_: total holes, per-step fill counts, BackgroundSmooth's tile
   // count and marks (zeroed every frame). scratch_: the two NeighborAverage
   // hole masks (2 eyes x H x W bytes each). smooth_: the BackgroundSmooth
   // planes (anchors, states, chunk flags; 2 eyes) and its tile list.
   DeviceBuffer keys_, counters_, scratch_, smooth_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
+  // The kernels whose shared-memory attributes are set, with the bytes
+  // they were allowed (set once per kernel and size, not every frame).
+  std::vector<std::pair<const void *, size_t>> attributes_set_;
 };
 
 }  // namespace p3d

@@ -282,11 +282,11 @@ TEST(WarpHelpers, StretchedSpanKeys) {
   EXPECT_EQ(span.last, 29);
   // Footprint target 27: u = 29, depth 0.25. Span targets: depth runs
   // linearly from 0.25 to 0 with u (1/6 and 1/12 at u = 29 1/3, 29 2/3).
-  EXPECT_EQ(warp_key_u(warp_key_at(s, 27, 64)), 29.f);
-  EXPECT_EQ(warp_key_depth(warp_key_at(s, 27, 64)), 0.25f);
-  EXPECT_EQ(warp_key_u(warp_key_at(s, 28, 64)), 29.f + 85.f / 256.f);
-  EXPECT_NEAR(warp_key_depth(warp_key_at(s, 28, 64)), 0.25 / 1.5, 1e-6);
-  EXPECT_NEAR(warp_key_depth(warp_key_at(s, 29, 64)), 0.25 / 3, 1e-6);
+  EXPECT_EQ(warp_u_of(warp_hit_at(s, 27, 64).u), 29.f);
+  EXPECT_EQ(warp_hit_at(s, 27, 64).depth, warp_depth_code(0.25f));
+  EXPECT_EQ(warp_u_of(warp_hit_at(s, 28, 64).u), 29.f + 85.f / 256.f);
+  EXPECT_NEAR(warp_hit_at(s, 28, 64).depth, 65535 / 6., 0.5);  // 10922.5: either
+  EXPECT_EQ(warp_hit_at(s, 29, 64).depth, 5461u);             // round(65535 / 12)
   // The clipped span at the view's edges.
   const WarpSpan left_edge = warp_span(warp_source(depth, 0, 64, -1.f, 8.f, 0.f), 64);
   EXPECT_EQ(left_edge.first, 0);
@@ -314,7 +314,7 @@ TEST(WarpHelpers, IntegerSamplingEqualsTheFloatFormulaEverywhere) {
     const float u = static_cast<float>(q) / 256.f;
     const int x0 = static_cast<int>(std::floor(u)), x1 = x0 + 1 < 3 ? x0 + 1 : x0;
     const float f = u - static_cast<float>(x0);
-    const Rgba got = sample_row(row, 3, warp_key(0.5f, u));
+    const Rgba got = sample_row(row, 3, warp_u_code(u));
     auto lerp = [f](uint8_t a, uint8_t b) { return to_u8(a + (static_cast<float>(b) - a) * f); };
     EXPECT_EQ(got.r, lerp(row[x0].r, row[x1].r)) << "q " << q;
     EXPECT_EQ(got.g, lerp(row[x0].g, row[x1].g)) << "q " << q;
@@ -339,10 +339,10 @@ TEST(WarpHelpers, SampleWordIsSampleRow) {
       const uint32_t words[3] = {rgba_word(ca), rgba_word(cb), rgba_word(ca)};
       ASSERT_TRUE(equal(word_rgba(words[1]), cb));
       for (int k = 0; k < 256; k += (a + b) % 7 + 1) {
-        const unsigned long long key = warp_key(0.5f, static_cast<float>(k) / 256.f);
+        const unsigned key = warp_u_code(static_cast<float>(k) / 256.f);
         ASSERT_EQ(sample_word(words, 3, key), rgba_word(sample_row(row, 3, key))) << a << " " << b << " " << k;
       }
-      const unsigned long long last = warp_key(0.5f, 2.f);
+      const unsigned last = warp_u_code(2.f);
       ASSERT_EQ(sample_word(words, 3, last), rgba_word(sample_row(row, 3, last)));
     }
 }
@@ -398,16 +398,79 @@ TEST(WarpHelpers, CeilToIntIsCeilf) {
 }
 
 TEST(WarpHelpers, KeysOrderByDepthThenPosition) {
-  EXPECT_GT(warp_key(0.5f, 3.f), warp_key(0.25f, 60.f));
-  EXPECT_GT(warp_key(0.5f, 3.5f), warp_key(0.5f, 3.f));
-  EXPECT_GT(warp_key(0.f, 0.f), 0ull);  // 0 stays "hole"
-  EXPECT_EQ(warp_key(-1.f, 2.f), warp_key(0.f, 2.f));
-  EXPECT_EQ(warp_key_u(warp_key(0.7f, 1234.5f)), 1234.5f);
-  EXPECT_EQ(warp_key_depth(warp_key(0.7f, 1234.5f)), 0.7f);
+  auto hit = [](float d, float u) { return WarpHit{warp_depth_code(d), warp_u_code(u)}; };
+  EXPECT_GT(WideKeys::key(hit(0.5f, 3.f), 0), WideKeys::key(hit(0.25f, 60.f), 0));
+  EXPECT_GT(WideKeys::key(hit(0.5f, 3.5f), 0), WideKeys::key(hit(0.5f, 3.f), 0));
+  EXPECT_GT(WideKeys::key(hit(0.f, 0.f), 0), 0ull);  // 0 stays "hole"
+  EXPECT_EQ(warp_depth_code(-1.f), 0u);
+  EXPECT_EQ(warp_depth_code(2.f), 65535u);
+  EXPECT_EQ(warp_depth_code(1.f), 65535u);
+  EXPECT_EQ(warp_depth_code(0.5f), 32768u);
+  // Nearer than 1/65535 apart: one depth code, ordered by u.
+  EXPECT_GT(WideKeys::key(hit(0.50000f, 3.5f), 0), WideKeys::key(hit(0.500005f, 3.f), 0));
+  EXPECT_EQ(warp_u_of(WideKeys::u(WideKeys::key(hit(0.7f, 1234.5f), 0), 0)), 1234.5f);
+  EXPECT_EQ(WideKeys::depth(WideKeys::key(hit(0.7f, 1234.5f), 0)), warp_depth_code(0.7f));
+}
+
+// NarrowKeys are WideKeys in 32 bits for hits within 127 pixels of their
+// target: the same order at every target, the same depth and u codes back,
+// never 0. Every u code within 32767 of 256 X (the bound of
+// warp_narrow_keys_fit) at a few targets and depths, compared pairwise with
+// its neighbours and with random others.
+TEST(WarpHelpers, NarrowKeysOrderAsWideKeysNearTheTarget) {
+  std::mt19937 rng(41);
+  for (int X : {0, 1, 127, 128, 300, 4095, 7679, 65535}) {
+    const unsigned lo = 256u * X > 32767u ? 256u * X - 32767u : 1u, hi = 256u * X + 32767u;
+    std::uniform_int_distribution<unsigned> any_u(lo, hi), any_d(0u, 65535u);
+    for (unsigned d : {0u, 1u, 32768u, 65534u, 65535u})
+      for (unsigned u = lo; u <= hi; ++u) {
+        const WarpHit h{d, u};
+        const NarrowKeys::Word n = NarrowKeys::key(h, X);
+        ASSERT_NE(n, 0u) << X << " " << u;
+        ASSERT_EQ(NarrowKeys::u(n, X), u) << X;
+        ASSERT_EQ(NarrowKeys::depth(n), d);
+        const WarpHit o{any_d(rng), any_u(rng)};
+        ASSERT_EQ(n < NarrowKeys::key(o, X), WideKeys::key(h, X) < WideKeys::key(o, X)) << X << " " << u;
+        if (u > lo) {
+          ASSERT_GT(n, NarrowKeys::key(WarpHit{d, u - 1}, X));
+        }
+      }
+  }
+}
+
+// warp_narrow_keys_fit's bound holds: with random depth rows at parameters
+// it accepts (up to its limit) every covered target's u code lies within
+// 32767 of 256 X, and it refuses the parameters past that limit.
+TEST(WarpHelpers, NarrowKeysFitBoundsEveryHit) {
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<float> u01(0.f, 1.f);
+  const int w = 4000;
+  std::vector<float> depth(w);
+  long long hits = 0, max_off = 0;
+  for (int round = 0; round < 60; ++round) {
+    const float convergence = round % 3 == 0 ? 0.f : round % 3 == 1 ? 1.f : u01(rng);
+    const float c = std::max(convergence, 1.f - convergence), shift = round % 2 ? 1.f : -0.5f;
+    float D = 120.f / (std::fabs(shift) * c);  // at the limit: the largest D it accepts
+    while (!warp_narrow_keys_fit(shift, 0.f, D, convergence)) D = std::nextafter(D, 0.f);
+    ASSERT_GT(D, 0.9999f * 120.f / (std::fabs(shift) * c));
+    ASSERT_FALSE(warp_narrow_keys_fit(0.f, shift, D * 1.01f, convergence));
+    for (int x = 0; x < w; ++x) depth[x] = round % 4 == 0 ? static_cast<float>(rng() & 1) : u01(rng);
+    for (int x = 0; x < w; ++x) {
+      const WarpSource s = warp_source(depth.data(), x, w, shift, D, convergence);
+      const WarpSpan span = warp_span(s, w);
+      for (int X = span.first; X <= span.last; ++X, ++hits) {
+        const long long off = std::llabs(static_cast<long long>(warp_hit_at(s, X, w).u) - 256ll * X);
+        ASSERT_LE(off, 32767) << x << " " << X;
+        max_off = std::max(max_off, off);
+      }
+    }
+  }
+  EXPECT_GT(hits, 60 * w / 2);
+  EXPECT_GT(max_off, 256 * 120) << "the rows reach the limit";  // so the bound is tested where it binds
 }
 
 TEST(WarpHelpers, BackgroundSourcePicksFartherThenCloserThenLeft) {
-  const unsigned long long far = warp_key(0.1f, 0.f), near = warp_key(0.9f, 0.f);
+  const unsigned far = warp_depth_code(0.1f), near = warp_depth_code(0.9f);
   EXPECT_EQ(background_source(10, 5, far, 11, near), 5);
   EXPECT_EQ(background_source(10, 9, near, 20, far), 20);
   EXPECT_EQ(background_source(10, 7, far, 12, far), 12);  // equal depth: closer
@@ -581,18 +644,18 @@ TEST(WarpFill, NeighborAverageOfOneColourIsThatColour) {
 
 // Keys of one rendered view, recomputed from the public helpers (the warp's
 // scatter is tested above): what BackgroundSmooth's background pick reads.
-std::vector<unsigned long long> view_keys(const WarpParams &params, const cv::Mat &depth, int eye) {
+std::vector<WideKeys::Word> view_keys(const WarpParams &params, const cv::Mat &depth, int eye) {
   const WarpParams p = warp_sanitize(params);
   const int w = depth.cols, h = depth.rows;
   const float D = disparity_scale(p, w), shift = warp_eye_shift(p, D, eye);
-  std::vector<unsigned long long> keys(static_cast<size_t>(w) * h, 0ull);
+  std::vector<WideKeys::Word> keys(static_cast<size_t>(w) * h, 0ull);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const WarpSource s = warp_source(depth.ptr<float>(y), x, w, shift, D, p.convergence);
       const WarpSpan span = warp_span(s, w);
       for (int X = span.first; X <= span.last; ++X) {
-        unsigned long long &k = keys[static_cast<size_t>(y) * w + X];
-        k = std::max(k, warp_key_at(s, X, w));
+        WideKeys::Word &k = keys[static_cast<size_t>(y) * w + X];
+        k = std::max(k, WideKeys::key(warp_hit_at(s, X, w), X));
       }
     }
   return keys;
@@ -611,7 +674,7 @@ HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &non
   for (int eye = 0; eye < 2; ++eye) {
     const float shift = warp_eye_shift(p, D, eye);
     if (shift == 0.f) continue;
-    const std::vector<unsigned long long> keys = view_keys(params, depth, eye);
+    const std::vector<WideKeys::Word> keys = view_keys(params, depth, eye);
     auto hole = [&](int x, int y) { return keys[static_cast<size_t>(y) * w + x] == 0; };
     auto is_clean = [&](int x, int y) {
       for (int xx = x - kSmoothClean; xx <= x + kSmoothClean; ++xx)
@@ -635,8 +698,8 @@ HostFrame naive_background_smooth(const WarpParams &params, const HostFrame &non
         side[dir] = clean >= 0 ? clean : any;
       }
       const int xl = side[0], xr = side[1];
-      const int pick = background_source(x, xl, xl >= 0 ? keys[static_cast<size_t>(y) * w + xl] : 0ull, xr,
-                                         xr >= 0 ? keys[static_cast<size_t>(y) * w + xr] : 0ull);
+      auto depth_at = [&](int xx) { return xx >= 0 ? WideKeys::depth(keys[static_cast<size_t>(y) * w + xx]) : 0u; };
+      const int pick = background_source(x, xl, depth_at(xl), xr, depth_at(xr));
       if (pick < 0) return false;
       *c = view_at(none_render, eye, pick, y);
       return true;

@@ -205,7 +205,8 @@ TEST_F(GpuWarp, UnalignedOutputRows) {
 }
 
 // Rows too wide for a z-buffer in shared memory (about 28000 pixels on
-// Hopper) take the global-memory z-buffer; both must agree with the CPU.
+// Hopper with 32-bit keys, as here) take the global-memory z-buffer of
+// 64-bit keys; both must agree with the CPU.
 TEST_F(GpuWarp, VeryWideRowsUseGlobalKeys) {
   std::mt19937 rng(fresh_seed());
   HostFrame src(PixelFormat::BGRA, 40001, 3);
@@ -213,6 +214,38 @@ TEST_F(GpuWarp, VeryWideRowsUseGlobalKeys) {
   for (DepthKind kind : {DepthKind::Smooth, DepthKind::Binary}) {
     const cv::Mat depth = random_depth(40001, 3, kind, rng());
     for (HoleFill f : kAllFills) expect_same(warp_params(0.5f, 0.5f, StereoView::Both, f), src, depth);
+  }
+}
+
+// The row kernel keeps 32-bit keys (NarrowKeys: u relative to the target)
+// where warp_narrow_keys_fit() says every hit lies within 127 pixels of its
+// target, and 64-bit keys past that; both must give the CPU's bytes on
+// either side of the limit: both views at convergence 0.5 (|s| D c = D / 4)
+// and one view at convergence 0 (|s| D c = D), on noise and binary depth
+// (the widest hits: every pixel at the far or near end).
+TEST_F(GpuWarp, NarrowAndWideKeysAtTheLimit) {
+  std::mt19937 rng(fresh_seed());
+  const int w = 2000, h = 9;
+  HostFrame src(PixelFormat::NV12, w, h);
+  src.fill_random(rng());
+  struct Case {
+    float percent, convergence;
+    StereoView view;
+    bool narrow;
+  };
+  // D = percent * 20: both views 480 * 0.25 = 120 (the limit), one view 120 * 1.
+  const Case cases[] = {{23.9f, 0.5f, StereoView::Both, true},  {24.1f, 0.5f, StereoView::Both, false},
+                        {5.95f, 0.f, StereoView::Right, true},  {6.05f, 0.f, StereoView::Right, false},
+                        {5.95f, 1.f, StereoView::Left, true},   {6.05f, 1.f, StereoView::Left, false}};
+  for (const Case &c : cases) {
+    const WarpParams p = warp_sanitize(warp_params(c.percent, c.convergence, c.view, HoleFill::BackgroundSmooth));
+    const float D = disparity_scale(p, w);
+    ASSERT_EQ(warp_narrow_keys_fit(warp_eye_shift(p, D, 0), warp_eye_shift(p, D, 1), D, p.convergence), c.narrow)
+        << c.percent;
+    for (DepthKind kind : {DepthKind::Noise, DepthKind::Binary}) {
+      const cv::Mat depth = random_depth(w, h, kind, rng());
+      for (HoleFill f : kAllFills) expect_same(warp_params(c.percent, c.convergence, c.view, f), src, depth);
+    }
   }
 }
 
