@@ -157,8 +157,8 @@ P3D_HD float warp_u_of(unsigned int u_code) { return static_cast<float>(u_code -
 
 // Key words: the hit's depth code over its u code, so that the larger word
 // is the larger (depth, u) pair, and 0 is the hole.
-//  * WideKeys, 64 bits: any row (the CPU's z-buffer, and the GPU's where a
-//    hit may lie 128 pixels or more from its target).
+//  * WideKeys, 64 bits: any row (the CPU's z-buffer, and the GPU's where
+//    warp_narrow_keys_fit() does not hold).
 //  * NarrowKeys, 32 bits: the u code relative to the target, u - 256 X +
 //    32768, in the low 16 bits. For |u code - 256 X| <= 32767 that is
 //    1..65535 and orders like u at a fixed X; warp_narrow_keys_fit() says
@@ -333,7 +333,8 @@ P3D_HD WarpHit warp_hit_at(const WarpSource &s, int X, int width) {
 // Whether NarrowKeys hold every hit of a frame: |u - X| < 128 for every
 // covered X, with a margin. A footprint target has u - X = x - t(x) =
 // -s p(x) (clamping u to the row only brings it nearer X), a connected
-// span's u lies in [x, x + 1] for X in [t(x), t(x+1)), so |u - X| <= |s| D
+// span's u lies in [x, x + 1] for X in [t(x), t(x+1)) (an ulp past x + 1
+// at most, through the reciprocal: inside the margin), so |u - X| <= |s| D
 // max(c, 1 - c) + 1 for shift factor s, parallax p = D (d - c), d in
 // [0, 1]; the u code is then within 256 |u - X| + 2 of 256 X. Read for
 // the sanitised parameters and both eyes' shift factors.

@@ -17,7 +17,9 @@
 // instructions, gains from every further resident block): 2048 on A100
 // (sm_80), Hopper (sm_90) and the data-centre Blackwells (sm_100); 1536 on
 // the others from Ampere on (sm_86, Jetson Orin's sm_87, sm_89, sm_120);
-// 1024 on Turing.
+// 1024 on Turing. A card runs the bound its machine code was built with:
+// the default gpu_arch list has no sm_100, so a B200 compiles the embedded
+// compute_75 PTX, with Turing's bound, unless the build names 100.
 #if defined(__CUDA_ARCH__) && (__CUDA_ARCH__ == 800 || __CUDA_ARCH__ == 900 || __CUDA_ARCH__ == 1000)
 #define P3D_MAX_THREADS_PER_SM 2048
 #else

@@ -295,9 +295,10 @@ __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
 // kernel is instruction bound (ncu, 4K: 75 % of issue slots, DRAM 19 %),
 // so every further resident row helps: the third took the 4K warp from
 // 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB of shared
-// memory a row at 4K) 0.2385 -> 0.2280. With 64-bit keys the spill is
-// 12 bytes in the global-key kernels (rows of about 19000 pixels and more)
-// and none elsewhere.
+// memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register bound
+// (sm_90) only the global-key kernels (64-bit keys, rows of about 19000
+// pixels and more) spill: 12 bytes with BackgroundSmooth, 4 with
+// NeighborAverage.
 constexpr int kRowThreadsMax = 512;
 template <class Keys, bool kSharedKeys, HoleFill kFill>
 __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
@@ -559,25 +560,27 @@ __global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *m
 
 dim3 pixel_grid(int W, int H) { return dim3((W + kBlockX - 1) / kBlockX, (H + kBlockY - 1) / kBlockY, 2); }
 
-// Lets `kernel` take `bytes` of dynamic shared memory (past the default
-// 48 KiB only by opting in) and asks for the largest carveout, so that as
-// many blocks share an SM as their shared memory allows. `set` remembers
-// what each kernel was given, so a frame of a size seen before makes no
-// call (the attributes are per kernel and device; a renderer serves one
-// device).
-CudaStatus allow_shared_memory(const void *kernel, size_t bytes, std::vector<std::pair<const void *, size_t>> *set) {
-  for (const auto &k : *set)
-    if (k.first == kernel && k.second >= bytes) return {};
-  if (bytes > 48 * 1024)
-    P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)));
+// Lets `kernel` take as much dynamic shared memory as the device allows a
+// block beside the kernel's static shared memory (past 48 KiB only by
+// opting in), and asks for the largest carveout, so that as many blocks
+// share an SM as their shared memory allows. Always the most, not a
+// frame's size: the limit belongs to the kernel, shared by every renderer
+// in the process, so a renderer that set a smaller one for its smaller
+// rows would make another's launch fail; and the default 48 KiB count the
+// static bytes too (a row of 5956 pixels with 32-bit keys takes 49144
+// dynamic bytes, past it with the row kernel's 16 static ones). `done`
+// lists the kernels this renderer has set up, so no frame after the first
+// makes a call (a renderer serves one device).
+CudaStatus allow_shared_memory(const void *kernel, int smem_optin, std::vector<const void *> *done) {
+  for (const void *k : *done)
+    if (k == kernel) return {};
+  cudaFuncAttributes a{};
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&a, kernel));
+  P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                    smem_optin - static_cast<int>(a.sharedSizeBytes)));
   P3D_CUDA_TRY(cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
                                     static_cast<int>(cudaSharedmemCarveoutMaxShared)));
-  for (auto &k : *set)
-    if (k.first == kernel) {
-      k.second = bytes;
-      return {};
-    }
-  set->emplace_back(kernel, bytes);
+  done->push_back(kernel);
   return {};
 }
 
@@ -603,13 +606,14 @@ struct RowLaunch {
   bool words;
   size_t smem;
   cudaStream_t stream;
-  std::vector<std::pair<const void *, size_t>> *attributes_set;
+  int smem_optin;
+  std::vector<const void *> *attributes_set;
 };
 
 template <class Keys, bool kSharedKeys, HoleFill kFill>
 CudaStatus launch_rows(const RowLaunch &l) {
   const auto kernel = warp_row_kernel<Keys, kSharedKeys, kFill>;
-  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), l.smem, l.attributes_set));
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), l.smem_optin, l.attributes_set));
   const int threads = l.src.width > 1024 ? kRowThreadsMax : 256;
   static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
   kernel<<<l.src.height, threads, l.smem, l.stream>>>(l.src, l.m, l.depth, l.out, l.eyes, l.D, l.convergence,
@@ -687,10 +691,10 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 // and listed the tiles with holes: one smooth_tile_kernel, a block for every
 // tile the list may hold (the host does not read the count). No host sync.
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
-                         cudaStream_t stream, std::vector<std::pair<const void *, size_t>> *attributes_set) {
+                         cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set) {
   const auto kernel = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true> : smooth_tile_kernel<true, false>)
                                   : (plan.staged ? smooth_tile_kernel<false, true> : smooth_tile_kernel<false, false>);
-  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), plan.smem, attributes_set));
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), smem_optin, attributes_set));
   kernel<<<static_cast<unsigned>(plan.tiles()), kSmoothTileThreads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
   P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
   return {};
@@ -760,10 +764,11 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   }
   const bool words = reinterpret_cast<uintptr_t>(out.plane[0]) % 4 == 0 && out.stride[0] % 4 == 0;
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
-                         keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, &attributes_set_};
+                         keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, smem_optin_,
+                         &attributes_set_};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
-  if (smooth) P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, &attributes_set_));
+  if (smooth) P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_));
 
   if (holes_out) {
     unsigned long long h = 0;

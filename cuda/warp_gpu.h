@@ -35,7 +35,6 @@
 // largest frame has been seen. One renderer serves one stream at a time.
 #pragma once
 
-#include <utility>
 #include <vector>
 
 #include "../common/warp.h"
@@ -71,9 +70,9 @@ class WarpRendererGpu {
   // planes (anchors, states, chunk flags; 2 eyes) and its tile list.
   DeviceBuffer keys_, counters_, scratch_, smooth_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
-  // The kernels whose shared-memory attributes are set, with the bytes
-  // they were allowed (set once per kernel and size, not every frame).
-  std::vector<std::pair<const void *, size_t>> attributes_set_;
+  // The kernels whose shared-memory attributes this renderer has set (once
+  // per kernel, to the device's most, not every frame).
+  std::vector<const void *> attributes_set_;
 };
 
 }  // namespace p3d

@@ -249,6 +249,46 @@ TEST_F(GpuWarp, NarrowAndWideKeysAtTheLimit) {
   }
 }
 
+// A kernel's shared-memory limit is the kernel's, shared by every renderer
+// of the process, and the 48 KiB a block gets without opting in count the
+// kernel's static shared memory too. Two renderers taking turns on rows of
+// different widths must both launch (7680 and 6000 pixels: 61 and 48 KB
+// with 32-bit keys), and so must rows whose dynamic bytes lie just under
+// 48 KiB (5956 pixels with 32-bit keys, 4011 with 64-bit ones at 25 %:
+// 49144 and 49140 bytes, plus the row kernel's 16 static ones). Those two
+// come first: a kernel opted in by an earlier launch of the process no
+// longer shows the second fault (run the test alone for that).
+TEST_F(GpuWarp, SharedMemoryLimitsAcrossRenderersAndAt48KiB) {
+  std::mt19937 rng(fresh_seed());
+  WarpRendererGpu other;
+  struct Run {
+    int w;
+    float percent;
+    bool own;  // this fixture's renderer, else `other`
+  };
+  const Run runs[] = {{5956, 3.f, true},  {4011, 25.f, false}, {7680, 3.f, true},
+                      {6000, 3.f, false}, {7680, 3.f, true},   {5957, 3.f, false}};
+  for (const Run &r : runs) {
+    SCOPED_TRACE(r.w);
+    HostFrame src(PixelFormat::NV12, r.w, 3);
+    src.fill_random(rng());
+    const cv::Mat depth = random_depth(r.w, 3, DepthKind::Binary, rng());
+    const WarpParams p = warp_params(r.percent, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth);
+    HostFrame cpu(PixelFormat::RGBA, 2 * r.w, 3);
+    const long long cpu_holes = warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), cpu.view());
+    const test::DeviceFrame dsrc = test::DeviceFrame::upload(src);
+    const test::DeviceDepth ddepth = test::DeviceDepth::upload(depth);
+    const test::DeviceFrame dout(PixelFormat::RGBA, 2 * r.w, 3);
+    long long gpu_holes = -7;
+    WarpRendererGpu &renderer = r.own ? renderer_ : other;
+    test::check_cuda(
+        renderer.render(p, dsrc.view(), YuvToRgb(), as_const(ddepth.view()), dout.view(), stream_, &gpu_holes));
+    ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
+    EXPECT_EQ(gpu_holes, cpu_holes);
+    EXPECT_EQ(first_difference(cpu, dout.download()), "");
+  }
+}
+
 // BackgroundSmooth windows too tall for the sums kernel's shared-memory
 // copy (25 % of 3001 pixels: R = 188 rows for both views, 376 for one) read
 // the states and anchors from global memory instead; the result is the same.
