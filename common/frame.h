@@ -126,6 +126,17 @@ P3D_HD Rgba word_rgba(uint32_t w) {
               static_cast<uint8_t>(w >> 24)};
 }
 
+// A word with its first and third bytes traded: rgba_word() of a pixel as
+// the BGR orders store it (store_rgba()'s byte order, in one word). The
+// device has a byte-permute instruction for it.
+P3D_HD uint32_t swap_rb_word(uint32_t w) {
+#ifdef __CUDA_ARCH__
+  return __byte_perm(w, 0u, 0x3012);
+#else
+  return (w & 0xff00ff00u) | (w >> 16 & 0xffu) | (w & 0xffu) << 16;
+#endif
+}
+
 // rgba_word(load_rgba()) of pixels x and x + 1 of row y into w[0] and w[1]
 // (x even; x + 1 == width: w[0] only). A 4:2:0 pair shares its chroma
 // sample, read and multiplied once: the warp converts each source row this

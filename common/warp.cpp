@@ -62,7 +62,7 @@ struct OutputRow {
       : p(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + 4 * static_cast<size_t>(col0)),
         bgr(is_bgr_order(out.format)) {}
   void put(int x, uint32_t w) const {
-    if (bgr) w = (w & 0xff00ff00u) | (w >> 16 & 0xffu) | (w & 0xffu) << 16;
+    if (bgr) w = swap_rb_word(w);
     std::memcpy(p + 4 * static_cast<size_t>(x), &w, 4);
   }
 };

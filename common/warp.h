@@ -64,8 +64,8 @@
 //       X, or, when the row has none left of X, the nearest non-hole left of
 //       X; CR likewise to the right (-1: none). The anchor is the colour
 //       (rendered view, before filling) of background_source(X, CL, depth
-//       code of CL, CR, depth code of CR): the farther side, as for Background. No non-hole on
-//       either side: the hole has no anchor.
+//       code of CL, CR, depth code of CR): the farther side, as for
+//       Background. No non-hole on either side: the hole has no anchor.
 //     - Column sums: every hole (X, y) gets V(X, y), the per-channel sums and
 //       the count of the anchors of its column's run of holes: the holes
 //       (X, y') with |y' - y| <= R such that every pixel from y to y' is a

@@ -102,7 +102,7 @@ __device__ void store_word(const FrameView &out, int x, int y, uint32_t w, bool 
   }
   const bool bgr = is_bgr_order(out.format);
   *reinterpret_cast<uint32_t *>(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + 4 * static_cast<size_t>(x)) =
-      bgr ? __byte_perm(w, 0u, 0x3012) : w;
+      bgr ? swap_rb_word(w) : w;
 }
 
 // Background fill of one row whose keys are final and whose chunks' hole

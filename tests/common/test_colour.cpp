@@ -1,5 +1,6 @@
 // Colour conversion parameters, packed-format swizzles, luma and plane
 // geometry (common/frame.h, common/colour.cpp).
+#include <cstring>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -172,6 +173,22 @@ TEST(ColourSwizzle, StoreRgbaOfEveryPackedFormat) {
     EXPECT_EQ(c.g, 22);
     EXPECT_EQ(c.b, 33);
     EXPECT_EQ(c.a, is_packed_rgb(f) && (f == PixelFormat::RGBA || f == PixelFormat::BGRA) ? 44 : 255);
+  }
+}
+
+// swap_rb_word(rgba_word(c)) is the word store_rgba() writes for the BGR
+// orders (the warp's row writers store words so), for every byte value in
+// every position.
+TEST(ColourSwizzle, SwapRbWordIsTheBgrStore) {
+  HostFrame h(PixelFormat::BGRA, 1, 1);
+  for (int v = 0; v < 256; ++v) {
+    const uint8_t b = static_cast<uint8_t>(v);
+    for (const Rgba c : {Rgba{b, 1, 2, 3}, Rgba{1, b, 2, 3}, Rgba{1, 2, b, 3}, Rgba{1, 2, 3, b}}) {
+      store_rgba(h.view(), 0, 0, c);
+      uint32_t stored;
+      std::memcpy(&stored, h.view().plane[0], 4);
+      ASSERT_EQ(swap_rb_word(rgba_word(c)), stored) << v;
+    }
   }
 }
 
