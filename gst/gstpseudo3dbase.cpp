@@ -252,15 +252,18 @@ void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gi
   });
 }
 
-GstStructure *gst_pseudo3d_sizes_back(const GstStructure *in, gint wn, gint wd, gint hn, gint hd, gboolean rounded) {
+GstStructure *gst_pseudo3d_sizes_forward(const GstStructure *in, gint wn, gint wd, gint hn, gint hd) {
   GstStructure *s = gst_structure_copy(in);
-  if (rounded) {
-    gst_pseudo3d_unscale_field(s, "width", wn, wd);
-    gst_pseudo3d_unscale_field(s, "height", hn, hd);
-  } else {
-    gst_pseudo3d_scale_field(s, "width", wd, wn);
-    gst_pseudo3d_scale_field(s, "height", hd, hn);
-  }
+  gst_pseudo3d_scale_field(s, "width", wn, wd);
+  gst_pseudo3d_scale_field(s, "height", hn, hd);
+  return s;
+}
+
+GstStructure *gst_pseudo3d_sizes_back(const GstStructure *in, gint wn, gint wd, gint hn, gint hd, gboolean rounded) {
+  if (!rounded) return gst_pseudo3d_sizes_forward(in, wd, wn, hd, hn);  // the exact inverse
+  GstStructure *s = gst_structure_copy(in);
+  gst_pseudo3d_unscale_field(s, "width", wn, wd);
+  gst_pseudo3d_unscale_field(s, "height", hn, hd);
   return s;
 }
 

@@ -138,6 +138,10 @@ void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint
  * passes the caps query, and set_info() can refuse it with its reason
  * instead of a bare not-negotiated. */
 void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den);
+/* A copy of structure `in` (input sizes) with the output sizes of an
+ * element whose output width and height are input * wn / wd and
+ * input * hn / hd (gst_pseudo3d_scale_field). */
+GstStructure *gst_pseudo3d_sizes_forward(const GstStructure *in, gint wn, gint wd, gint hn, gint hd);
 /* A copy of sink-side-bound structure `in` (output sizes) with the input
  * sizes that give them, for an element whose output width and height are
  * input * wn / wd and input * hn / hd: the exact inverse, or (`rounded`)

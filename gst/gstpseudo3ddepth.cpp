@@ -78,11 +78,7 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   const bool rgbd = self->state->method.negotiating() == GST_PSEUDO3D_DEPTH_METHOD_RGBD;
   GST_OBJECT_UNLOCK(self);
   if (!rgbd) return gst_pseudo3d_caps_of(gst_structure_copy(in));
-  if (from == GST_PAD_SINK) {
-    GstStructure *s = gst_structure_copy(in);
-    gst_pseudo3d_scale_field(s, "width", 1, 2);
-    return gst_pseudo3d_caps_of(s);
-  }
+  if (from == GST_PAD_SINK) return gst_pseudo3d_caps_of(gst_pseudo3d_sizes_forward(in, 1, 2, 1, 1));
   // Towards the sink: twice the width first, then every width whose half this is.
   return gst_caps_merge_structure(gst_pseudo3d_caps_of(gst_pseudo3d_sizes_back(in, 1, 2, 1, 1, FALSE)),
                                   gst_pseudo3d_sizes_back(in, 1, 2, 1, 1, TRUE));

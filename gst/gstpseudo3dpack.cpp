@@ -126,11 +126,8 @@ static GstStructure *transformed(const GstStructure *in, SizeWay way, p3d::Stere
                                  const PackGeometry &g) {
   gint wn, wd, hn, hd;
   size_ratio(input, g.layout, &wn, &wd, &hn, &hd);
-  if (way != SizeWay::ToSrc) return gst_pseudo3d_sizes_back(in, wn, wd, hn, hd, way == SizeWay::BackRounded);
-  GstStructure *s = gst_structure_copy(in);
-  gst_pseudo3d_scale_field(s, "width", wn, wd);
-  gst_pseudo3d_scale_field(s, "height", hn, hd);
-  return s;
+  if (way == SizeWay::ToSrc) return gst_pseudo3d_sizes_forward(in, wn, wd, hn, hd);
+  return gst_pseudo3d_sizes_back(in, wn, wd, hn, hd, way == SizeWay::BackRounded);
 }
 
 // Whether a caps structure's format (a name or a list) names NV12 or I420.
