@@ -11,6 +11,7 @@
 // function. Every output accumulates its taps in the reference's order (dy
 // outer, dx inner) through bilateral_accumulate() on the same host-made
 // weights, so the result is bit-identical to the CPU's.
+#include "chained_launch.cuh"
 #include "bilateral_gpu.h"
 #include "launch_bounds.cuh"
 
@@ -140,6 +141,7 @@ template <int R>
 __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, ImageView<const float> depth_in,
                                                             ImageView<float> depth_out,
                                                             const float *__restrict__ tables) {
+  chained_kernel_start();
   using G = Geometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
   Texel *tile = reinterpret_cast<Texel *>(smem);
@@ -212,6 +214,7 @@ template <int R>
 __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
     separable_kernel(FrameView guide, ImageView<const float> depth_in, ImageView<float> depth_out,
                      const float *__restrict__ tables) {
+  chained_kernel_start();
   using G = SeparableGeometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
   Texel *tile = reinterpret_cast<Texel *>(smem);
@@ -344,8 +347,8 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
   const KernelEntry &k = separable ? kSeparableKernels[s.radius] : kKernels[s.radius];
   const dim3 block(kBlockX, kBlockY);
   const dim3 grid((depth_in.width + kBlockX - 1) / kBlockX, (depth_in.height + kOutY - 1) / kOutY);
-  k.fn<<<grid, block, k.shared_bytes, stream>>>(guide, depth_in, depth_out, tables_.as<const float>());
-  P3D_CUDA_TRY_LAUNCH(separable ? "separable_kernel" : "bilateral_kernel");
+  P3D_CUDA_TRY(
+      launch_chained(k.fn, grid, block, k.shared_bytes, stream, guide, depth_in, depth_out, tables_.as<const float>()));
   return {};
 }
 

@@ -1,3 +1,4 @@
+#include "chained_launch.cuh"
 #include "depth_estimate_gpu.h"
 #include "warp_reduce.cuh"
 
@@ -35,6 +36,7 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
                                                                   float *__restrict__ features,
                                                                   const float *__restrict__ ref, bool have_state,
                                                                   DepthDeviceState *state) {
+  chained_kernel_start();
   constexpr int kRows = kB > 0 ? (kB >= 16 ? 1 : 16 / kB) : kFeatureRowsMax;
   __shared__ uint32_t col[kRows][3][kThreads];
   __shared__ unsigned long long warp_diff[kThreads / 32];
@@ -167,6 +169,7 @@ __device__ TemporalDecision device_decision(const DepthDeviceState *state, const
 __global__ void tile_labels_kernel(const float *__restrict__ features, float *__restrict__ smoothed, int bx, int by,
                                    DepthParams params, bool yuv, bool have_state, const DepthDeviceState *state, int *labels,
                                    unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
+  chained_kernel_start();
   __shared__ int parent[kTile * kTile];
   __shared__ float feat[kTile * kTile][3];
   __shared__ unsigned left_bits[kTile], up_bits[kTile];  // per tile row: bit lx set when joined to the left / above
@@ -235,6 +238,7 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
 // one per block of the border (each a chain of global atomics).
 __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx, int by, float edge_threshold,
                                      bool yuv, int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
+  chained_kernel_start();
   const long long e = static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (e >= pairs) return;
   int a, b, step;  // step: from a pair's blocks to those of the pair before it on the border (0: none in the tile)
@@ -276,6 +280,7 @@ __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx,
 // atomic on one address.
 __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int height, Hypothesis hypothesis,
                                unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
+  chained_kernel_start();
   __shared__ int cta_root;
   __shared__ uint32_t warp_sum[kThreads / 32], warp_count[kThreads / 32], warp_max[kThreads / 32];
   const int i = blockIdx.x * kThreads + threadIdx.x;
@@ -338,6 +343,7 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
                                    const float *__restrict__ features,
                                    float *__restrict__ ref, float *__restrict__ block_depth, DepthDeviceState *state,
                                    DepthParams params, bool have_state, int n, int bx, int B, int width, int height) {
+  chained_kernel_start();
   const int i = blockIdx.x * kThreads + threadIdx.x;
   if (i >= n) return;
   float diff;
@@ -364,6 +370,7 @@ constexpr int kExpandPixels = 4;  // the float4 below
 static_assert(kExpandPixels == 4, "expand_kernel stores a float4");
 __global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int B, int width, int height,
                               ImageView<float> depth) {
+  chained_kernel_start();
   const int x0 = (blockIdx.x * kExpandX + threadIdx.x) * kExpandPixels, y = blockIdx.y * kExpandY + threadIdx.y;
   if (x0 >= width || y >= height) return;
   const float *src = block_depth + static_cast<size_t>(y / B) * bx;
@@ -388,6 +395,7 @@ __global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int
 }
 
 __global__ void depth_from_grey_kernel(FrameView grey, YuvToRgb m, int width, int height, ImageView<float> depth) {
+  chained_kernel_start();
   const int x = blockIdx.x * kExpandX + threadIdx.x, y = blockIdx.y * kExpandY + threadIdx.y;
   if (x >= width || y >= height) return;
   depth.at(x, y) = depth_from_grey(grey, x, y, m);
@@ -421,7 +429,7 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   P3D_CUDA_TRY_STATUS(block_depth_.ensure(nb * sizeof(float)));
   P3D_CUDA_TRY_STATUS(state_.ensure(sizeof(DepthDeviceState)));
   auto *state = state_.as<DepthDeviceState>();
-  P3D_CUDA_TRY(cudaMemsetAsync(state, 0, sizeof(DepthDeviceState), stream));
+  P3D_CUDA_TRY(zero_chained(state, sizeof(DepthDeviceState), stream));
 
   // Step 1 (+ the difference sum of step 5). ~16 pixel rows a CTA, so that
   // small blocks do not make one atomic per handful of pixels.
@@ -430,47 +438,42 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
                          : B == 4 ? block_features_kernel<4>
                          : B == 8 ? block_features_kernel<8>
                                   : block_features_kernel<0>;
-  features_kernel<<<dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0, stream>>>(
-      frame, B, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid, state);
-  P3D_CUDA_TRY_LAUNCH(block_features_kernel);
+  P3D_CUDA_TRY(launch_chained(features_kernel, dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0,
+                              stream, frame, B, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid,
+                              state));
 
   // Step 2.
   const bool yuv = !is_packed_rgb(frame.format);
   const int tiles_x = blocks_along(bx, kTile), tiles_y = blocks_along(by, kTile);
-  tile_labels_kernel<<<dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream>>>(
-      features_.as<float>(), smoothed_features_.as<float>(), bx, by, params, yuv, same_grid, state, labels_.as<int>(),
-      region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(), region_max_.as<uint32_t>());
-  P3D_CUDA_TRY_LAUNCH(tile_labels_kernel);
+  P3D_CUDA_TRY(launch_chained(tile_labels_kernel, dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream,
+                              features_.as<float>(), smoothed_features_.as<float>(), bx, by, params, yuv, same_grid,
+                              state, labels_.as<int>(), region_sums_.as<unsigned long long>(),
+                              region_counts_.as<uint32_t>(), region_max_.as<uint32_t>()));
   const long long vertical_pairs = static_cast<long long>(tiles_x - 1) * by;
   const long long pairs = vertical_pairs + static_cast<long long>(tiles_y - 1) * bx;
   if (pairs > 0) {
-    border_labels_kernel<<<grid_for(pairs, kThreads), kThreads, 0, stream>>>(
-        smoothed_features_.as<float>(), bx, by, params.edge_threshold, yuv, labels_.as<int>(), tiles_x, vertical_pairs,
-        pairs);
-    P3D_CUDA_TRY_LAUNCH(border_labels_kernel);
+    P3D_CUDA_TRY(launch_chained(border_labels_kernel, grid_for(pairs, kThreads), kThreads, 0, stream,
+                                smoothed_features_.as<float>(), bx, by, params.edge_threshold, yuv, labels_.as<int>(),
+                                tiles_x, vertical_pairs, pairs));
   }
 
   // Steps 3-4.
-  resolve_kernel<<<grid_for(n, kThreads), kThreads, 0, stream>>>(labels_.as<int>(), n, bx, B, W, H, params.hypothesis,
-                                                                 region_sums_.as<unsigned long long>(),
-                                                                 region_counts_.as<uint32_t>(),
-                                                                 region_max_.as<uint32_t>());
-  P3D_CUDA_TRY_LAUNCH(resolve_kernel);
+  P3D_CUDA_TRY(launch_chained(resolve_kernel, grid_for(n, kThreads), kThreads, 0, stream, labels_.as<int>(), n, bx, B,
+                              W, H, params.hypothesis, region_sums_.as<unsigned long long>(),
+                              region_counts_.as<uint32_t>(), region_max_.as<uint32_t>()));
 
   // Steps 4-5.
-  block_depth_kernel<<<grid_for(n, kThreads), kThreads, 0, stream>>>(
-      labels_.as<int>(), region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(),
-      region_max_.as<uint32_t>(), features_.as<float>(),
-      ref_features_.as<float>(), block_depth_.as<float>(), state, params, same_grid, n, bx, B, W, H);
-  P3D_CUDA_TRY_LAUNCH(block_depth_kernel);
+  P3D_CUDA_TRY(launch_chained(block_depth_kernel, grid_for(n, kThreads), kThreads, 0, stream, labels_.as<int>(),
+                              region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(),
+                              region_max_.as<uint32_t>(), features_.as<float>(), ref_features_.as<float>(),
+                              block_depth_.as<float>(), state, params, same_grid, n, bx, B, W, H));
 
   // Step 6.
   const int ew = depth.width < bx * B ? depth.width : bx * B, eh = depth.height < by * B ? depth.height : by * B;
   if (!depth.empty()) {
-    expand_kernel<<<dim3(grid_for(grid_for(ew, kExpandPixels), kExpandX), grid_for(eh, kExpandY)),
-                    dim3(kExpandX, kExpandY), 0, stream>>>(
-        block_depth_.as<float>(), bx, B, ew, eh, depth);
-    P3D_CUDA_TRY_LAUNCH(expand_kernel);
+    P3D_CUDA_TRY(launch_chained(expand_kernel,
+                                dim3(grid_for(grid_for(ew, kExpandPixels), kExpandX), grid_for(eh, kExpandY)),
+                                dim3(kExpandX, kExpandY), 0, stream, block_depth_.as<float>(), bx, B, ew, eh, depth));
   }
 
   have_state_ = true;
@@ -537,9 +540,8 @@ CudaStatus depth_from_grey_gpu(const FrameView &grey, const YuvToRgb &m, ImageVi
   const int w = depth.width < grey.width ? depth.width : grey.width;
   const int h = depth.height < grey.height ? depth.height : grey.height;
   if (depth.empty() || w <= 0 || h <= 0) return {};
-  depth_from_grey_kernel<<<dim3(grid_for(w, kExpandX), grid_for(h, kExpandY)), dim3(kExpandX, kExpandY), 0, stream>>>(
-      grey, m, w, h, depth);
-  P3D_CUDA_TRY_LAUNCH(depth_from_grey_kernel);
+  P3D_CUDA_TRY(launch_chained(depth_from_grey_kernel, dim3(grid_for(w, kExpandX), grid_for(h, kExpandY)),
+                              dim3(kExpandX, kExpandY), 0, stream, grey, m, w, h, depth));
   return {};
 }
 

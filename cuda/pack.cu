@@ -1,3 +1,4 @@
+#include "chained_launch.cuh"
 #include "pack_gpu.h"
 
 #include <cstdint>
@@ -24,6 +25,7 @@ constexpr int kVec = 4;
 // runs without the code of the others.
 template <StereoInput I>
 __global__ void pack_kernel(const PackKernelParams kp) {
+  chained_kernel_start();
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= kp.out.width || y >= kp.out.height) return;
@@ -36,6 +38,7 @@ __global__ void pack_kernel(const PackKernelParams kp) {
 // aligned rows (checked by the launcher).
 template <StereoInput I>
 __global__ void pack_kernel_vec(const PackKernelParams kp) {
+  chained_kernel_start();
   const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x0 >= kp.out.width || y >= kp.out.height) return;
@@ -60,6 +63,7 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
 // pack_pixel_for's own anaglyph() per pixel, read from the registers by
 // pixel_at() as from the frame.
 __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
+  chained_kernel_start();
   const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x0 >= kp.out.width || y >= kp.out.height) return;
@@ -87,6 +91,7 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
 // 4:2:0 output: one thread per 2x2 block (its four pixels, one chroma pair).
 template <StereoInput I>
 __global__ void pack_kernel_yuv(const PackKernelParams kp) {
+  chained_kernel_start();
   const int bx = blockIdx.x * blockDim.x + threadIdx.x;
   const int by = blockIdx.y * blockDim.y + threadIdx.y;
   if (2 * bx >= kp.out.width || 2 * by >= kp.out.height) return;
@@ -115,22 +120,18 @@ CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t s
   const dim3 block(kBlockX, kBlockY);
   if (I == StereoInput::SideBySide && anaglyph_pair_vec(kp.p, kp.in, kp.out)) {
     const dim3 grid((kp.out.width / kVec + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
-    pack_anaglyph_pair_vec<<<grid, block, 0, stream>>>(kp);
-    P3D_CUDA_TRY_LAUNCH(pack_anaglyph_pair_vec);
+    P3D_CUDA_TRY(launch_chained(pack_anaglyph_pair_vec, grid, block, 0, stream, kp));
   } else if (!is_packed_rgb(kp.out.format)) {
     const int bw = (kp.out.width + 1) / 2, bh = (kp.out.height + 1) / 2;
     const dim3 grid((bw + kBlockX - 1) / kBlockX, (bh + kBlockY - 1) / kBlockY);
-    pack_kernel_yuv<I><<<grid, block, 0, stream>>>(kp);
-    P3D_CUDA_TRY_LAUNCH(pack_kernel_yuv);
+    P3D_CUDA_TRY(launch_chained(pack_kernel_yuv<I>, grid, block, 0, stream, kp));
   } else if (vector_stores) {
     const int threads_x = (kp.out.width + kVec - 1) / kVec;
     const dim3 grid((threads_x + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
-    pack_kernel_vec<I><<<grid, block, 0, stream>>>(kp);
-    P3D_CUDA_TRY_LAUNCH(pack_kernel_vec);
+    P3D_CUDA_TRY(launch_chained(pack_kernel_vec<I>, grid, block, 0, stream, kp));
   } else {
     const dim3 grid((kp.out.width + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
-    pack_kernel<I><<<grid, block, 0, stream>>>(kp);
-    P3D_CUDA_TRY_LAUNCH(pack_kernel);
+    P3D_CUDA_TRY(launch_chained(pack_kernel<I>, grid, block, 0, stream, kp));
   }
   return {};
 }
