@@ -395,23 +395,40 @@ TEST_F(Convert, OddSizeIsCroppedToEven) {
   }
 }
 
+namespace {
+
+// `source` (the 160x120 test clip) tagged as rotated by 90 degrees, at
+// `path`; false (with *why) where this ffmpeg cannot tag it.
+bool make_rotated_clip(const std::string &source, const std::string &path, std::string *why) {
+  g_remove(path.c_str());
+  const std::string tag = "ffmpeg -v error -y -i '" + source + "' -c copy -metadata:s:v rotate=90 '" + path + "'";
+  if (std::system(tag.c_str()) != 0) {
+    *why = "ffmpeg could not write " + path;
+    return false;
+  }
+  // Newer ffmpeg releases tag rotations with -display_rotation instead.
+  std::string probe;
+  run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries", "stream_side_data=rotation", "-of",
+               "default=nw=1", path},
+              &probe);
+  if (probe.find("rotation=") == std::string::npos) {
+    *why = "this ffmpeg wrote no rotation: " + probe;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 // A phone video stored sideways with a rotation tag comes out upright (the
 // depth hypotheses describe the upright scene, and the output carries no
 // rotation): 160x120 stored, rotated 90 degrees, converted to 120x160.
 TEST_F(Convert, RotatedVideoIsTurnedUpright) {
   if (!have_program("ffmpeg")) GTEST_SKIP() << "no ffmpeg to tag a rotation";
   const std::string rotated = fx().dir + "/rotated-90.mp4", out = fx().dir + "/from-rotated.mp4";
-  g_remove(rotated.c_str());
   g_remove(out.c_str());
-  const std::string tag = "ffmpeg -v error -y -i '" + fx().aac_mp4 + "' -c copy -metadata:s:v rotate=90 '" + rotated + "'";
-  ASSERT_EQ(std::system(tag.c_str()), 0);
-  // Newer ffmpeg releases tag rotations with -display_rotation instead.
-  std::string probe;
-  run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries", "stream_side_data=rotation", "-of",
-               "default=nw=1", rotated},
-              &probe);
-  if (probe.find("rotation=") == std::string::npos) GTEST_SKIP() << "this ffmpeg wrote no rotation: " << probe;
-  // The CPU path: NVDEC's CUDA frames reach the 3D stages as stored.
+  std::string why;
+  if (!make_rotated_clip(fx().aac_mp4, rotated, &why)) GTEST_SKIP() << why;
   const ToolRun r = run_convert(
       {rotated, out, "--layout", "top-bottom-half", "--quiet", "--preset", "ultrafast", "--processing", "cpu"});
   ASSERT_EQ(r.status, 0) << r.err;
@@ -419,6 +436,29 @@ TEST_F(Convert, RotatedVideoIsTurnedUpright) {
   EXPECT_EQ(rb.width, 120);
   EXPECT_EQ(rb.height, 160);
   EXPECT_EQ(rb.video_frames, 50);
+}
+
+// On the GPU path NVDEC's CUDA frames cannot be turned upright (no CUDA
+// rotation in GStreamer 1.22): the converter refuses the rotated video with
+// the reason and the way out, and leaves no output, instead of converting
+// it sideways. Where the decoder is not NVDEC the frames arrive in system
+// memory and are turned upright as on the CPU path. Skipped without a GPU.
+TEST_F(Convert, RotatedVideoOnCudaMemoryIsRefusedWithTheWayOut) {
+  if (!have_program("ffmpeg")) GTEST_SKIP() << "no ffmpeg to tag a rotation";
+  const std::string rotated = fx().dir + "/rotated-90-gpu.mp4", out = fx().dir + "/from-rotated-gpu.mp4";
+  g_remove(out.c_str());
+  std::string why;
+  if (!make_rotated_clip(fx().aac_mp4, rotated, &why)) GTEST_SKIP() << why;
+  const ToolRun r = run_convert({rotated, out, "--layout", "top-bottom-half", "--preset", "ultrafast", "--processing", "gpu"});
+  if (r.err.find("no usable NVIDIA GPU") != std::string::npos) GTEST_SKIP() << "no GPU: " << r.err;
+  if (r.err.find("cannot turn a video tagged rotate-") == std::string::npos) {  // decoded into system memory: upright
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(read_back(out).height, 160);
+    return;
+  }
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("--processing cpu"), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
 }
 
 // Progress goes to stderr; a reader that closes it (a pipe into `head`)

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "gst_run.h"
 #include "progress.h"
 #include "stage_settings.h"
 
@@ -126,6 +127,39 @@ GstCaps *video_caps_for(Processing processing) {
 
 GstCaps *VideoChain::accepted_caps() const { return video_caps_for(processing_); }
 
+// The rotation a tag list asks for (GST_TAG_IMAGE_ORIENTATION), empty when
+// it asks for none: "rotate-0" or no such tag.
+std::string tagged_rotation(const GstTagList *tags) {
+  gchar *value = nullptr;
+  if (!gst_tag_list_get_string(tags, GST_TAG_IMAGE_ORIENTATION, &value)) return {};
+  std::string r = value ? value : "";
+  g_free(value);
+  return r == "rotate-0" ? std::string() : r;
+}
+
+namespace {
+
+// The GPU path's probe on the decoded video: NVDEC's CUDA frames cannot go
+// through videoflip (system memory only in GStreamer 1.22, whose CUDA
+// converters cannot rotate), so a rotation tag there is refused with the
+// reason, once, instead of converting the picture sideways (its depth
+// hypotheses and stereo layout would describe the stored, not the upright,
+// scene). `user_data`: the chain's first element, which posts the error.
+GstPadProbeReturn refuse_rotation(GstPad *, GstPadProbeInfo *info, gpointer user_data) {
+  GstEvent *event = GST_PAD_PROBE_INFO_EVENT(info);
+  if (GST_EVENT_TYPE(event) != GST_EVENT_TAG) return GST_PAD_PROBE_OK;
+  GstTagList *tags = nullptr;
+  gst_event_parse_tag(event, &tags);
+  const std::string rotation = tagged_rotation(tags);
+  if (rotation.empty()) return GST_PAD_PROBE_OK;
+  post_error(GST_ELEMENT(user_data), "the GPU path cannot turn a video tagged " + rotation +
+                                         " upright (NVDEC's CUDA frames do not go through videoflip): use "
+                                         "--processing cpu");
+  return GST_PAD_PROBE_REMOVE;
+}
+
+}  // namespace
+
 bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   GstCapsFeatures *features = gst_caps_get_features(caps, 0);
   cuda_input_ = features && gst_caps_features_contains(features, "memory:CUDAMemory");
@@ -146,7 +180,9 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
                  ") to the even size the 4:2:0 encoder needs: use --processing cpu";
       return false;
     }
-    return gst_pad_link(decoded, head_sink_) == GST_PAD_LINK_OK && gst_element_link(head_, convert_);
+    if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK || !gst_element_link(head_, convert_)) return false;
+    gst_pad_add_probe(head_sink_, GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM, refuse_rotation, head_, nullptr);
+    return true;
   }
   if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
   // System memory: videoconvert passes the formats the stages take through

@@ -5,7 +5,8 @@
 // (the bracket on system memory: videocrop for odd sizes and 4:2:0
 // encoders, videoflip turning rotation-tagged video upright)
 // On the GPU path NVDEC's CUDA memory goes straight into pseudo3dconvert,
-// which keeps every stage on the device and downloads once; the formats the
+// which keeps every stage on the device and downloads once (a rotation tag
+// there is refused: nothing on CUDA memory turns it upright); the formats the
 // stages do not take get a videoconvert in front. The queues let decoding,
 // the 3D stages and the encoder run in parallel threads. The frame counter
 // for the progress sits on the encoder's input.
@@ -54,6 +55,11 @@ class VideoChain {
   bool cuda_input_ = false, cropped_ = false;
   std::string refusal_;
 };
+
+// The rotation a tag list's GST_TAG_IMAGE_ORIENTATION asks for ("rotate-90",
+// "flip-rotate-270", ...), empty for none ("rotate-0" or no tag). The GPU
+// path refuses a rotated video with it (attach()).
+std::string tagged_rotation(const GstTagList *tags);
 
 // What the video chain takes from decoders for a processing: CUDA memory
 // (NVDEC's output) first on the GPU path, system memory in any format.
