@@ -19,8 +19,14 @@ bool chained_launch_allowed(const void *kernel) {
   for (const Known &k : known)
     if (k.kernel == kernel && k.device == device) return k.allowed;
   cudaFuncAttributes a{};
-  // A failed query launches plainly (the launch itself reports a real fault).
-  const bool allowed = cudaFuncGetAttributes(&a, kernel) == cudaSuccess && a.ptxVersion >= 90;
+  if (cudaFuncGetAttributes(&a, kernel) != cudaSuccess) {
+    // Launch plainly this time and ask again next time; clear the error so
+    // that a later cudaPeekAtLastError() does not report it as its own (a
+    // real fault shows in the launch itself).
+    cudaGetLastError();
+    return false;
+  }
+  const bool allowed = a.ptxVersion >= 90;
   known.push_back(Known{kernel, device, allowed});
   return allowed;
 }

@@ -542,6 +542,7 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
 // end return at once. (A grid of as many blocks as the GPU holds, taking
 // tiles from a counter until the list is done, measured slower: 4K warp
 // 0.2405 -> 0.2430 ms, 1080p 0.0851 -> 0.0881, on an H100.)
+// A plain launch, with no chained_kernel_start(): see launch_smooth().
 template <bool kNarrow, bool kStaged>
 __global__ void __launch_bounds__(kSmoothTileThreads)
     smooth_tile_kernel(FrameView out, int W, int H, int2 radius, SmoothScratch sc) {

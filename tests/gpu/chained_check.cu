@@ -23,10 +23,17 @@ __global__ void copy_row(const int32_t *data, int n, int32_t *row) {
 
 }  // namespace
 
-CudaStatus chained_writer_reader(int n, int rounds, int spin_us, std::vector<int32_t> *out, bool *chained) {
-  int device = 0, clock_khz = 0;
+CudaStatus chained_writer_reader(int n, int rounds, int spin_us, std::vector<int32_t> *out, bool *chained,
+                                 bool *expected) {
+  int device = 0, clock_khz = 0, major = 0;
   P3D_CUDA_TRY(cudaGetDevice(&device));
   P3D_CUDA_TRY(cudaDeviceGetAttribute(&clock_khz, cudaDevAttrClockRate, device));
+  P3D_CUDA_TRY(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device));
+  if (clock_khz <= 0)  // no spin: the writer would not be slow enough to show a missing wait
+    return CudaStatus{cudaErrorInvalidValue, "cudaDevAttrClockRate > 0", __FILE__, __LINE__};
+  cudaFuncAttributes a{};
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&a, reinterpret_cast<const void *>(copy_row)));
+  *expected = major >= 9 && a.ptxVersion >= 90;
   const long long spin_cycles = static_cast<long long>(clock_khz) * spin_us / 1000;
   *chained = chained_launch_allowed(reinterpret_cast<const void *>(copy_row)) &&
              chained_launch_allowed(reinterpret_cast<const void *>(spin_then_write));

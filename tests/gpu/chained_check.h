@@ -16,8 +16,11 @@ namespace p3d::test {
 // round number into `n` ints; the reader copies them into round r's row of
 // the result. A reader that did not wait for its writer would copy the
 // previous round's numbers. *out: rounds x n values; *chained: whether
-// the launches really were chained (chained_launch_allowed()).
-CudaStatus chained_writer_reader(int n, int rounds, int spin_us, std::vector<int32_t> *out, bool *chained);
+// the launches really were chained (chained_launch_allowed()); *expected:
+// whether they should have been, from the device's compute capability and
+// the kernels' PTX version, read here on their own (sm_90 and later).
+CudaStatus chained_writer_reader(int n, int rounds, int spin_us, std::vector<int32_t> *out, bool *chained,
+                                 bool *expected);
 
 // zero_chained() of `count` bytes at `offset` into a buffer of `size`
 // bytes first set to 0xab; *out: the buffer afterwards.

@@ -16,12 +16,13 @@ namespace {
 TEST(GpuChainedLaunch, ReaderSeesItsWritersData) {
   constexpr int kN = 64 * 256, kRounds = 8, kSpinUs = 50;
   std::vector<int32_t> rows;
-  bool chained = false;
-  const p3d::CudaStatus st = p3d::test::chained_writer_reader(kN, kRounds, kSpinUs, &rows, &chained);
+  bool chained = false, expected = false;
+  const p3d::CudaStatus st = p3d::test::chained_writer_reader(kN, kRounds, kSpinUs, &rows, &chained, &expected);
   ASSERT_TRUE(st.ok()) << st.message();
   // On sm_90 and later code the launches overlap; elsewhere they are plain
   // and the test shows the fallback still orders them.
   RecordProperty("chained", chained ? "yes" : "no");
+  EXPECT_EQ(chained, expected) << "chained_launch_allowed() against the device and the kernels' PTX version";
   long long stale = 0;
   for (int r = 0; r < kRounds; ++r)
     for (int i = 0; i < kN; ++i) stale += rows[static_cast<size_t>(r) * kN + i] != r;

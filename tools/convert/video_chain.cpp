@@ -141,21 +141,29 @@ namespace {
 
 // The GPU path's probe on the decoded video: NVDEC's CUDA frames cannot go
 // through videoflip (system memory only in GStreamer 1.22, whose CUDA
-// converters cannot rotate), so a rotation tag there is refused with the
-// reason, once, instead of converting the picture sideways (its depth
+// converters cannot rotate), so an orientation tag there is refused with
+// the reason, once, instead of converting the picture as stored (its depth
 // hypotheses and stereo layout would describe the stored, not the upright,
-// scene). `user_data`: the chain's first element, which posts the error.
+// scene); the frames after it are dropped while the pipeline stops.
+struct RotationGuard {
+  GstElement *poster;  // the chain's first element, which posts the error
+  bool refused = false;
+};
+
 GstPadProbeReturn refuse_rotation(GstPad *, GstPadProbeInfo *info, gpointer user_data) {
+  auto *guard = static_cast<RotationGuard *>(user_data);
+  if (guard->refused) return GST_PAD_PROBE_DROP;  // buffers and events alike: the run is over
+  if (!(GST_PAD_PROBE_INFO_TYPE(info) & GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM)) return GST_PAD_PROBE_OK;
   GstEvent *event = GST_PAD_PROBE_INFO_EVENT(info);
   if (GST_EVENT_TYPE(event) != GST_EVENT_TAG) return GST_PAD_PROBE_OK;
   GstTagList *tags = nullptr;
   gst_event_parse_tag(event, &tags);
   const std::string rotation = tagged_rotation(tags);
   if (rotation.empty()) return GST_PAD_PROBE_OK;
-  post_error(GST_ELEMENT(user_data), "the GPU path cannot turn a video tagged " + rotation +
-                                         " upright (NVDEC's CUDA frames do not go through videoflip): use "
-                                         "--processing cpu");
-  return GST_PAD_PROBE_REMOVE;
+  guard->refused = true;
+  post_error(guard->poster, "the GPU path cannot apply the video's orientation tag " + rotation +
+                                " (NVDEC's CUDA frames do not go through videoflip): use --processing cpu");
+  return GST_PAD_PROBE_DROP;
 }
 
 }  // namespace
@@ -180,9 +188,14 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
                  ") to the even size the 4:2:0 encoder needs: use --processing cpu";
       return false;
     }
-    if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK || !gst_element_link(head_, convert_)) return false;
-    gst_pad_add_probe(head_sink_, GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM, refuse_rotation, head_, nullptr);
-    return true;
+    // Before linking, so that no event passes unseen (the decoder's sticky
+    // tags reach head_sink_ after the link).
+    gst_pad_add_probe(head_sink_,
+                      static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM | GST_PAD_PROBE_TYPE_BUFFER |
+                                                   GST_PAD_PROBE_TYPE_BUFFER_LIST),
+                      refuse_rotation, new RotationGuard{head_},
+                      [](gpointer p) { delete static_cast<RotationGuard *>(p); });
+    return gst_pad_link(decoded, head_sink_) == GST_PAD_LINK_OK && gst_element_link(head_, convert_);
   }
   if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
   // System memory: videoconvert passes the formats the stages take through

@@ -58,7 +58,7 @@ class VideoChain {
 
 // The rotation a tag list's GST_TAG_IMAGE_ORIENTATION asks for ("rotate-90",
 // "flip-rotate-270", ...), empty for none ("rotate-0" or no tag). The GPU
-// path refuses a rotated video with it (attach()).
+// path refuses a video with such a tag, naming it (attach()).
 std::string tagged_rotation(const GstTagList *tags);
 
 // What the video chain takes from decoders for a processing: CUDA memory
