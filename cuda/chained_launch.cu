@@ -31,9 +31,6 @@ bool chained_launch_allowed(const void *kernel) {
   return allowed;
 }
 
-}  // namespace p3d
-
-namespace p3d {
 namespace {
 __global__ void zero_bytes_kernel(unsigned char *p, size_t bytes) {
   chained_kernel_start();
