@@ -398,24 +398,18 @@ TEST_F(Convert, OddSizeIsCroppedToEven) {
 namespace {
 
 // `source` (the 160x120 test clip) tagged as rotated by 90 degrees, at
-// `path`; false (with *why) where this ffmpeg cannot tag it.
-bool make_rotated_clip(const std::string &source, const std::string &path, std::string *why) {
+// `path`. A failed ffmpeg run fails the test; *skip says why where this
+// ffmpeg writes no rotation tag (empty when it did).
+void make_rotated_clip(const std::string &source, const std::string &path, std::string *skip) {
   g_remove(path.c_str());
   const std::string tag = "ffmpeg -v error -y -i '" + source + "' -c copy -metadata:s:v rotate=90 '" + path + "'";
-  if (std::system(tag.c_str()) != 0) {
-    *why = "ffmpeg could not write " + path;
-    return false;
-  }
+  ASSERT_EQ(std::system(tag.c_str()), 0);
   // Newer ffmpeg releases tag rotations with -display_rotation instead.
   std::string probe;
   run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries", "stream_side_data=rotation", "-of",
                "default=nw=1", path},
               &probe);
-  if (probe.find("rotation=") == std::string::npos) {
-    *why = "this ffmpeg wrote no rotation: " + probe;
-    return false;
-  }
-  return true;
+  if (probe.find("rotation=") == std::string::npos) *skip = "this ffmpeg wrote no rotation: " + probe;
 }
 
 }  // namespace
@@ -427,8 +421,9 @@ TEST_F(Convert, RotatedVideoIsTurnedUpright) {
   if (!have_program("ffmpeg")) GTEST_SKIP() << "no ffmpeg to tag a rotation";
   const std::string rotated = fx().dir + "/rotated-90.mp4", out = fx().dir + "/from-rotated.mp4";
   g_remove(out.c_str());
-  std::string why;
-  if (!make_rotated_clip(fx().aac_mp4, rotated, &why)) GTEST_SKIP() << why;
+  std::string skip;
+  ASSERT_NO_FATAL_FAILURE(make_rotated_clip(fx().aac_mp4, rotated, &skip));
+  if (!skip.empty()) GTEST_SKIP() << skip;
   const ToolRun r = run_convert(
       {rotated, out, "--layout", "top-bottom-half", "--quiet", "--preset", "ultrafast", "--processing", "cpu"});
   ASSERT_EQ(r.status, 0) << r.err;
@@ -447,8 +442,9 @@ TEST_F(Convert, RotatedVideoOnCudaMemoryIsRefusedWithTheWayOut) {
   if (!have_program("ffmpeg")) GTEST_SKIP() << "no ffmpeg to tag a rotation";
   const std::string rotated = fx().dir + "/rotated-90-gpu.mp4", out = fx().dir + "/from-rotated-gpu.mp4";
   g_remove(out.c_str());
-  std::string why;
-  if (!make_rotated_clip(fx().aac_mp4, rotated, &why)) GTEST_SKIP() << why;
+  std::string skip;
+  ASSERT_NO_FATAL_FAILURE(make_rotated_clip(fx().aac_mp4, rotated, &skip));
+  if (!skip.empty()) GTEST_SKIP() << skip;
   const ToolRun r = run_convert(
       {rotated, out, "--layout", "top-bottom-half", "--quiet", "--preset", "ultrafast", "--processing", "gpu"});
   if (r.err.find("no usable NVIDIA GPU") != std::string::npos) GTEST_SKIP() << "no GPU: " << r.err;
