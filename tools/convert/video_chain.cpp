@@ -127,8 +127,11 @@ GstCaps *video_caps_for(Processing processing) {
 
 GstCaps *VideoChain::accepted_caps() const { return video_caps_for(processing_); }
 
-// The rotation a tag list asks for (GST_TAG_IMAGE_ORIENTATION), empty when
-// it asks for none: "rotate-0" or no such tag.
+namespace {
+
+// The orientation a tag list's GST_TAG_IMAGE_ORIENTATION asks for
+// ("rotate-90", "flip-rotate-270", ...), empty for none ("rotate-0" or no
+// such tag).
 std::string tagged_rotation(const GstTagList *tags) {
   gchar *value = nullptr;
   if (!gst_tag_list_get_string(tags, GST_TAG_IMAGE_ORIENTATION, &value)) return {};
@@ -136,8 +139,6 @@ std::string tagged_rotation(const GstTagList *tags) {
   g_free(value);
   return r == "rotate-0" ? std::string() : r;
 }
-
-namespace {
 
 // The GPU path's probe on the decoded video: NVDEC's CUDA frames cannot go
 // through videoflip (system memory only in GStreamer 1.22, whose CUDA

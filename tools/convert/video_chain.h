@@ -56,11 +56,6 @@ class VideoChain {
   std::string refusal_;
 };
 
-// The rotation a tag list's GST_TAG_IMAGE_ORIENTATION asks for ("rotate-90",
-// "flip-rotate-270", ...), empty for none ("rotate-0" or no tag). The GPU
-// path refuses a video with such a tag, naming it (attach()).
-std::string tagged_rotation(const GstTagList *tags);
-
 // What the video chain takes from decoders for a processing: CUDA memory
 // (NVDEC's output) first on the GPU path, system memory in any format.
 GstCaps *video_caps_for(Processing processing);
