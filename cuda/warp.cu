@@ -382,6 +382,7 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
 // memory otherwise: very wide windows only); a tile without a hole returns
 // at once.
 constexpr int kSmoothTileW = 32, kSmoothSub = 8, kSmoothTileThreads = 256, kSmoothTileRowsMax = 32;
+constexpr int kSmoothCopyBatch = 4;  // pixels a thread copies at once (smooth_tile)
 // Windows of at most this many rows up and down take tiles of 16 rows (plan_smooth).
 constexpr int kSmoothShortR = 32;
 static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
@@ -467,18 +468,39 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
     const int rows = min(H, y0 + S + R) - sy0, cols = min(W, cx0 + nc) - sx0;
     // The chunk flags of the copied rows, then the states of the chunks
     // with holes (zeros elsewhere, nothing read) and the anchors they name:
-    // holes are sparse, so most of the copy costs no load. A warp a row.
+    // holes are sparse, so most of the copy costs no load. The block works
+    // through each copy as one flat range, kSmoothCopyBatch pixels a thread
+    // at a time whose loads are all issued before any is used: a listed
+    // tile's time is mostly these loads' latency. Copied a warp a row, each
+    // row waiting for the last (ten rows a warp at 4K), the 4K warp took
+    // 0.2185 ms against 0.2172, the 8K 0.891 against 0.844 (H100).
     const int fc0 = sx0 / 32, fcn = (sx0 + cols - 1) / 32 - fc0 + 1;
-    const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5, warps = blockDim.x >> 5;
-    for (int r = warp; r < rows; r += warps)
-      for (int c = lane; c < fcn; c += 32) flags[r * fcn + c] = ch_eye[static_cast<size_t>(sy0 + r) * chunks + fc0 + c];
+    for (int i = threadIdx.x; i < rows * fcn; i += blockDim.x) {
+      const int r = i / fcn;
+      flags[i] = ch_eye[static_cast<size_t>(sy0 + r) * chunks + fc0 + (i - r * fcn)];
+    }
     __syncthreads();
-    for (int r = warp; r < rows; r += warps) {
-      const size_t g = static_cast<size_t>(sy0 + r) * W + sx0;
-      for (int c = lane; c < cols; c += 32) {
-        const uint8_t v = flags[r * fcn + (sx0 + c) / 32 - fc0] ? st_eye[g + c] : 0;
-        st_copy[r * nc + c] = v;
-        if (v & kStateAnchor) an_copy[r * nc + c] = an_eye[g + c];
+    const int count = rows * cols;
+    for (int i0 = threadIdx.x; i0 < count; i0 += kSmoothCopyBatch * blockDim.x) {
+      int at_copy[kSmoothCopyBatch];  // the pixel's place in the copy, -1: none
+      uint8_t state[kSmoothCopyBatch];
+      Rgba anchor[kSmoothCopyBatch];  // loaded with its state: stale (and dropped) where it has no anchor
+#pragma unroll
+      for (int k = 0; k < kSmoothCopyBatch; ++k) {
+        const int i = i0 + k * static_cast<int>(blockDim.x), r = i / cols, c = i - r * cols;
+        at_copy[k] = i < count ? r * nc + c : -1;
+        state[k] = 0;
+        if (i < count && flags[r * fcn + (sx0 + c) / 32 - fc0]) {
+          const size_t g = static_cast<size_t>(sy0 + r) * W + sx0 + c;
+          state[k] = st_eye[g];
+          anchor[k] = an_eye[g];
+        }
+      }
+#pragma unroll
+      for (int k = 0; k < kSmoothCopyBatch; ++k) {
+        if (at_copy[k] < 0) continue;
+        st_copy[at_copy[k]] = state[k];
+        if (state[k] & kStateAnchor) an_copy[at_copy[k]] = anchor[k];
       }
     }
     st = st_copy;
@@ -541,7 +563,10 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
 // The sums kernel: block i sums listed tile i; the blocks past the list's
 // end return at once. (A grid of as many blocks as the GPU holds, taking
 // tiles from a counter until the list is done, measured slower: 4K warp
-// 0.2405 -> 0.2430 ms, 1080p 0.0851 -> 0.0881, on an H100.)
+// 0.2405 -> 0.2430 ms, 1080p 0.0851 -> 0.0881, on an H100. Measured again
+// with the batched copy, a grid of the GPU's resident blocks striding
+// through the list: 4K 0.2172 -> 0.2266 ms, 8K 0.844 -> 0.876, chained or
+// not; docs/benchmarks.md. A 4K frame lists about 900 of its 32400 tiles.)
 // A plain launch, with no chained_kernel_start(): see launch_smooth().
 template <bool kNarrow, bool kStaged>
 __global__ void __launch_bounds__(kSmoothTileThreads)
