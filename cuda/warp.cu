@@ -93,18 +93,31 @@ __device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W
 // value, and covered pixels are resolved with sample_word() (common/warp.h)
 // and stored with one 32-bit store (4K warp 0.287 -> 0.285 ms on an H100).
 
-// store_rgba() of a word: one 32-bit store when the frame's rows are
-// 4-byte aligned (`words`, checked once by the launcher), r and b swapped
-// for the BGR orders.
-__device__ void store_word(const FrameView &out, int x, int y, uint32_t w, bool words) {
-  if (!words) {
-    store_rgba(out, x, y, word_rgba(w));
-    return;
+// One eye's part of output row y, which starts at column col0 of `out`:
+// store() is store_rgba() of a word, one 32-bit store when the frame's rows
+// are 4-byte aligned (`words`, checked once by the launcher), r and b
+// swapped for the BGR orders. The row's address is taken once, not per
+// pixel (64-bit arithmetic).
+struct OutRow {
+  const FrameView *out;
+  uint32_t *words;  // the eye's first pixel in the row; null: rows not 4-byte aligned
+  int col0, y;
+  bool bgr;
+  __device__ OutRow(const FrameView &frame, int col0_, int y_, bool aligned)
+      : out(&frame),
+        words(aligned ? reinterpret_cast<uint32_t *>(frame.plane[0] + static_cast<size_t>(y_) * frame.stride[0]) + col0_
+                      : nullptr),
+        col0(col0_),
+        y(y_),
+        bgr(is_bgr_order(frame.format)) {}
+  __device__ void store(int X, uint32_t w) const {
+    if (!words) {
+      store_rgba(*out, col0 + X, y, word_rgba(w));
+      return;
+    }
+    words[X] = bgr ? swap_rb_word(w) : w;
   }
-  const bool bgr = is_bgr_order(out.format);
-  *reinterpret_cast<uint32_t *>(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + 4 * static_cast<size_t>(x)) =
-      bgr ? swap_rb_word(w) : w;
-}
+};
 
 // Background fill of one row whose keys are final and whose chunks' hole
 // bits are in hole_bits: each hole's nearest non-holes by bit search.
@@ -152,7 +165,7 @@ struct RowJob {
   SmoothScratch smooth;  // BackgroundSmooth
   unsigned long long *total;
   int y, W, H, chunks;
-  bool words;  // out's rows are 4-byte aligned: store_word() stores words
+  bool words;  // out's rows are 4-byte aligned: OutRow stores words
 };
 
 // ---- BackgroundSmooth (common/warp.h) ----------------------------------------
@@ -167,12 +180,33 @@ struct RowJob {
 constexpr uint8_t kStateHole = 1, kStateAnchor = 2;
 static_assert(kSmoothClean >= 1 && kSmoothClean < 32, "the clean test reads the chunks on either side");
 
-// Anchors of one rendered eye row whose keys are final and whose chunks'
-// hole bits the resolve loop took by ballot: per chunk the clean bits (no
-// hole within kSmoothClean, read from the chunk and its neighbours' hole
-// bits), then each hole takes its nearest clean (else non-hole) pixel on
-// either side by bit search, and background_source() picks the anchor.
-// Adds kStateAnchor to the state of the holes that have one.
+// Lists the tile of chunk c of row y of an eye, once per frame.
+__device__ void list_smooth_tile(const SmoothScratch &sc, int eye, int y, int c) {
+  const unsigned t = (static_cast<unsigned>(eye) * sc.tiles_y + y / sc.tile_rows) * sc.tiles_x + c;
+  if (atomicExch(sc.tile_mark + t, 1u) == 0u) sc.tile_list[atomicAdd(sc.tile_count, 1u)] = t;
+}
+
+// Every chunk's flag (has it a hole) of one rendered eye row, from the
+// hole bits the resolve loop took by ballot, and the tiles of the chunks
+// with holes listed for the sums kernel. Every row writes its flags every
+// frame (the sums kernel reads no state of a chunk without one).
+template <class Keys>
+__device__ void smooth_chunk_flags(const RowJob<Keys> &j, int eye) {
+  uint8_t *flags = j.smooth.chunk_holes + (static_cast<size_t>(eye) * j.H + j.y) * j.chunks;
+  for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
+    const bool holes = j.hole_bits[c] != 0u;
+    flags[c] = holes;
+    if (holes) list_smooth_tile(j.smooth, eye, j.y, c);
+  }
+}
+
+// The states and anchors of one rendered eye row whose keys are final and
+// whose chunks' hole bits the resolve loop took by ballot, for the chunks
+// with holes (the sums kernel reads no others): per chunk the clean bits
+// (no hole within kSmoothClean, read from the chunk and its neighbours'
+// hole bits), then each hole takes its nearest clean (else non-hole) pixel
+// on either side by bit search, and background_source() picks the anchor.
+// States: 0 for a non-hole, kStateHole, plus kStateAnchor where it has one.
 template <class Keys>
 __device__ void smooth_anchor_row(const RowJob<Keys> &j, int eye) {
   for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
@@ -186,24 +220,42 @@ __device__ void smooth_anchor_row(const RowJob<Keys> &j, int eye) {
   const size_t row = (static_cast<size_t>(eye) * j.H + j.y) * j.W;
   for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
     const int c = X >> 5, bit = X & 31;
-    if (!((j.hole_bits[c] >> bit) & 1u)) continue;  // the resolve loop wrote its state
+    const unsigned chunk = j.hole_bits[c];
+    if (!chunk) continue;
+    if (!((chunk >> bit) & 1u)) {
+      j.smooth.state[row + X] = 0;
+      continue;
+    }
     const int l_any = nearest_left(j.hole_bits, true, j.W, c, bit);
     const int r_any = nearest_right(j.hole_bits, true, j.W, j.chunks, c, bit);
     const int l_clean = l_any < 0 ? -1 : nearest_left(j.clean_bits, false, j.W, c, bit);
     const int r_clean = r_any < 0 ? -1 : nearest_right(j.clean_bits, false, j.W, j.chunks, c, bit);
     const int xl = smooth_side(l_clean, l_any), xr = smooth_side(r_clean, r_any);
     const int pick = background_source(X, xl, key_depth_at<Keys>(j.keys, xl), xr, key_depth_at<Keys>(j.keys, xr));
-    if (pick < 0) continue;
+    if (pick < 0) {
+      j.smooth.state[row + X] = kStateHole;
+      continue;
+    }
     j.smooth.state[row + X] = kStateHole | kStateAnchor;
     j.smooth.anchor[row + X] =
         rendered_colour(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, Keys::u(j.keys[pick], pick));
   }
 }
 
-// Lists the tile of chunk c of row y of an eye, once per frame.
-__device__ void list_smooth_tile(const SmoothScratch &sc, int eye, int y, int c) {
-  const unsigned t = (static_cast<unsigned>(eye) * sc.tiles_y + y / sc.tile_rows) * sc.tiles_x + c;
-  if (atomicExch(sc.tile_mark + t, 1u) == 0u) sc.tile_list[atomicAdd(sc.tile_count, 1u)] = t;
+// Clears a row's W key words before an eye's scatter. In shared memory
+// (kShared: 16-byte aligned) 16 bytes a store, where a word a store cost
+// five instructions a pixel and eye; a row's keys in global memory (rows
+// too wide for shared memory) are not always 16-byte aligned.
+template <bool kShared, class Word>
+__device__ void zero_keys(Word *keys, int W) {
+  int done = 0;
+  if (kShared) {
+    constexpr int kPerStore = static_cast<int>(sizeof(uint4) / sizeof(Word));
+    const int stores = W / kPerStore;
+    for (int i = threadIdx.x; i < stores; i += blockDim.x) reinterpret_cast<uint4 *>(keys)[i] = make_uint4(0, 0, 0, 0);
+    done = stores * kPerStore;
+  }
+  for (int X = done + threadIdx.x; X < W; X += blockDim.x) keys[X] = 0;
 }
 
 // Whether a fill needs each chunk's hole bits (its nearest-pixel searches).
@@ -213,27 +265,31 @@ constexpr bool kFillBits = kFill == HoleFill::Background || kFill == HoleFill::B
 // Renders one eye of the row; every thread of the block calls it. The fill
 // is a template parameter, so that the per-pixel loops carry no test of the
 // fills they do not serve (the row kernel is instruction bound).
-template <class Keys, HoleFill kFill>
+template <class Keys, bool kSharedKeys, HoleFill kFill>
 __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
   const int col0 = eye * j.W;
   const float shift = j.eyes.shift[eye];
   uint8_t *mask_row =
       kFill == HoleFill::NeighborAverage ? j.mask + (static_cast<size_t>(eye) * j.H + j.y) * j.W : nullptr;
+  const OutRow out_row(j.out, col0, j.y, j.words);
   if (shift == 0.f) {  // this eye is the source
     for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
-      store_word(j.out, col0 + x, j.y, reinterpret_cast<const uint32_t *>(j.row.plane[0])[x], j.words);
+      out_row.store(x, reinterpret_cast<const uint32_t *>(j.row.plane[0])[x]);
       if (kFill == HoleFill::NeighborAverage) mask_row[x] = 0;
     }
     return;
   }
   __syncthreads();  // the previous eye is done with keys and row_holes
   if (threadIdx.x == 0) *row_holes = 0;
-  for (int X = threadIdx.x; X < j.W; X += blockDim.x) j.keys[X] = 0;
+  zero_keys<kSharedKeys>(j.keys, j.W);
   __syncthreads();
 
   for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
     const WarpSource s = warp_source(j.depth_row, x, j.W, shift, j.D, j.convergence);
     const WarpSpan span = warp_span(s, j.W);
+    // Not unrolled: a span is one target for most pixels, and the unrolled
+    // loop's set-up cost more than the loop.
+#pragma unroll 1
     for (int X = span.first; X <= span.last; ++X) atomicMax(j.keys + X, Keys::key(warp_hit_at(s, X, j.W), X));
   }
   __syncthreads();
@@ -241,41 +297,34 @@ __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
   // j.row holds the load_rgba() values of the source row, as the CPU's
   // SourceRow does; sample_word reads them as words.
   // The loop runs warp-uniformly (a warp covers one 32-pixel chunk per
-  // step) so that the fills take each chunk's hole bits by ballot;
-  // BackgroundSmooth writes the states of the chunks with holes only (the
-  // sums kernel reads no other), and every chunk's flag.
+  // step) so that the fills take each chunk's hole bits by ballot. All
+  // else the fills need per chunk (BackgroundSmooth's chunk flags, tile
+  // list and states) is written after it, from the hole bits: in the loop
+  // it cost about 18 instructions a pixel and eye, mostly for chunks
+  // without a hole (4K warp: docs/benchmarks.md).
   int holes = 0;
   const int lane = threadIdx.x & 31;
-  const size_t row_state = (static_cast<size_t>(eye) * j.H + j.y) * j.W;
   for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
     const int X = base + lane;
     const bool in = X < j.W;
     const typename Keys::Word key = in ? j.keys[X] : 1u;  // past the row: not a hole
     if (in) {
       if (key != 0) {
-        store_word(j.out, col0 + X, j.y,
-                   sample_word(reinterpret_cast<const uint32_t *>(j.row.plane[0]), j.W, Keys::u(key, X)), j.words);
+        out_row.store(X, sample_word(reinterpret_cast<const uint32_t *>(j.row.plane[0]), j.W, Keys::u(key, X)));
       } else {
         ++holes;
-        if (kFill == HoleFill::None) store_word(j.out, col0 + X, j.y, rgba_word(kHoleColour), j.words);
+        if (kFill == HoleFill::None) out_row.store(X, rgba_word(kHoleColour));
       }
       if (kFill == HoleFill::NeighborAverage) mask_row[X] = key == 0 ? 1 : 0;
     }
     if (kFillBits<kFill>) {
       const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
-      const int c = base >> 5;
-      if (lane == 0) j.hole_bits[c] = chunk_holes;
-      if (kFill == HoleFill::BackgroundSmooth) {
-        if (lane == 0) {
-          j.smooth.chunk_holes[(static_cast<size_t>(eye) * j.H + j.y) * j.chunks + c] = chunk_holes != 0u;
-          if (chunk_holes) list_smooth_tile(j.smooth, eye, j.y, c);
-        }
-        if (chunk_holes && in) j.smooth.state[row_state + X] = key == 0 ? kStateHole : 0;
-      }
+      if (lane == 0) j.hole_bits[base >> 5] = chunk_holes;
     }
   }
   if (holes) atomicAdd(row_holes, holes);
   __syncthreads();  // also publishes this row's colours to the fill below
+  if (kFill == HoleFill::BackgroundSmooth) smooth_chunk_flags(j, eye);
   const int row_total = *row_holes;
   if (row_total == 0) return;  // block-uniform
   if (threadIdx.x == 0) atomicAdd(j.total, static_cast<unsigned long long>(row_total));
@@ -307,7 +356,7 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
                     unsigned long long *total, bool words) {
   chained_kernel_start();
-  extern __shared__ unsigned long long smem[];
+  extern __shared__ __align__(16) unsigned long long smem[];  // 16: zero_keys() stores uint4
   __shared__ int row_holes;
   RowJob<Keys> j;
   j.y = blockIdx.x;
@@ -339,8 +388,8 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
   for (int x = 2 * threadIdx.x; x < j.W; x += 2 * blockDim.x)
     load_rgba_pair_words(src, x, j.y, m, reinterpret_cast<uint32_t *>(rgba) + x);
   __syncthreads();
-  render_eye<Keys, kFill>(j, 0, &row_holes);
-  render_eye<Keys, kFill>(j, 1, &row_holes);
+  render_eye<Keys, kSharedKeys, kFill>(j, 0, &row_holes);
+  render_eye<Keys, kSharedKeys, kFill>(j, 1, &row_holes);
 }
 
 // One Jacobi step of NeighborAverage over both eyes: reads mask_in and the
