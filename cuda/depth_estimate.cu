@@ -31,6 +31,38 @@ unsigned grid_for(long long items, int per_block) { return static_cast<unsigned>
 // sum is formed by one thread, exactly. kB > 0: B is kB, known at compile
 // time (the automatic sizes); 0: any B.
 constexpr int kFeatureRowsMax = 8;  // block rows a CTA holds: 16 / B for B >= 2
+
+// Column x's sums over the kB rows from y0 (clipped to the frame) of a
+// 4:2:0 frame (NV12, I420), load_native3()'s values added up: with kB even
+// (and so y0 even) the rows come in pairs sharing one chroma row, whose
+// sample each pair loads once and counts twice (a lone last row of an odd
+// height, once). Integer sums, so the totals are those of a load per
+// pixel, with a third fewer loads and the row addresses stepped, not
+// recomputed (the features kernel is bound by its loads' instructions).
+template <int kB>
+__device__ void column_sums_420(const FrameView &f, int x, int y0, uint32_t *s0, uint32_t *s1, uint32_t *s2) {
+  static_assert(kB % 2 == 0, "rows pair up from an even first row");
+  const bool nv12 = f.format == PixelFormat::NV12;
+  const uint8_t *luma = f.plane[0] + static_cast<size_t>(y0) * f.stride[0] + x;
+  const size_t chroma_row = static_cast<size_t>(y0 / 2);
+  const uint8_t *cb = nv12 ? f.plane[1] + chroma_row * f.stride[1] + 2 * (x / 2)
+                           : f.plane[1] + chroma_row * f.stride[1] + x / 2;
+  const uint8_t *cr = nv12 ? cb + 1 : f.plane[2] + chroma_row * f.stride[2] + x / 2;
+  const size_t cr_stride = nv12 ? f.stride[1] : f.stride[2];
+#pragma unroll
+  for (int dy = 0; dy < kB; dy += 2) {
+    const int y = y0 + dy;
+    if (y >= f.height) break;
+    const bool pair = y + 1 < f.height;
+    *s0 += luma[0] + (pair ? luma[f.stride[0]] : 0u);
+    const uint32_t n = pair ? 2u : 1u;
+    *s1 += n * cb[0];
+    *s2 += n * cr[0];
+    luma += 2 * static_cast<size_t>(f.stride[0]);
+    cb += f.stride[1];
+    cr += cr_stride;
+  }
+}
 template <int kB>
 __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView frame, int B_arg, int bx, int by,
                                                                   float *__restrict__ features,
@@ -51,6 +83,15 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
     if (r >= rows_per_cta) break;  // kB > 0: never
     const int y0 = (j0 + r) * B;
     uint32_t s0 = 0, s1 = 0, s2 = 0;
+    if constexpr (kB > 0 && kB % 2 == 0) {
+      if (column_in && !is_packed_rgb(frame.format)) {
+        column_sums_420<kB>(frame, x, y0, &s0, &s1, &s2);
+        col[r][0][t] = s0;
+        col[r][1][t] = s1;
+        col[r][2][t] = s2;
+        continue;
+      }
+    }
     if (column_in) {
 #pragma unroll 4
       for (int dy = 0; dy < B; ++dy) {
