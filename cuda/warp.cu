@@ -135,10 +135,11 @@ __device__ void background_fill_row(const FrameView &out, const Rgba *src_row, i
 
 // BackgroundSmooth's scratch (both eyes, W x H each) and its tiles. The
 // sums kernel works on tiles of 32 columns (one chunk) x `tile_rows` rows
-// of one eye; the row kernel lists the tiles that hold a hole as it finds
-// them, so that the sums kernel visits those and no others (most tiles of
-// a frame have none: launching a block for each cost about as much as the
-// sums themselves). Tile t = (eye * tiles_y + y / tile_rows) * tiles_x + chunk.
+// of one eye; the row kernel lists the tiles that hold a hole (after each
+// eye's resolve loop), so that the sums kernel visits those and no others
+// (most tiles of a frame have none: launching a block for each cost about
+// as much as the sums themselves). Tile t = (eye * tiles_y + y /
+// tile_rows) * tiles_x + chunk.
 struct SmoothScratch {
   uint8_t *state;        // kState* flags of every pixel of the chunks with holes
   Rgba *anchor;          // every hole's anchor
@@ -188,8 +189,9 @@ __device__ void list_smooth_tile(const SmoothScratch &sc, int eye, int y, int c)
 
 // Every chunk's flag (has it a hole) of one rendered eye row, from the
 // hole bits the resolve loop took by ballot, and the tiles of the chunks
-// with holes listed for the sums kernel. Every row writes its flags every
-// frame (the sums kernel reads no state of a chunk without one).
+// with holes listed for the sums kernel. Every row of a rendered eye (shift
+// not 0) writes its flags every frame (the sums kernel reads no state of a
+// chunk without one).
 template <class Keys>
 __device__ void smooth_chunk_flags(const RowJob<Keys> &j, int eye) {
   uint8_t *flags = j.smooth.chunk_holes + (static_cast<size_t>(eye) * j.H + j.y) * j.chunks;
@@ -435,7 +437,7 @@ constexpr int kSmoothCopyBatch = 4;  // pixels a thread copies at once (smooth_t
 // Windows of at most this many rows up and down take tiles of 16 rows (plan_smooth).
 constexpr int kSmoothShortR = 32;
 static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
-static_assert(kSmoothTileThreads % 32 == 0, "the copy loops go a warp per row");
+static_assert(kSmoothTileThreads % 32 == 0, "whole warps: the row kernel's chunk loops and the copies");
 __host__ __device__ size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
 __host__ __device__ int smooth_tile_columns(int Rx) { return kSmoothTileW + 2 * Rx; }
 
@@ -515,9 +517,10 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
     sy0 = max(0, y0 - R);
     sx0 = max(0, cx0);
     const int rows = min(H, y0 + S + R) - sy0, cols = min(W, cx0 + nc) - sx0;
-    // The chunk flags of the copied rows, then the states of the chunks
-    // with holes (zeros elsewhere, nothing read) and the anchors they name:
-    // holes are sparse, so most of the copy costs no load. The block works
+    // The chunk flags of the copied rows, then the states and anchors of
+    // the chunks with holes (zeros elsewhere, nothing read; an anchor is
+    // loaded with its state and kept where the state names one): holes
+    // are sparse, so most of the copy costs no load. The block works
     // through each copy as one flat range, kSmoothCopyBatch pixels a thread
     // at a time whose loads are all issued before any is used: a listed
     // tile's time is mostly these loads' latency. Copied a warp a row, each
@@ -822,7 +825,15 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   const size_t chunk_flags = 2 * static_cast<size_t>(H) * row_chunks(W);  // both eyes
   const SmoothPlan plan = smooth ? plan_smooth(eyes, D, W, H, smem_optin_) : SmoothPlan{};
   const size_t list_offset = align16(plane * kSmoothBytesPerPixel + chunk_flags);  // the tile list's words
-  if (smooth) P3D_CUDA_TRY_STATUS(smooth_.ensure(list_offset + sizeof(unsigned) * plan.tiles()));
+  if (smooth) {
+    const size_t had = smooth_.size();
+    P3D_CUDA_TRY_STATUS(smooth_.ensure(list_offset + sizeof(unsigned) * plan.tiles()));
+    // Cleared once a (re)allocation: the sums kernel's copy loads every
+    // anchor of a chunk with holes beside its state and drops those whose
+    // state names none, so no byte it loads may be uninitialised memory
+    // (compute-sanitizer initcheck), though no such value is ever used.
+    if (smooth_.size() != had) P3D_CUDA_TRY(zero_chained(smooth_.get(), smooth_.size(), stream));
+  }
   const size_t counter_bytes = kTileMarksOffset + sizeof(unsigned) * plan.tiles();
   P3D_CUDA_TRY_STATUS(counters_.ensure(counter_bytes));
   uint8_t *counters = counters_.as<uint8_t>();
