@@ -88,7 +88,8 @@ __device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageVi
   for (int i = tid; i < kTexels; i += kThreads) {
     const int ty = i / kTileW, tx = i - ty * kTileW;
     const int gx = ox + tx, gy = oy + ty;
-    if (gx >= 0 && gx < w && gy >= 0 && gy < h) tile[i] = Texel{depth_in.row(gy)[gx], kLumaBytes * load_luma(guide, gx, gy)};
+    if (gx >= 0 && gx < w && gy >= 0 && gy < h)
+      tile[i] = Texel{depth_in.row(gy)[gx], kLumaBytes * load_luma(guide, gx, gy)};
   }
   __syncthreads();
 }
