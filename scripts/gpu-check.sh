@@ -4,13 +4,17 @@
 #   scripts/gpu-check.sh prepare        (here, no GPU needed) builds build-gpu/
 #       for sm_90, bundles GStreamer + the project's binaries + test data into
 #       .gpu/payload.tar.gz with scripts/make-gst-runtime.sh.
-#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|pipelines|convert|all]]   (on the GPU machine, from the repo
+#   scripts/gpu-check.sh run [OUTDIR [tests|sanitize|pipelines|convert|profile|all]]   (on the GPU machine, from the repo
 #       root, with .gpu carried) unpacks, runs the GPU suites, compute-sanitizer
 #       memcheck on the kernel suite and on element cases, racecheck on the
 #       kernels that use shared memory (large sizes filtered out: the
 #       sanitizers are ~100x slower), pseudo3d-bench, and prints a table;
 #       "convert" runs scripts/bench-convert.sh (pseudo3d-convert --benchmark
-#       on a 4K H.264 clip: convert-to-fakesink against decode-only).
+#       on a 4K H.264 clip: convert-to-fakesink against decode-only);
+#       "profile" takes Nsight Compute's per-instruction counts of one
+#       frame's kernels (P3D_PROFILE_SIZE, default 3840x2160; the first
+#       launch of each) and summarises them with scripts/sass_profile.py
+#       (profile.txt; sass.csv and details.csv beside it).
 #       Full logs and results land in OUTDIR (default gpu-results/).
 #
 # With the device tool:  run(command="scripts/gpu-check.sh run $OUT", carry=[".gpu"])
@@ -62,7 +66,21 @@ run() {
     P3D_CONVERT=$p/bin/pseudo3d-convert P3D_BENCH_WORK=$work/convert \
       "$top/scripts/bench-convert.sh" "$out" >"$out/convert.txt" 2>&1; rc[convert]=$?
   fi
-  if [ "$what" != tests ] && [ "$what" != pipelines ] && [ "$what" != convert ]; then
+  if [ "$what" = profile ]; then
+    local size=${P3D_PROFILE_SIZE:-3840x2160}
+    # The bench computes each input frame's stages once before it times
+    # anything: the first dozen launches are one frame's depth, filter and
+    # warp kernels.
+    ncu --section SourceCounters --section SpeedOfLight --launch-count 12 -o "$out/profile" \
+      "$p/bin/pseudo3d-bench" --device gpu --size "$size" --iterations 2 --out "$work/profile-bench.jsonl" \
+      >"$out/ncu.log" 2>&1; rc[profile]=$?
+    ncu --import "$out/profile.ncu-rep" --page source --csv --print-source sass >"$out/sass.csv" 2>>"$out/ncu.log"
+    ncu --import "$out/profile.ncu-rep" --page details --csv >"$out/details.csv" 2>>"$out/ncu.log"
+    rm -f "$out/profile.ncu-rep"  # tens of MB; the CSVs hold what the summary reads
+    "$top/scripts/sass_profile.py" "$out/sass.csv" "$(( ${size%x*} * ${size#*x} ))" --hot 5 >"$out/profile.txt" 2>&1 ||
+      rc[profile]=1
+  fi
+  if [ "$what" != tests ] && [ "$what" != pipelines ] && [ "$what" != convert ] && [ "$what" != profile ]; then
   compute-sanitizer --tool memcheck --leak-check full --error-exitcode 3 "$p/bin/test_gpu" --gtest_filter="-$big" \
     >"$out/memcheck.log" 2>&1; rc[memcheck]=$?
   compute-sanitizer --tool memcheck --error-exitcode 3 "$p/bin/test_gpu_elements" --gtest_filter='*RGBA_333x177*:*BGRx_1001x7*:*GpuFaults*:*GpuContext*' \
@@ -84,6 +102,7 @@ run() {
     [ -f "$out/bench.txt" ] && { echo "== benchmark"; cat "$out/bench.txt"; }
     [ -f "$out/pipelines.txt" ] && { echo "== pipelines"; cat "$out/pipelines.txt"; }
     [ -f "$out/convert.txt" ] && { echo "== pseudo3d-convert"; cat "$out/convert.txt"; }
+    [ -f "$out/profile.txt" ] && { echo "== instructions (Nsight Compute SourceCounters)"; cat "$out/profile.txt"; }
   } | tee "$out/summary.txt"
   local fail=0
   for k in "${!rc[@]}"; do [ "${rc[$k]}" -ne 0 ] && fail=1; done
@@ -93,5 +112,5 @@ run() {
 case "${1:-}" in
   prepare) prepare ;;
   run) shift; run "$@" ;;
-  *) echo "usage: $0 prepare | run [OUTDIR]" >&2; exit 2 ;;
+  *) echo "usage: $0 prepare | run [OUTDIR [tests|sanitize|pipelines|convert|profile|all]]" >&2; exit 2 ;;
 esac
