@@ -28,6 +28,9 @@ cv::Mat copy_of(ImageView<const float> v) {
   return m;
 }
 
+// A CV_32FC1 matrix as the filter's image view.
+ImageView<float> float_view(cv::Mat &m) { return ImageView<float>{m.ptr<float>(), m.cols, m.rows, m.step[0]}; }
+
 // kStrip adjacent output pixels of one window at once: the taps (dx, dy)
 // for dy from dy0 to dy1 (outer) and dx from dx0 to dx1 (inner), the order
 // of bilateral_pixel() and bilateral_pass_pixel(), each through
@@ -72,21 +75,10 @@ inline void for_each_strip(int x0, int x1, const StripFn &strip) {
   for (int x = x0; x < x1; x += kStrip) strip(x + kStrip <= x1 ? x : x1 - kStrip);
 }
 
-}  // namespace
-
-void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
-                          ImageView<float> depth_out) {
-  CV_Assert(guide.width == depth_in.width && guide.height == depth_in.height);
-  CV_Assert(depth_out.width == depth_in.width && depth_out.height == depth_in.height);
-  if (depth_in.empty() || depth_out.empty()) return;
-
-  cv::Mat in_copy;
-  if (static_cast<const void *>(depth_in.data) == static_cast<const void *>(depth_out.data)) {
-    in_copy = copy_of(depth_in);
-    depth_in = ImageView<const float>{in_copy.ptr<float>(), in_copy.cols, in_copy.rows, in_copy.step[0]};
-  }
-
-  const BilateralParams p = bilateral_sanitize(params);
+// The filter at full resolution of sanitised parameters p (scale 1) on the
+// guide's luma (CV_8UC1); depth_in does not alias depth_out.
+void filter_on_luma(const BilateralParams &p, const cv::Mat &luma, ImageView<const float> depth_in,
+                    ImageView<float> depth_out) {
   // The range table mirrored (bilateral_mirror_range): `range` points at its
   // centre, so range[g] is the weight of a guide difference g in -255..255,
   // and range[|g|] (what bilateral_pixel reads) the same value.
@@ -94,7 +86,6 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
   float *range = signed_range.data() + kBilateralRangeTableSize - 1;
   bilateral_tables(p, space.data(), range);
   bilateral_mirror_range(signed_range.data());
-  const cv::Mat luma = bilateral_guide_luma(guide);
 
   const int w = depth_in.width, h = depth_in.height;
   const int r = p.radius, side = 2 * r + 1;
@@ -161,6 +152,54 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
           out[x] = bilateral_pixel(x, y, w, h, r, space.data(), range, guide_at, depth_at);
     }
   });
+}
+
+// The coarse grid of step s > 1 (common/bilateral.h): guide' and depth'
+// per cell, filtered there, each result spread over its cell.
+void filter_on_cells(const BilateralParams &p, int s, const FrameView &guide, ImageView<const float> depth_in,
+                     ImageView<float> depth_out) {
+  const int w = depth_in.width, h = depth_in.height;
+  const int cw = bilateral_cells(w, s), ch = bilateral_cells(h, s);
+  cv::Mat luma(ch, cw, CV_8UC1), depth(ch, cw, CV_32FC1), out(ch, cw, CV_32FC1);
+  cv::parallel_for_(cv::Range(0, ch), [&](const cv::Range &rows) {
+    for (int cy = rows.start; cy < rows.end; ++cy) {
+      const float *src = depth_in.row(cy * s);
+      for (int cx = 0; cx < cw; ++cx) {
+        luma.ptr<uint8_t>(cy)[cx] = static_cast<uint8_t>(bilateral_cell_luma(guide, cx, cy, s));
+        depth.ptr<float>(cy)[cx] = src[cx * s];
+      }
+    }
+  });
+  filter_on_luma(bilateral_coarse_params(p, s), luma, as_const(float_view(depth)), float_view(out));
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const float *cell = out.ptr<float>(y / s);
+      float *dst = depth_out.row(y);
+      for (int x = 0; x < w; ++x) dst[x] = cell[x / s];
+    }
+  });
+}
+
+}  // namespace
+
+void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
+                          ImageView<float> depth_out) {
+  CV_Assert(guide.width == depth_in.width && guide.height == depth_in.height);
+  CV_Assert(depth_out.width == depth_in.width && depth_out.height == depth_in.height);
+  if (depth_in.empty() || depth_out.empty()) return;
+
+  const BilateralParams p = bilateral_sanitize(params);
+  const int s = bilateral_effective_scale(p, depth_in.width, depth_in.height);
+  if (s > 1) {  // reads depth_in into its own grid first, so it may alias depth_out
+    filter_on_cells(p, s, guide, depth_in, depth_out);
+    return;
+  }
+  cv::Mat in_copy;
+  if (static_cast<const void *>(depth_in.data) == static_cast<const void *>(depth_out.data)) {
+    in_copy = copy_of(depth_in);
+    depth_in = ImageView<const float>{in_copy.ptr<float>(), in_copy.cols, in_copy.rows, in_copy.step[0]};
+  }
+  filter_on_luma(bilateral_coarse_params(p, 1), bilateral_guide_luma(guide), depth_in, depth_out);
 }
 
 // The guide's luma once per pixel: the window reads every value up to

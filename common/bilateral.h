@@ -37,6 +37,24 @@
 // path, so single pixels at depth corners can differ from the exact filter by
 // tens of levels, the mean by tenths of a level (docs/quality.md). Its time
 // grows linearly with the radius, the exact window's quadratically.
+//
+// scale = s > 1: the filter above runs on a grid s times coarser in each
+// direction, and each of its results is spread over its s x s cell:
+//   cells:   W' = ceil(W / s), H' = ceil(H / s); cell (X, Y) holds the
+//            pixels sX..sX+s-1 x sY..sY+s-1 that lie inside the image;
+//   guide':  the mean of the cell's guide lumas, rounded (integer:
+//            (sum + n / 2) / n over its n pixels; bilateral_cell_luma());
+//   depth':  the depth of the cell's first pixel, depth(sX, sY): exact for
+//            the estimator's piecewise-constant map when s divides its block
+//            (bilateral_auto_scale() is half the automatic block size);
+//   filter:  either mode above on (guide', depth') with radius ceil(r / s)
+//            and sigma_space / s (bilateral_coarse_params()): the same reach
+//            in the picture;
+//   out(x, y) = out'(x / s, y / s).
+// Depth edges then follow image edges to a cell, not a pixel; the filter
+// does about s^2 times less work (more where the radius rounds down). The
+// quality cost at 4K and 8K is measured in docs/quality.md. Radius 0 is the
+// identity at every scale. scale 0 is automatic (bilateral_auto_scale()).
 #pragma once
 
 #include "frame.h"
@@ -57,19 +75,35 @@ enum class BilateralMode : int { Exact = 0, Separable = 1 };
 // stays Exact: the definition the references and their tests start from.
 constexpr BilateralMode kDefaultFilterMode = BilateralMode::Separable;
 
+constexpr int kMaxBilateralScale = 8;
+// scale 0 (automatic): one grid step per kAutoFilterRowsPerStep rows of the
+// picture's shorter side, so 1 up to 2159 rows, 2 at 4K, 4 at 8K. That is
+// half depth_estimate.h's automatic block (one per 540 rows), so a cell
+// never straddles two of the estimator's blocks where both are automatic.
+constexpr int kAutoFilterRowsPerStep = 1080;
+
 struct BilateralParams {
-  int radius = 5;             // 0..kMaxBilateralRadius
-  float sigma_space = 3.f;    // pixels, > 0
+  int radius = 5;             // 0..kMaxBilateralRadius, in pixels of the picture
+  float sigma_space = 3.f;    // pixels of the picture, > 0
   float sigma_range = 12.f;   // 8-bit guide levels, >= 0
   BilateralMode mode = BilateralMode::Exact;
+  int scale = 1;              // 1..kMaxBilateralScale: the grid step; 0 = bilateral_auto_scale()
 };
 
-// pseudo3dfilter's defaults: BilateralParams() in kDefaultFilterMode. The
-// element and the tools that stand for it (pseudo3d-depthmap,
+// The grid step the filter takes at a picture size (scale 0) on a frame of
+// width x height.
+P3D_HD int bilateral_auto_scale(int width, int height) {
+  return clamp_value((width < height ? width : height) / kAutoFilterRowsPerStep, 1, kMaxBilateralScale);
+}
+
+// pseudo3dfilter's defaults: BilateralParams() in kDefaultFilterMode at the
+// automatic scale (full resolution up to 1080p, as before the scale existed).
+// The element and the tools that stand for it (pseudo3d-depthmap,
 // pseudo3d-bench) start from these.
 inline BilateralParams default_filter_params() {
   BilateralParams p;
   p.mode = kDefaultFilterMode;
+  p.scale = 0;
   return p;
 }
 
@@ -83,7 +117,44 @@ inline BilateralParams bilateral_sanitize(const BilateralParams &p) {
   }
   if (!(p.sigma_range > 0.f)) s.sigma_range = 0.f;
   if (p.mode != BilateralMode::Separable) s.mode = BilateralMode::Exact;
+  s.scale = p.scale == 0 ? 0 : clamp_value(p.scale, 1, kMaxBilateralScale);
   return s;
+}
+
+// The grid step of sanitised parameters on a width x height frame: 1 at
+// radius 0 (the identity needs no grid).
+P3D_HD int bilateral_effective_scale(const BilateralParams &sanitised, int width, int height) {
+  if (sanitised.radius == 0) return 1;
+  return sanitised.scale == 0 ? bilateral_auto_scale(width, height) : sanitised.scale;
+}
+
+// The parameters the coarse grid's filter runs with at step s (see the
+// header comment): the same reach in the picture, scale 1. At s = 1 the
+// sanitised parameters themselves, at scale 1.
+inline BilateralParams bilateral_coarse_params(const BilateralParams &sanitised, int s) {
+  BilateralParams c = sanitised;
+  c.scale = 1;
+  if (s <= 1) return c;
+  c.radius = (sanitised.radius + s - 1) / s;
+  c.sigma_space = sanitised.sigma_space / static_cast<float>(s);
+  return bilateral_sanitize(c);
+}
+
+// Cells of a grid of step s along an axis of `pixels`.
+P3D_HD int bilateral_cells(int pixels, int s) { return (pixels + s - 1) / s; }
+
+// guide' of cell (cx, cy) at step s (>= 1): the rounded mean of the luma of
+// its pixels inside the image; load_luma() itself at s = 1.
+P3D_HD int bilateral_cell_luma(const FrameView &guide, int cx, int cy, int s) {
+  if (s == 1) return load_luma(guide, cx, cy);
+  const int x0 = cx * s, y0 = cy * s;
+  const int x1 = x0 + s < guide.width ? x0 + s : guide.width;
+  const int y1 = y0 + s < guide.height ? y0 + s : guide.height;
+  int sum = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) sum += load_luma(guide, x, y);
+  const int n = (x1 - x0) * (y1 - y0);
+  return (sum + n / 2) / n;
 }
 
 // Number of floats of the space table for a (sanitised) radius.

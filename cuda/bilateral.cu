@@ -11,6 +11,16 @@
 // function. Every output accumulates its taps in the reference's order (dy
 // outer, dx inner) through bilateral_accumulate() on the same host-made
 // weights, so the result is bit-identical to the CPU's.
+//
+// At a grid step s > 1 (BilateralParams::scale) the kernels' kCells
+// instances run on the coarse grid: the tile's texels are cells (the
+// rounded mean luma of the cell's pixels, the depth of its first pixel:
+// bilateral_cell_luma(), as on the CPU) and each output is written to its
+// s x s cell (store_cell), so the coarse picture never goes through global
+// memory. The step-1 instances are the kernels as they were before the grid
+// (their PTX is unchanged but for the unused Cells parameter), so every
+// pixel's filter did not slow down: a runtime step in them cost 1.7 us at
+// 1080p and 7 us at 4K on an H100 (docs/benchmarks.md).
 #include "chained_launch.cuh"
 #include "bilateral_gpu.h"
 #include "launch_bounds.cuh"
@@ -74,24 +84,69 @@ static_assert(Geometry<kMaxBilateralRadius>::kSharedBytes <= 48 * 1024, "tile to
 // Device table layout for every radius: symmetric range table, then the space table.
 constexpr size_t kMaxTableFloats = Geometry<kMaxBilateralRadius>::kTables;
 
+// The grid the kernels filter: cells of s x s pixels (s = 1: the pixels),
+// w x h of them.
+struct Cells {
+  int w, h, s;
+};
+
+// The grid's size: the cells' (kCells) or the image's.
+template <bool kCells>
+__device__ __forceinline__ int grid_width(const ImageView<const float> &depth_in, const Cells &cells) {
+  return kCells ? cells.w : depth_in.width;
+}
+template <bool kCells>
+__device__ __forceinline__ int grid_height(const ImageView<const float> &depth_in, const Cells &cells) {
+  return kCells ? cells.h : depth_in.height;
+}
+
 // Stages the block's tables and its tile of (depth, luma) texels whose
-// origin is (ox, oy) in the image, row-major so a warp reads consecutive
-// pixels of a row. Texels outside the image stay unset: the clipped
-// windows never read them.
-template <int kTileW, int kTexels, int kTables>
-__device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageView<const float> &depth_in, int ox,
-                                           int oy, const float *__restrict__ tables, Texel *tile,
-                                           float *s_tables) {
+// origin is (ox, oy) in the grid, row-major so a warp reads consecutive
+// texels of a row. Texels outside the grid stay unset: the clipped windows
+// never read them.
+template <int kTileW, int kTexels, int kTables, bool kCells>
+__device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageView<const float> &depth_in,
+                                           const Cells &cells, int ox, int oy, const float *__restrict__ tables,
+                                           Texel *tile, float *s_tables) {
   const int tid = threadIdx.y * kBlockX + threadIdx.x;
   for (int i = tid; i < kTables; i += kThreads) s_tables[i] = tables[i];
-  const int w = depth_in.width, h = depth_in.height;
+  const int w = grid_width<kCells>(depth_in, cells), h = grid_height<kCells>(depth_in, cells);
   for (int i = tid; i < kTexels; i += kThreads) {
     const int ty = i / kTileW, tx = i - ty * kTileW;
     const int gx = ox + tx, gy = oy + ty;
-    if (gx >= 0 && gx < w && gy >= 0 && gy < h)
-      tile[i] = Texel{depth_in.row(gy)[gx], kLumaBytes * load_luma(guide, gx, gy)};
+    if (gx >= 0 && gx < w && gy >= 0 && gy < h) {
+      if constexpr (kCells)
+        tile[i] = Texel{depth_in.row(gy * cells.s)[gx * cells.s],
+                        kLumaBytes * bilateral_cell_luma(guide, gx, gy, cells.s)};
+      else
+        tile[i] = Texel{depth_in.row(gy)[gx], kLumaBytes * load_luma(guide, gx, gy)};
+    }
   }
   __syncthreads();
+}
+
+// Output v of cell (cx, cy): its s x s pixels inside the image; at s = 2 a
+// row's two as one 8-byte store where the address allows.
+__device__ __forceinline__ void store_cell(const ImageView<float> &out, int s, int cx, int cy, float v) {
+  const int x0 = cx * s, y0 = cy * s;
+  const int x1 = min(x0 + s, out.width), y1 = min(y0 + s, out.height);
+  for (int y = y0; y < y1; ++y) {
+    float *r = out.row(y);
+    if (s == 2 && x1 == x0 + 2 && (reinterpret_cast<uintptr_t>(r + x0) & 7) == 0) {
+      *reinterpret_cast<float2 *>(r + x0) = make_float2(v, v);
+      continue;
+    }
+    for (int x = x0; x < x1; ++x) r[x] = v;
+  }
+}
+
+// Output v of grid point (x, y): a pixel, or a cell's pixels.
+template <bool kCells>
+__device__ __forceinline__ void store_output(const ImageView<float> &out, const Cells &cells, int x, int y, float v) {
+  if constexpr (kCells)
+    store_cell(out, cells.s, x, y, v);
+  else
+    out.row(y)[x] = v;
 }
 
 // Tile row t of the thread's window column holds tap row dy = t - j of its
@@ -157,10 +212,10 @@ __device__ void filter_unclipped(const Texel *tile, const float *range_sym, cons
   for (int j = 0; j < K; ++j) out[j] = sum_wd[j] / sum_w[j];
 }
 
-template <int R>
+template <int R, bool kCells>
 __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, ImageView<const float> depth_in,
                                                             ImageView<float> depth_out,
-                                                            const float *__restrict__ tables) {
+                                                            const float *__restrict__ tables, Cells cells) {
   chained_kernel_start();
   using G = Geometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
@@ -169,9 +224,9 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
   const float *s_range_sym = s_tables;
   const float *s_space = s_tables + kRangeSym;
 
-  const int w = depth_in.width, h = depth_in.height;
-  const int ox = blockIdx.x * kBlockX - R, oy = blockIdx.y * kOutY - R;  // tile origin in the image
-  stage_tile<G::kTileW, G::kTexels, G::kTables>(guide, depth_in, ox, oy, tables, tile, s_tables);
+  const int w = grid_width<kCells>(depth_in, cells), h = grid_height<kCells>(depth_in, cells);
+  const int ox = blockIdx.x * kBlockX - R, oy = blockIdx.y * kOutY - R;  // tile origin in the grid
+  stage_tile<G::kTileW, G::kTexels, G::kTables, kCells>(guide, depth_in, cells, ox, oy, tables, tile, s_tables);
 
   const int x = blockIdx.x * kBlockX + threadIdx.x;
   const int y0 = blockIdx.y * kOutY + threadIdx.y * kRowsPerThread;
@@ -181,14 +236,15 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
     float out[kRowsPerThread];
     filter_unclipped<R>(tile, s_range_sym, s_space, out);
 #pragma unroll
-    for (int j = 0; j < kRowsPerThread; ++j) depth_out.row(y0 + j)[x] = out[j];
+    for (int j = 0; j < kRowsPerThread; ++j) store_output<kCells>(depth_out, cells, x, y0 + j, out[j]);
     return;
   }
   auto at = [=](int qx, int qy) { return tile[(qy - oy) * G::kTileW + (qx - ox)]; };
   auto guide_at = [=](int qx, int qy) { return at(qx, qy).luma(); };
   auto depth_at = [=](int qx, int qy) { return at(qx, qy).depth; };
   for (int y = y0; y < y0 + kRowsPerThread && y < h; ++y)
-    depth_out.row(y)[x] = bilateral_pixel(x, y, w, h, R, s_space, s_range_sym + kRangeMid, guide_at, depth_at);
+    store_output<kCells>(depth_out, cells, x, y,
+                         bilateral_pixel(x, y, w, h, R, s_space, s_range_sym + kRangeMid, guide_at, depth_at));
 }
 
 // Separable mode, both passes in one kernel. The block stages the same
@@ -231,10 +287,10 @@ __device__ __forceinline__ float pass_unclipped(int centre4, const float (&space
 // cuda/launch_bounds.cuh): at most 40 registers a thread, where the
 // compiler took 58 and so ran 4 blocks on an H100 (4K filter 0.133 -> 0.120
 // ms; a bound of 5 blocks gave 0.124).
-template <int R>
+template <int R, bool kCells>
 __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
     separable_kernel(FrameView guide, ImageView<const float> depth_in, ImageView<float> depth_out,
-                     const float *__restrict__ tables) {
+                     const float *__restrict__ tables, Cells cells) {
   chained_kernel_start();
   using G = SeparableGeometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
@@ -244,10 +300,10 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
   const float *s_range_sym = s_tables;
   const float *s_space = s_tables + kRangeSym;
 
-  const int w = depth_in.width, h = depth_in.height;
+  const int w = grid_width<kCells>(depth_in, cells), h = grid_height<kCells>(depth_in, cells);
   const int bx = blockIdx.x * kBlockX, by = blockIdx.y * kOutY;  // the block's first output
-  const int ox = bx - R, oy = by - R;                             // tile origin in the image
-  stage_tile<G::kTileW, G::kTexels, G::kTables>(guide, depth_in, ox, oy, tables, tile, s_tables);
+  const int ox = bx - R, oy = by - R;                             // tile origin in the grid
+  stage_tile<G::kTileW, G::kTexels, G::kTables, kCells>(guide, depth_in, cells, ox, oy, tables, tile, s_tables);
   const int tid = threadIdx.y * kBlockX + threadIdx.x;
   // The 1-D space weights space(d, 0) in registers: the unclipped taps
   // index them by compile-time constants instead of loading them from
@@ -295,39 +351,57 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
       luma4[t] = c[t * G::kTileW].luma4;
       value[t] = m[t * kBlockX];
     }
+    if constexpr (kCells) {
+      float out[kRowsPerThread];  // all first: the loaded run is dead before the cells' stores
 #pragma unroll
-    for (int j = 0; j < kRowsPerThread; ++j)
-      depth_out.row(by + ly0 + j)[x] =
-          pass_unclipped<R>(luma4[j + R], space_1d, s_range_sym, [&](int d) { return luma4[j + R + d]; },
-                            [&](int d) { return value[j + R + d]; });
+      for (int j = 0; j < kRowsPerThread; ++j)
+        out[j] = pass_unclipped<R>(luma4[j + R], space_1d, s_range_sym, [&](int d) { return luma4[j + R + d]; },
+                                   [&](int d) { return value[j + R + d]; });
+#pragma unroll
+      for (int j = 0; j < kRowsPerThread; ++j) store_cell(depth_out, cells.s, x, by + ly0 + j, out[j]);
+    } else {
+#pragma unroll
+      for (int j = 0; j < kRowsPerThread; ++j)
+        depth_out.row(by + ly0 + j)[x] =
+            pass_unclipped<R>(luma4[j + R], space_1d, s_range_sym, [&](int d) { return luma4[j + R + d]; },
+                              [&](int d) { return value[j + R + d]; });
+    }
     return;
   }
   auto mid_at = [=](int qx, int qy) { return mid[(qy - oy) * kBlockX + (qx - bx)]; };
   for (int j = 0; j < kRowsPerThread; ++j) {
     const int y = by + ly0 + j;
     if (y >= h) return;
-    depth_out.row(y)[x] = bilateral_pass_pixel(x, y, 0, 1, h, R, s_space, range, guide_at, mid_at);
+    store_output<kCells>(depth_out, cells, x, y,
+                         bilateral_pass_pixel(x, y, 0, 1, h, R, s_space, range, guide_at, mid_at));
   }
 }
 
-using KernelFn = void (*)(FrameView, ImageView<const float>, ImageView<float>, const float *);
+using KernelFn = void (*)(FrameView, ImageView<const float>, ImageView<float>, const float *, Cells);
 struct KernelEntry {
   KernelFn fn;
   size_t shared_bytes;
 };
 
-template <int... R>
+template <bool kCells, int... R>
 constexpr auto make_kernels(std::integer_sequence<int, R...>) {
-  return std::array<KernelEntry, sizeof...(R)>{KernelEntry{bilateral_kernel<R>, Geometry<R>::kSharedBytes}...};
+  return std::array<KernelEntry, sizeof...(R)>{
+      KernelEntry{bilateral_kernel<R, kCells>, Geometry<R>::kSharedBytes}...};
 }
-template <int... R>
+template <bool kCells, int... R>
 constexpr auto make_separable_kernels(std::integer_sequence<int, R...>) {
   return std::array<KernelEntry, sizeof...(R)>{
-      KernelEntry{separable_kernel<R>, SeparableGeometry<R>::kSharedBytes}...};
+      KernelEntry{separable_kernel<R, kCells>, SeparableGeometry<R>::kSharedBytes}...};
 }
 
-const auto kKernels = make_kernels(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
-const auto kSeparableKernels = make_separable_kernels(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
+// Every radius at step 1; on a grid of step s >= 2 the radius is
+// ceil(r / s) <= ceil(kMaxBilateralRadius / 2).
+constexpr int kMaxCellRadius = (kMaxBilateralRadius + 1) / 2;
+const auto kKernels = make_kernels<false>(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
+const auto kSeparableKernels =
+    make_separable_kernels<false>(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
+const auto kCellKernels = make_kernels<true>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
+const auto kCellSeparableKernels = make_separable_kernels<true>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
 
 CudaStatus invalid(const char *what, int line) { return CudaStatus{cudaErrorInvalidValue, what, __FILE__, line}; }
 
@@ -359,17 +433,23 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
     return invalid("BilateralFilterGpu::run: depth_in aliases depth_out", __LINE__);
   if (guide.plane[0] == nullptr) return invalid("BilateralFilterGpu::run: guide has no plane 0", __LINE__);
 
-  const BilateralParams s = bilateral_sanitize(params);
+  const BilateralParams sanitised = bilateral_sanitize(params);
+  const int step = bilateral_effective_scale(sanitised, depth_in.width, depth_in.height);
+  const BilateralParams s = bilateral_coarse_params(sanitised, step);  // what the grid's filter runs
   if (s.radius != uploaded_.radius || s.sigma_space != uploaded_.sigma_space ||
       s.sigma_range != uploaded_.sigma_range)
     P3D_CUDA_TRY_STATUS(upload_tables(s, stream));
 
+  const Cells cells{bilateral_cells(depth_in.width, step), bilateral_cells(depth_in.height, step), step};
   const bool separable = s.mode == BilateralMode::Separable;
-  const KernelEntry &k = separable ? kSeparableKernels[s.radius] : kKernels[s.radius];
+  if (step > 1 && s.radius > kMaxCellRadius)  // bilateral_coarse_params() rules it out
+    return invalid("BilateralFilterGpu::run: grid radius beyond the cell kernels", __LINE__);
+  const KernelEntry &k = step > 1 ? (separable ? kCellSeparableKernels[s.radius] : kCellKernels[s.radius])
+                                  : (separable ? kSeparableKernels[s.radius] : kKernels[s.radius]);
   const dim3 block(kBlockX, kBlockY);
-  const dim3 grid((depth_in.width + kBlockX - 1) / kBlockX, (depth_in.height + kOutY - 1) / kOutY);
-  P3D_CUDA_TRY(
-      launch_chained(k.fn, grid, block, k.shared_bytes, stream, guide, depth_in, depth_out, tables_.as<const float>()));
+  const dim3 grid((cells.w + kBlockX - 1) / kBlockX, (cells.h + kOutY - 1) / kOutY);
+  P3D_CUDA_TRY(launch_chained(k.fn, grid, block, k.shared_bytes, stream, guide, depth_in, depth_out,
+                              tables_.as<const float>(), cells));
   return {};
 }
 

@@ -50,6 +50,7 @@ static const struct {
 } kProxied[] = {
     {STAGE_DEPTH, "method"},          {STAGE_DEPTH, "hypothesis"},      {STAGE_DEPTH, "temporal-smoothing"},
     {STAGE_FILTER, "radius"},         {STAGE_FILTER, "sigma-space"},    {STAGE_FILTER, "sigma-range"},
+    {STAGE_FILTER, "scale"},
     {STAGE_WARP, "max-disparity"},    {STAGE_WARP, "convergence"},      {STAGE_WARP, "view"},
     {STAGE_WARP, "fill"},             {STAGE_PACK, "layout"},           {STAGE_PACK, "glasses"},
     {STAGE_PACK, "anaglyph-method"},  {STAGE_PACK, "swap-eyes"},

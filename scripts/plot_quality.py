@@ -449,6 +449,7 @@ def report(rows, md, png_rel, data_rel):
         *filter_section(rows),
         "",
         *hand_written(md, "filter-mode.md"),
+        *hand_written(md, "filter-scale.md"),
         "## Depth estimator against ground truth",
         "",
         *depth_section(rows),

@@ -8,7 +8,7 @@
 // luma = W*H for YUV input, 4*W*H for packed RGB whose luma needs all of it):
 //   convert  F + 4WH                 (frame -> RGBA)
 //   depth    F + 4WH                 (float depth written)
-//   filter   4WH + luma + 4WH        (depth and guide read, depth written)
+//   filter   4WH/s^2 + luma + 4WH    (depth at the grid step s and guide read, depth written)
 //   warp     F + 4WH + 8WH           (frame and depth read, 2W x H pair written)
 //   pack     8WH + packed output     (pair read, layout's output written)
 //   chain    depth + filter + warp + pack
@@ -109,6 +109,8 @@ void print_usage(std::ostream &os) {
         "                          checkerboard, left, right\n"
         "  --radius N              bilateral radius (default 5)\n"
         "  --filter-mode M         separable (default, as pseudo3dfilter) or exact\n"
+        "  --filter-scale N        the filter's grid step: 0 automatic (default, as pseudo3dfilter:\n"
+        "                          2 at 4K, 4 at 8K), 1 every pixel, up to 8\n"
         "  --max-disparity P       percent of width (default 3)\n"
         "  --fill F                background-smooth (default), background, neighbor-average, none\n"
         "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
@@ -168,6 +170,8 @@ Options parse_args(int argc, char **argv) {
       o.params.filter.radius = parse_int(a, v, 0, kMaxBilateralRadius);
     } else if (a == "--filter-mode") {
       o.params.filter.mode = parse_name(a, v, kFilterModes);
+    } else if (a == "--filter-scale") {
+      o.params.filter.scale = parse_int(a, v, 0, kMaxBilateralScale);
     } else if (a == "--max-disparity") {
       o.params.warp.max_disparity = parse_float(a, v);
     } else if (a == "--fill") {
@@ -261,7 +265,8 @@ double frame_bytes(PixelFormat f, int w, int h) {
   return total;
 }
 
-double stage_bytes(const std::string &stage, PixelFormat f, Size s, const PackParams &pack) {
+double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageParams &p) {
+  const PackParams &pack = p.pack;
   const double wh = static_cast<double>(s.width) * s.height;
   const double frame = frame_bytes(f, s.width, s.height);
   const double luma = is_packed_rgb(f) ? 4 * wh : wh;
@@ -269,12 +274,15 @@ double stage_bytes(const std::string &stage, PixelFormat f, Size s, const PackPa
   pack_size(pack.layout, s.width, s.height, &pw, &ph);
   const double packed = 4.0 * pw * ph;
   if (stage == "convert" || stage == "depth") return frame + 4 * wh;
-  if (stage == "filter") return 4 * wh + luma + 4 * wh;
+  if (stage == "filter") {
+    const int step = bilateral_effective_scale(bilateral_sanitize(p.filter), s.width, s.height);
+    return 4 * wh / (step * step) + luma + 4 * wh;
+  }
   if (stage == "warp") return frame + 4 * wh + 8 * wh;
   if (stage == "pack") return 8 * wh + packed;
   if (stage == "chain") {
     double sum = 0;
-    for (const char *st : {"depth", "filter", "warp", "pack"}) sum += stage_bytes(st, f, s, pack);
+    for (const char *st : {"depth", "filter", "warp", "pack"}) sum += stage_bytes(st, f, s, p);
     return sum;
   }
   return 0;
@@ -336,6 +344,8 @@ class Reporter {
     if (m.device == "cpu") j.integer("cpu_threads", cv::getNumThreads());
     j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kLayouts, o_.params.pack.layout));
     j.str("filter_mode", name_of(kFilterModes, o_.params.filter.mode)).str("fill", name_of(kFills, o_.params.warp.fill));
+    j.integer("filter_scale",
+              bilateral_effective_scale(bilateral_sanitize(o_.params.filter), m.size.width, m.size.height));
     j.integer("iterations", m.iterations);
     j.num("median_ms", m.st.median_ms).num("min_ms", m.st.min_ms).num("fps", m.fps());
     j.integer("bytes", std::llround(m.bytes)).num("gbps", m.gbps());
@@ -445,7 +455,7 @@ void bench_cpu(const Options &o, Size s, std::vector<HostFrame> frames, Reporter
     m.size = s;
     m.iterations = iterations;
     m.st = stats_of(time_cpu([&](int i) { b.run_stage(stage, o.params, i); }, o.cpu_warmup, iterations));
-    m.bytes = stage_bytes(stage, o.format, s, o.params.pack);
+    m.bytes = stage_bytes(stage, o.format, s, o.params);
     rep.emit(m);
   }
 }
@@ -496,7 +506,7 @@ void bench_gpu(const Options &o, const GpuContext &g, Size s, const std::vector<
     m.size = s;
     m.iterations = plan.iterations;
     m.st = stats_of(t.ms);
-    m.bytes = stage_bytes(t.stage, o.format, s, o.params.pack);
+    m.bytes = stage_bytes(t.stage, o.format, s, o.params);
     m.share = g.copy_gbps > 0 ? m.gbps() / g.copy_gbps : 0;
     rep.emit(m);
   }

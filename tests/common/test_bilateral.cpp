@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bilateral.h"
+#include "depth_estimate.h"
 #include "host_frame.h"
 #include "test_data.h"
 
@@ -443,6 +444,135 @@ TEST(BilateralCpu, StripsEqualThePerPixelFunctionsBitForBit) {
         }
         EXPECT_TRUE(bit_equal(filter(p, guide, depth), expected));
       }
+}
+
+// ---- the coarse grid (BilateralParams::scale) --------------------------------------
+
+BilateralParams scaled(int radius, float sigma_space, float sigma_range, BilateralMode mode, int scale) {
+  BilateralParams p{radius, sigma_space, sigma_range, mode};
+  p.scale = scale;
+  return p;
+}
+
+// The definition of the coarse grid (common/bilateral.h), written out here
+// from its parts: the cells' guide (rounded mean luma, computed here in
+// double from the luma image) as an NV12 frame, the depth of each cell's
+// first pixel, the full-resolution filter with radius ceil(r / s) and
+// sigma_space / s, each result copied over its cell.
+cv::Mat coarse_definition(const BilateralParams &p, int s, const HostFrame &guide, const cv::Mat &depth) {
+  const cv::Mat luma = bilateral_guide_luma(guide.view());
+  const int cw = (depth.cols + s - 1) / s, ch = (depth.rows + s - 1) / s;
+  cv::Mat cell_luma(ch, cw, CV_8UC1), cell_depth(ch, cw, CV_32FC1);
+  for (int cy = 0; cy < ch; ++cy)
+    for (int cx = 0; cx < cw; ++cx) {
+      const cv::Rect cell = cv::Rect(cx * s, cy * s, s, s) & cv::Rect(0, 0, depth.cols, depth.rows);
+      const double mean = cv::mean(luma(cell))[0];
+      cell_luma.at<uint8_t>(cy, cx) = static_cast<uint8_t>(std::floor(mean + 0.5));
+      cell_depth.at<float>(cy, cx) = depth.at<float>(cy * s, cx * s);
+    }
+  BilateralParams coarse = p;
+  coarse.scale = 1;
+  coarse.radius = (p.radius + s - 1) / s;
+  coarse.sigma_space = p.sigma_space / static_cast<float>(s);
+  const cv::Mat filtered = filter(coarse, luma_guide(cell_luma), cell_depth);
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x) out.at<float>(y, x) = filtered.at<float>(y / s, x / s);
+  return out;
+}
+
+TEST(BilateralScale, AutomaticStepSanitiseAndCoarseParameters) {
+  EXPECT_EQ(bilateral_auto_scale(1920, 1080), 1);
+  EXPECT_EQ(bilateral_auto_scale(2560, 1440), 1);
+  EXPECT_EQ(bilateral_auto_scale(3840, 2160), 2);
+  EXPECT_EQ(bilateral_auto_scale(4096, 2160), 2);
+  EXPECT_EQ(bilateral_auto_scale(2160, 3840), 2);  // portrait: the shorter side
+  EXPECT_EQ(bilateral_auto_scale(7680, 4320), 4);
+  EXPECT_EQ(bilateral_auto_scale(8192, 8192), 7);
+  EXPECT_EQ(bilateral_auto_scale(1, 1), 1);
+  // Half the estimator's automatic block wherever that block is even.
+  for (const cv::Size sz : {cv::Size(3840, 2160), cv::Size(7680, 4320), cv::Size(5760, 3240)}) {
+    DepthParams dp;
+    EXPECT_EQ(effective_block_size(dp, sz.width, sz.height), 2 * bilateral_auto_scale(sz.width, sz.height)) << sz;
+  }
+  EXPECT_EQ(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, -3)).scale, 1);
+  EXPECT_EQ(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, 99)).scale, kMaxBilateralScale);
+  EXPECT_EQ(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, 0)).scale, 0);
+  EXPECT_EQ(BilateralParams().scale, 1);         // the reference definition: full resolution
+  EXPECT_EQ(default_filter_params().scale, 0);   // what the element runs: automatic
+  // Radius 0 is the identity at every step; the automatic step follows the size.
+  EXPECT_EQ(bilateral_effective_scale(bilateral_sanitize(scaled(0, 3.f, 12.f, BilateralMode::Exact, 4)), 99, 99), 1);
+  EXPECT_EQ(bilateral_effective_scale(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, 0)), 3840, 2160),
+            2);
+  const BilateralParams c = bilateral_coarse_params(bilateral_sanitize(scaled(5, 3.f, 12.f, kDefaultFilterMode, 2)), 2);
+  EXPECT_EQ(c.radius, 3);
+  EXPECT_EQ(c.sigma_space, 1.5f);
+  EXPECT_EQ(c.sigma_range, 12.f);
+  EXPECT_EQ(c.mode, kDefaultFilterMode);
+  EXPECT_EQ(c.scale, 1);
+  EXPECT_EQ(bilateral_coarse_params(bilateral_sanitize(scaled(16, 8.f, 12.f, BilateralMode::Exact, 8)), 8).radius, 2);
+  EXPECT_EQ(bilateral_coarse_params(bilateral_sanitize(scaled(1, 1.f, 12.f, BilateralMode::Exact, 8)), 8).radius, 1);
+}
+
+// The filter at a step s > 1 is the full-resolution filter on the cells,
+// spread over them, bit for bit: both modes, steps that divide the size and
+// steps that leave partial cells at the right and bottom, frames smaller
+// than one cell, every guide format family, in place too.
+TEST(BilateralScale, IsTheFilterOnTheCellsSpreadOverThem) {
+  for (const cv::Size sz : {cv::Size(64, 48), cv::Size(67, 45), cv::Size(5, 3), cv::Size(1, 9), cv::Size(2, 2)})
+    for (const int s : {2, 3, 4, 8})
+      for (const BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable})
+        for (const PixelFormat f : {PixelFormat::NV12, PixelFormat::BGRA}) {
+          SCOPED_TRACE(::testing::Message() << sz << " s=" << s << " mode=" << static_cast<int>(mode)
+                                            << " format=" << static_cast<int>(f));
+          HostFrame guide(f, sz.width, sz.height, 3);
+          guide.fill_random(300 + s);
+          cv::Mat depth = random_depth(sz.width, sz.height, 301 + s);
+          const BilateralParams p = scaled(5, 3.f, 14.f, mode, s);
+          const cv::Mat expected = coarse_definition(p, s, guide, depth);
+          EXPECT_TRUE(bit_equal(filter(p, guide, depth), expected));
+          bilateral_filter_cpu(p, guide.view(), as_const(depth_view_of(depth)), depth_view_of(depth));
+          EXPECT_TRUE(bit_equal(depth, expected));
+        }
+}
+
+// Scale 0 at 4K is step 2; below 2160 rows it is the full-resolution filter
+// itself, so the defaults of every picture up to 1080p did not change.
+TEST(BilateralScale, AutomaticIsStepTwoAt4KAndFullResolutionBelow) {
+  {
+    HostFrame guide(PixelFormat::NV12, 1920, 1080, 0);
+    guide.fill_random(310);
+    const cv::Mat depth = random_depth(1920, 1080, 311);
+    EXPECT_TRUE(bit_equal(filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 0), guide, depth),
+                          filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 1), guide, depth)));
+  }
+  HostFrame guide(PixelFormat::NV12, 3840, 2160, 0);
+  guide.fill_random(312);
+  const cv::Mat depth = random_depth(3840, 2160, 313);
+  const cv::Mat automatic = filter(default_filter_params(), guide, depth);
+  EXPECT_TRUE(bit_equal(automatic, filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 2), guide, depth)));
+  EXPECT_FALSE(bit_equal(automatic, filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 1), guide, depth)));
+}
+
+// What the step keeps: a constant map stays constant; a depth step that
+// lies on a cell border and on a guide edge stays where it is, sharp (the
+// range weight across the edge is exp(-160^2 / 32) = 0 in float); and
+// radius 0 is the identity (no cells) at every step.
+TEST(BilateralScale, KeepsConstantsCellAlignedEdgesAndTheIdentity) {
+  const int w = 48, h = 20;
+  const HostFrame guide = luma_guide(step_image<uint8_t>(w, h, CV_8UC1, 40, 200));
+  const cv::Mat step = step_image<float>(w, h, CV_32FC1, 0.2f, 0.8f);
+  const cv::Mat flat(h, w, CV_32FC1, cv::Scalar(0.375f));
+  for (const int s : {2, 3, 4, 8})
+    for (const BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
+      SCOPED_TRACE(::testing::Message() << "s=" << s << " mode=" << static_cast<int>(mode));
+      // Only the rounding of sum(w*d)/sum(w) separates the results from their inputs.
+      EXPECT_LE(cv::norm(filter(scaled(5, 3.f, 12.f, mode, s), guide, flat), flat, cv::NORM_INF), 1e-6);
+      ASSERT_EQ(w / 2 % s, 0);
+      EXPECT_LE(cv::norm(filter(scaled(5, 3.f, 4.f, mode, s), guide, step), step, cv::NORM_INF), 1e-6);
+      const cv::Mat random = random_depth(w, h, 320 + s);
+      EXPECT_TRUE(bit_equal(filter(scaled(0, 3.f, 12.f, mode, s), guide, random), random));
+    }
 }
 
 }  // namespace

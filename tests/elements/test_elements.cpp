@@ -438,8 +438,40 @@ TEST_P(FilterFormats, FiltersDepth) {
   if (size.w >= 16) {
     EXPECT_GT(cv::norm(by_mode[0], by_mode[1], cv::NORM_INF), 0) << "mode reaches the filter";
   }
+  // The coarse grid: scale=2 is bilateral_filter_cpu at step 2, and differs
+  // from every pixel's filter.
+  GstHarness *h = harness("pseudo3ddepth ! pseudo3dfilter radius=3 scale=2", fmt, size.w, size.h);
+  GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(frame));
+  const cv::Mat db = buffer_depth(b);
+  cv::Mat want(size.h, size.w, CV_32FC1);
+  BilateralParams p = default_filter_params();
+  p.radius = 3;
+  p.scale = 2;
+  bilateral_filter_cpu(p, frame.view(), depth_view_of(da), depth_view_of(want));
+  EXPECT_EQ(cv::norm(db, want, cv::NORM_INF), 0) << "the element is bilateral_filter_cpu at scale 2";
+  if (size.w >= 16) {
+    EXPECT_GT(cv::norm(by_mode[1], db, cv::NORM_INF), 0) << "scale reaches the filter";
+  }
+  gst_buffer_unref(b);
+  gst_harness_teardown(h);
   gst_buffer_unref(a);
   gst_harness_teardown(ref);
+}
+
+// The grid step is automatic by default (full resolution up to 1080p, 2 at
+// 4K) and the property's default says so.
+TEST(Filter, DefaultScaleIsAutomatic) {
+  GstElement *f = gst_element_factory_make("pseudo3dfilter", nullptr);
+  ASSERT_NE(f, nullptr);
+  gint scale = -1;
+  g_object_get(f, "scale", &scale, nullptr);
+  EXPECT_EQ(scale, 0);
+  EXPECT_EQ(default_filter_params().scale, 0);
+  GParamSpec *spec = g_object_class_find_property(G_OBJECT_GET_CLASS(f), "scale");
+  ASSERT_NE(spec, nullptr);
+  EXPECT_EQ(G_PARAM_SPEC_INT(spec)->default_value, 0);
+  EXPECT_EQ(G_PARAM_SPEC_INT(spec)->maximum, kMaxBilateralScale);
+  gst_object_unref(f);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllFormatsAndSizes, FilterFormats,
@@ -535,7 +567,7 @@ TEST(Pack, RejectsYuvInput) {
 TEST(Convert, ForwardsProperties) {
   GstElement *bin = gst_element_factory_make("pseudo3dconvert", nullptr);
   ASSERT_NE(bin, nullptr);
-  g_object_set(bin, "max-disparity", 7.5f, "radius", 2, NULL);
+  g_object_set(bin, "max-disparity", 7.5f, "radius", 2, "scale", 3, NULL);
   GstElement *warp = gst_bin_get_by_name(GST_BIN(bin), "warp");
   GstElement *filter = gst_bin_get_by_name(GST_BIN(bin), "filter");
   ASSERT_NE(warp, nullptr);
@@ -543,9 +575,11 @@ TEST(Convert, ForwardsProperties) {
   gfloat md = 0;
   gint radius = 0;
   g_object_get(warp, "max-disparity", &md, NULL);
-  g_object_get(filter, "radius", &radius, NULL);
+  gint scale = 0;
+  g_object_get(filter, "radius", &radius, "scale", &scale, NULL);
   EXPECT_FLOAT_EQ(md, 7.5f);
   EXPECT_EQ(radius, 2);
+  EXPECT_EQ(scale, 3);
   gst_object_unref(warp);
   gst_object_unref(filter);
   gst_object_unref(bin);

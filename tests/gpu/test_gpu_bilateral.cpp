@@ -255,5 +255,82 @@ TEST(GpuBilateral, Uhd3840x2160) { large_frame(3840, 2160, {5, 3.f, 12.f}); }
 TEST(GpuBilateral, Uhd3840x2160Radius16) { large_frame(3840, 2160, {16, 8.f, 12.f}); }
 TEST(GpuBilateral, Uhd7680x4320) { large_frame(7680, 4320, {5, 3.f, 12.f}); }
 
+// ---- the coarse grid (BilateralParams::scale): the kernels stage cells and
+// write each result over its cell; bit-identical to the CPU's composition.
+
+BilateralParams with_scale(BilateralParams p, BilateralMode mode, int scale) {
+  p.mode = mode;
+  p.scale = scale;
+  return p;
+}
+
+// Random inputs: steps that divide the size and steps that leave partial
+// cells, frames smaller than a cell, odd radii, every format family.
+TEST_P(GpuBilateralFormats, CoarseGridOddSizesAndSteps) {
+  BilateralFilterGpu filter;
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  for (const cv::Size sz : {cv::Size(1, 1), cv::Size(3, 2), cv::Size(33, 17), cv::Size(1001, 7), cv::Size(161, 83),
+                            cv::Size(256, 128)})
+    for (const int scale : {2, 3, 4, 8})
+      for (const int r : {1, 5, 16})
+        for (const BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable})
+          expect_identical(filter, with_scale({r, 0.6f * r + 0.5f, 15.f}, mode, scale),
+                           random_guide(GetParam(), sz.width, sz.height, seed + r),
+                           random_depth(sz.width, sz.height, seed + 7 * r + scale),
+                           "scale " + std::to_string(scale) + " mode " + std::to_string(static_cast<int>(mode)));
+}
+
+// The defaults at 4K and 8K (the automatic step: 2 and 4) on a real picture
+// guiding the estimator-like blocky depth, and the exact mode at step 2.
+TEST(GpuBilateral, CoarseGridAutomaticAtUhdAnd8K) {
+  large_frame(3840, 2160, default_filter_params());
+  large_frame(3840, 2160, with_scale({5, 3.f, 12.f}, BilateralMode::Exact, 2));
+  large_frame(7680, 4320, default_filter_params());
+}
+
+// Cells at the view's right and bottom edges are cut to the view: nothing
+// beside or below it is written, at a step whose float2 stores straddle it.
+TEST(GpuBilateral, CoarseGridWritesOnlyTheOutputView) {
+  for (const int scale : {2, 3}) {
+    const int w = 77, h = 29, pad = 19;
+    const uint32_t seed = fresh_seed();
+    SCOPED_TRACE("seed " + std::to_string(seed) + " scale " + std::to_string(scale));
+    const HostFrame guide = random_guide(PixelFormat::NV12, w, h, seed);
+    const cv::Mat depth = random_depth(w, h, seed + 3);
+    const BilateralParams p = with_scale({4, 2.f, 15.f}, BilateralMode::Separable, scale);
+    const DeviceFrame g = DeviceFrame::upload(guide);
+    const DeviceDepth in = DeviceDepth::upload(depth);
+    DeviceDepth wide(w + pad, h + 1);
+    ImageView<float> out = wide.view();
+    out.width = w;
+    out.height = h;
+    BilateralFilterGpu filter;
+    test::check_cuda(filter.run(p, g.view(), as_const(in.view()), out, nullptr));
+    const cv::Mat all = wide.download();
+    const Result r = compare_exact(all(cv::Rect(0, 0, w, h)).clone(), run_cpu(p, guide, depth));
+    EXPECT_EQ(r.nonfinite, 0);
+    EXPECT_EQ(r.differing, 0);
+    EXPECT_EQ(cv::countNonZero(all(cv::Rect(w, 0, pad, h + 1)) == all(cv::Rect(w, 0, pad, h + 1))), 0)
+        << "pixels right of the view were written";
+    EXPECT_EQ(cv::countNonZero(all(cv::Rect(0, h, w, 1)) == all(cv::Rect(0, h, w, 1))), 0)
+        << "the row below the view was written";
+  }
+}
+
+// Steps and parameters changing from call to call on one instance: the
+// tables follow the grid's radius and sigma, not the parameters as given.
+TEST(GpuBilateral, CoarseGridStepChangesReuploadTables) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  const HostFrame guide = random_guide(PixelFormat::I420, 203, 97, seed);
+  const cv::Mat depth = random_depth(203, 97, seed + 1);
+  BilateralFilterGpu filter;
+  const BilateralParams a{5, 3.f, 12.f};
+  for (const int scale : {1, 2, 1, 3, 3, 2, 8, 1})
+    for (const BilateralMode mode : {BilateralMode::Separable, BilateralMode::Exact})
+      expect_identical(filter, with_scale(a, mode, scale), guide, depth, "sequence scale " + std::to_string(scale));
+}
+
 }  // namespace
 }  // namespace p3d

@@ -1,6 +1,7 @@
 // What the quality studies share: output, timing, statistics, the Aloe data.
 #include <algorithm>
 #include <cstdio>
+#include <cmath>
 #include <ctime>
 #include <limits>
 
@@ -236,6 +237,17 @@ cv::Mat filter_depth(const BilateralParams &bp, const FrameView &guide, const cv
   cv::Mat out(depth.size(), CV_32FC1);
   bilateral_filter_cpu(bp, guide, depth_view_of(depth), depth_view_of(out));
   return out;
+}
+
+MapError map_error(const cv::Mat &a, const cv::Mat &b) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  MapError e;
+  cv::minMaxLoc(diff, nullptr, &e.max_abs);
+  e.mean_abs = cv::mean(diff)[0];
+  const double mse = cv::norm(diff, cv::NORM_L2SQR) / static_cast<double>(diff.total());
+  e.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : std::numeric_limits<double>::infinity();
+  return e;
 }
 
 BilateralParams study_filter(int radius, BilateralMode mode) {

@@ -17,6 +17,8 @@ namespace {
 constexpr uint32_t kSampleSeed = 20261121u;  // fixed: the subsample is the same in every run
 constexpr int kRankSamples = 50000;
 
+}  // namespace
+
 // kRankSamples known-GT pixel indices drawn without replacement by a partial
 // Fisher-Yates shuffle on mt19937 (whose output the standard fixes), so every
 // build draws the same sample.
@@ -34,6 +36,8 @@ std::vector<int> rank_sample(const cv::Mat &gt) {
   known.resize(n);
   return known;
 }
+
+namespace {
 
 const char *pixel_format_name(PixelFormat f) {
   return f == PixelFormat::I420 ? "I420" : f == PixelFormat::NV12 ? "NV12" : "RGBA";

@@ -70,23 +70,6 @@ cv::Mat bilateral_separable(const BilateralParams &bp, const FrameView &guide, c
   return filter_depth(p, guide, depth);
 }
 
-struct MapError {
-  double max_abs = 0, mean_abs = 0, psnr = 0;
-};
-
-// Error of depth map b against a (depth units 0..1); PSNR of depth * 255
-// with peak 255, i.e. 10 log10(1 / MSE).
-MapError map_error(const cv::Mat &a, const cv::Mat &b) {
-  cv::Mat diff;
-  cv::absdiff(a, b, diff);
-  MapError e;
-  cv::minMaxLoc(diff, nullptr, &e.max_abs);
-  e.mean_abs = cv::mean(diff)[0];
-  const double mse = cv::norm(diff, cv::NORM_L2SQR) / static_cast<double>(diff.total());
-  e.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : std::numeric_limits<double>::infinity();
-  return e;
-}
-
 }  // namespace
 
 void measure_filter_variants(Writer &w, const Aloe &a, int runs) {

@@ -16,7 +16,7 @@ namespace p3d::quality {
 namespace {
 
 constexpr int kExitUsage = 64;
-const std::set<std::string> kParts = {"synthesis", "peers", "filter", "depth", "flicker"};
+const std::set<std::string> kParts = {"synthesis", "peers", "filter", "depth", "scale", "flicker"};
 
 void print_usage(std::ostream &os) {
   os << "Usage: pseudo3d-quality [options]\n"
@@ -24,7 +24,7 @@ void print_usage(std::ostream &os) {
         "  --out FILE      JSON lines written here (default quality.jsonl; truncated)\n"
         "  --runs N        timed runs per measurement, median reported (default 5)\n"
         "  --frames N      vtest.avi frames for the flicker measurement (default 200)\n"
-        "  --only LIST     comma separated subset of synthesis,peers,filter,depth,flicker\n"
+        "  --only LIST     comma separated subset of synthesis,peers,filter,depth,scale,flicker\n"
         "                  (default all but peers, which takes minutes)\n"
         "  --threads N     OpenCV worker threads (default: OpenCV's choice)\n"
         "  --filter-mode M exact or separable: the depth filter of the depth and flicker\n"
@@ -91,7 +91,8 @@ int run(const Options &o) {
   emit_run_line(w, o);
   int rc = 0;
   const bool need_aloe =
-      o.parts.count("synthesis") || o.parts.count("peers") || o.parts.count("filter") || o.parts.count("depth");
+      o.parts.count("synthesis") || o.parts.count("peers") || o.parts.count("filter") || o.parts.count("depth") ||
+      o.parts.count("scale");
   Aloe aloe, half;
   std::string err;
   if (need_aloe && (!load_aloe(o.data_dir, 1.0, aloe, err) || !load_aloe(o.data_dir, 0.5, half, err))) {
@@ -105,6 +106,7 @@ int run(const Options &o) {
     if (o.parts.count("peers")) measure_peer_fills(w, aloe);
     if (o.parts.count("filter")) measure_filter_variants(w, aloe, o.runs);
     if (o.parts.count("depth")) measure_depth_rank(w, aloe, half, o.runs, o.filter_mode);
+    if (o.parts.count("scale")) measure_filter_scale(w, aloe, o.runs);
   }
   if (o.parts.count("flicker")) measure_flicker(w, o.data_dir + "/vtest.avi", o.frames, o.filter_mode);
   return rc;

@@ -7,6 +7,7 @@
 //                        and peers' inpainting in the same holes
 //   filter_variants.cpp  exact cross-bilateral window against its faster variants
 //   depth_rank.cpp       single-picture depth against Aloe's ground truth, per cue
+//   filter_scale.cpp     the filter on a coarser grid, on Aloe enlarged to 4K and 8K sizes
 //   flicker.cpp          depth change on vtest.avi's static background
 // scripts/quality-report.sh turns the JSON lines into docs/quality.md and
 // docs/img/quality-vs-time.png (scripts/plot_quality.py).
@@ -39,7 +40,7 @@ struct Options {
   int threads = -1;  // -1: OpenCV's default
   // "peers" (OpenCV's inpainting in the warp's holes, minutes on the CPU)
   // runs only when asked for (--only peers).
-  std::set<std::string> parts = {"synthesis", "filter", "depth", "flicker"};
+  std::set<std::string> parts = {"synthesis", "filter", "depth", "scale", "flicker"};
   // The cross-bilateral filter's mode in the depth and flicker studies
   // (what pseudo3dfilter runs; its other parameters are the defaults).
   BilateralMode filter_mode = kDefaultFilterMode;
@@ -82,6 +83,13 @@ std::vector<Timing> time_interleaved(int runs, const std::vector<std::function<v
 // side is constant.
 double spearman(const std::vector<double> &a, const std::vector<double> &b);
 
+// Error of depth map b against a (CV_32FC1, depth units 0..1); PSNR of
+// depth * 255 with peak 255, i.e. 10 log10(1 / MSE).
+struct MapError {
+  double max_abs = 0, mean_abs = 0, psnr = 0;
+};
+MapError map_error(const cv::Mat &a, const cv::Mat &b);
+
 // ---- Aloe ---------------------------------------------------------------------------
 
 struct Aloe {
@@ -121,6 +129,13 @@ void measure_filter_variants(Writer &w, const Aloe &a, int runs);
 // full: Aloe as shipped; half: the same at half size (the cues must not
 // depend on the picture's resolution).
 void measure_depth_rank(Writer &w, const Aloe &full, const Aloe &half, int runs, BilateralMode filter_mode);
+// The fixed random sample of known-GT pixels (indices into a continuous
+// W x H map) that the depth ranks are taken over.
+std::vector<int> rank_sample(const cv::Mat &gt);
+// The filter's grid step (BilateralParams::scale) on Aloe as shipped and
+// enlarged 2x and 4x (where the automatic step is 1, 2 and 4): view
+// synthesis, depth rank and filter time against every pixel's filter.
+void measure_filter_scale(Writer &w, const Aloe &a, int runs);
 void measure_flicker(Writer &w, const std::string &path, int frames, BilateralMode filter_mode);
 
 }  // namespace p3d::quality
