@@ -22,7 +22,9 @@
 //   sigma_range < 0 or NaN -> 0 (exact guide match only);
 //   tiny sigmas whose square underflows act as their -> 0 limit and huge
 //   ones (up to +inf) as a plain box / range-blind average;
-//   a mode other than Separable -> Exact.
+//   a mode other than Separable -> Exact;
+//   scale < 0 -> 1, scale > kMaxBilateralScale -> kMaxBilateralScale (0
+//   stays automatic).
 // Summation order (both sides, bit-identical results): dy outer from -r to r,
 // dx inner from -r to r, window clipped to the image.
 //
