@@ -193,13 +193,14 @@ TEST(GpuBilateral, ParameterChangesReuploadTables) {
 
 // The output view is narrower than its allocation and has a pitch unlike the
 // input's: the kernel must write exactly the view's pixels.
-TEST(GpuBilateral, WritesOnlyTheOutputView) {
+// The filter into a view narrower and shorter than its buffer: the view
+// holds the CPU's result, and nothing right of it or below it is written.
+void expect_writes_only_the_view(const BilateralParams &p) {
   const int w = 77, h = 29, pad = 19;
   const uint32_t seed = fresh_seed();
-  SCOPED_TRACE("seed " + std::to_string(seed));
+  SCOPED_TRACE("seed " + std::to_string(seed) + " scale " + std::to_string(p.scale));
   const HostFrame guide = random_guide(PixelFormat::NV12, w, h, seed);
   const cv::Mat depth = random_depth(w, h, seed + 3);
-  const BilateralParams p{4, 2.f, 15.f};
   const DeviceFrame g = DeviceFrame::upload(guide);
   const DeviceDepth in = DeviceDepth::upload(depth);
   DeviceDepth wide(w + pad, h + 1);
@@ -217,6 +218,8 @@ TEST(GpuBilateral, WritesOnlyTheOutputView) {
   EXPECT_EQ(cv::countNonZero(all(cv::Rect(0, h, w, 1)) == all(cv::Rect(0, h, w, 1))), 0)
       << "the row below the view was written";
 }
+
+TEST(GpuBilateral, WritesOnlyTheOutputView) { expect_writes_only_the_view({4, 2.f, 15.f}); }
 
 TEST(GpuBilateral, RejectsBadArguments) {
   const DeviceFrame g(PixelFormat::RGBA, 16, 8);
@@ -292,30 +295,8 @@ TEST(GpuBilateral, CoarseGridAutomaticAtUhdAnd8K) {
 // Cells at the view's right and bottom edges are cut to the view: nothing
 // beside or below it is written, at a step whose float2 stores straddle it.
 TEST(GpuBilateral, CoarseGridWritesOnlyTheOutputView) {
-  for (const int scale : {2, 3}) {
-    const int w = 77, h = 29, pad = 19;
-    const uint32_t seed = fresh_seed();
-    SCOPED_TRACE("seed " + std::to_string(seed) + " scale " + std::to_string(scale));
-    const HostFrame guide = random_guide(PixelFormat::NV12, w, h, seed);
-    const cv::Mat depth = random_depth(w, h, seed + 3);
-    const BilateralParams p = with_scale({4, 2.f, 15.f}, BilateralMode::Separable, scale);
-    const DeviceFrame g = DeviceFrame::upload(guide);
-    const DeviceDepth in = DeviceDepth::upload(depth);
-    DeviceDepth wide(w + pad, h + 1);
-    ImageView<float> out = wide.view();
-    out.width = w;
-    out.height = h;
-    BilateralFilterGpu filter;
-    test::check_cuda(filter.run(p, g.view(), as_const(in.view()), out, nullptr));
-    const cv::Mat all = wide.download();
-    const Result r = compare_exact(all(cv::Rect(0, 0, w, h)).clone(), run_cpu(p, guide, depth));
-    EXPECT_EQ(r.nonfinite, 0);
-    EXPECT_EQ(r.differing, 0);
-    EXPECT_EQ(cv::countNonZero(all(cv::Rect(w, 0, pad, h + 1)) == all(cv::Rect(w, 0, pad, h + 1))), 0)
-        << "pixels right of the view were written";
-    EXPECT_EQ(cv::countNonZero(all(cv::Rect(0, h, w, 1)) == all(cv::Rect(0, h, w, 1))), 0)
-        << "the row below the view was written";
-  }
+  for (const int scale : {2, 3})
+    expect_writes_only_the_view(with_scale({4, 2.f, 15.f}, BilateralMode::Separable, scale));
 }
 
 // Steps and parameters changing from call to call on one instance: the
