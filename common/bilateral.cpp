@@ -197,7 +197,7 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
   cv::Mat in_copy;
   if (static_cast<const void *>(depth_in.data) == static_cast<const void *>(depth_out.data)) {
     in_copy = copy_of(depth_in);
-    depth_in = ImageView<const float>{in_copy.ptr<float>(), in_copy.cols, in_copy.rows, in_copy.step[0]};
+    depth_in = as_const(float_view(in_copy));
   }
   filter_on_luma(bilateral_coarse_params(p, 1), bilateral_guide_luma(guide), depth_in, depth_out);
 }
