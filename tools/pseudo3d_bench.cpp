@@ -265,6 +265,11 @@ double frame_bytes(PixelFormat f, int w, int h) {
   return total;
 }
 
+// The filter's grid step at size s (the element's rule for scale 0).
+int filter_step(const BilateralParams &filter, Size s) {
+  return bilateral_effective_scale(bilateral_sanitize(filter), s.width, s.height);
+}
+
 double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageParams &p) {
   const PackParams &pack = p.pack;
   const double wh = static_cast<double>(s.width) * s.height;
@@ -275,7 +280,7 @@ double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageP
   const double packed = 4.0 * pw * ph;
   if (stage == "convert" || stage == "depth") return frame + 4 * wh;
   if (stage == "filter") {
-    const int step = bilateral_effective_scale(bilateral_sanitize(p.filter), s.width, s.height);
+    const int step = filter_step(p.filter, s);
     return 4 * wh / (step * step) + luma + 4 * wh;
   }
   if (stage == "warp") return frame + 4 * wh + 8 * wh;
@@ -344,8 +349,7 @@ class Reporter {
     if (m.device == "cpu") j.integer("cpu_threads", cv::getNumThreads());
     j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kLayouts, o_.params.pack.layout));
     j.str("filter_mode", name_of(kFilterModes, o_.params.filter.mode)).str("fill", name_of(kFills, o_.params.warp.fill));
-    j.integer("filter_scale",
-              bilateral_effective_scale(bilateral_sanitize(o_.params.filter), m.size.width, m.size.height));
+    j.integer("filter_scale", filter_step(o_.params.filter, m.size));
     j.integer("iterations", m.iterations);
     j.num("median_ms", m.st.median_ms).num("min_ms", m.st.min_ms).num("fps", m.fps());
     j.integer("bytes", std::llround(m.bytes)).num("gbps", m.gbps());
