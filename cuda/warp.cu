@@ -434,6 +434,7 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
 // at once.
 constexpr int kSmoothTileW = 32, kSmoothSub = 8, kSmoothTileThreads = 256, kSmoothTileRowsMax = 32;
 constexpr int kSmoothCopyBatch = 4;  // pixels a thread copies at once (smooth_tile)
+constexpr int kSmoothTilesPerBlock = 8;  // the sums kernel's grid (smooth_tile_kernel)
 // Windows of at most this many rows up and down take tiles of 16 rows (plan_smooth).
 constexpr int kSmoothShortR = 32;
 static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
@@ -532,20 +533,33 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
       flags[i] = ch_eye[static_cast<size_t>(sy0 + r) * chunks + fc0 + (i - r * fcn)];
     }
     __syncthreads();
-    const int count = rows * cols;
-    for (int i0 = threadIdx.x; i0 < count; i0 += kSmoothCopyBatch * blockDim.x) {
+    // Pixel i of the range is row i / cols, column i % cols; a thread's
+    // pixels are blockDim.x apart, so it steps its row and column by the
+    // block's quotient and remainder instead of dividing for each (the
+    // division was a third of the copy's instructions, which were a third
+    // of the kernel's: 4K warp 0.2046 -> 0.2016 ms on an H200).
+    const int count = rows * cols, step = static_cast<int>(blockDim.x);
+    const int step_rows = step / cols, step_cols = step - step_rows * cols;
+    int r = static_cast<int>(threadIdx.x) / cols, c = static_cast<int>(threadIdx.x) - r * cols;
+    for (int i0 = threadIdx.x; i0 < count; i0 += kSmoothCopyBatch * step) {
       int at_copy[kSmoothCopyBatch];  // the pixel's place in the copy, -1: none
       uint8_t state[kSmoothCopyBatch];
       Rgba anchor[kSmoothCopyBatch];  // loaded with its state: stale (and dropped) where it has no anchor
 #pragma unroll
       for (int k = 0; k < kSmoothCopyBatch; ++k) {
-        const int i = i0 + k * static_cast<int>(blockDim.x), r = i / cols, c = i - r * cols;
-        at_copy[k] = i < count ? r * nc + c : -1;
+        const bool in = i0 + k * step < count;
+        at_copy[k] = in ? r * nc + c : -1;
         state[k] = 0;
-        if (i < count && flags[r * fcn + (sx0 + c) / 32 - fc0]) {
+        if (in && flags[r * fcn + ((sx0 + c) >> 5) - fc0]) {
           const size_t g = static_cast<size_t>(sy0 + r) * W + sx0 + c;
           state[k] = st_eye[g];
           anchor[k] = an_eye[g];
+        }
+        r += step_rows;
+        c += step_cols;
+        if (c >= cols) {
+          c -= cols;
+          ++r;
         }
       }
 #pragma unroll
@@ -612,23 +626,29 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
   }
 }
 
-// The sums kernel: block i sums listed tile i; the blocks past the list's
-// end return at once. (A grid of as many blocks as the GPU holds, taking
-// tiles from a counter until the list is done, measured slower: 4K warp
-// 0.2405 -> 0.2430 ms, 1080p 0.0851 -> 0.0881, on an H100. Measured again
-// with the batched copy, a grid of the GPU's resident blocks striding
-// through the list: 4K 0.2172 -> 0.2266 ms, 8K 0.844 -> 0.876, chained or
-// not; docs/benchmarks.md. A 4K frame lists about 900 of its 32400 tiles.)
+// The sums kernel: block b sums listed tiles b, b + gridDim.x, ...; the
+// grid has a block for every kSmoothTilesPerBlock tiles the frame may list
+// (launch_smooth), so a frame whose every tile has a hole (noise depth,
+// GpuWarp.AllModesRandomDepth) takes each block through several tiles.
+// A 4K frame lists about 900 of its 32400 tiles. Measured on an H200
+// against a block for every tile: 4K warp 0.2016 -> 0.1986 ms, 8K 0.820 ->
+// 0.808, 1080p unchanged; 4, 8 and 16 tiles a block alike, 32 cost 1080p
+// 7 us (docs/benchmarks.md). (A grid of only as many blocks as the GPU
+// holds measured slower: 4K warp 0.2172 -> 0.2266 ms, 8K 0.844 -> 0.876 on
+// an H100, chained or not.)
 // A plain launch, with no chained_kernel_start(): see launch_smooth().
 template <bool kNarrow, bool kStaged>
 __global__ void __launch_bounds__(kSmoothTileThreads)
     smooth_tile_kernel(FrameView out, int W, int H, int2 radius, SmoothScratch sc) {
   extern __shared__ unsigned char smem_bytes[];
-  if (blockIdx.x >= *sc.tile_count) return;  // block-uniform
-  const unsigned t = sc.tile_list[blockIdx.x];
-  const int tx = static_cast<int>(t % sc.tiles_x), rest = static_cast<int>(t / sc.tiles_x);
-  const int ty = rest % sc.tiles_y, eye = rest / sc.tiles_y;
-  smooth_tile<kNarrow, kStaged>(smem_bytes, out, W, H, eye == 0 ? radius.x : radius.y, sc, eye, tx, ty);
+  const unsigned count = *sc.tile_count;
+  for (unsigned i = blockIdx.x; i < count; i += gridDim.x) {  // block-uniform
+    if (i != blockIdx.x) __syncthreads();  // the last tile's row sums are done with shared memory
+    const unsigned t = sc.tile_list[i];
+    const int tx = static_cast<int>(t % sc.tiles_x), rest = static_cast<int>(t / sc.tiles_x);
+    const int ty = rest % sc.tiles_y, eye = rest / sc.tiles_y;
+    smooth_tile<kNarrow, kStaged>(smem_bytes, out, W, H, eye == 0 ? radius.x : radius.y, sc, eye, tx, ty);
+  }
 }
 
 __global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *mask) {
@@ -770,7 +790,8 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 
 // BackgroundSmooth sums, after the row kernel wrote the states and anchors
 // and listed the tiles with holes: one smooth_tile_kernel, a block for every
-// tile the list may hold (the host does not read the count). No host sync.
+// kSmoothTilesPerBlock tiles the list may hold (the host does not read the
+// count). No host sync.
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
                          cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set) {
   const auto kernel = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true> : smooth_tile_kernel<true, false>)
@@ -780,7 +801,8 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
   // at once (tiles without holes), and the chained start's two
   // instructions in each of them cost more than the overlap gains (4K warp
   // 0.2225 -> 0.2330 ms chained, on an H100; cuda/chained_launch.cuh).
-  kernel<<<static_cast<unsigned>(plan.tiles()), kSmoothTileThreads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
+  const unsigned blocks = static_cast<unsigned>((plan.tiles() + kSmoothTilesPerBlock - 1) / kSmoothTilesPerBlock);
+  kernel<<<blocks, kSmoothTileThreads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
   P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
   return {};
 }
