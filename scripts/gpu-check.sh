@@ -13,8 +13,9 @@
 #       on a 4K H.264 clip: convert-to-fakesink against decode-only);
 #       "profile" takes Nsight Compute's per-instruction counts of one
 #       frame's kernels (P3D_PROFILE_SIZE, default 3840x2160; the first
-#       launch of each) and summarises them with scripts/sass_profile.py
-#       (profile.txt; sass.csv and details.csv beside it).
+#       P3D_PROFILE_LAUNCHES launches, default 12) and summarises them with
+#       scripts/sass_profile.py (profile.txt; sass.csv and details.csv
+#       beside it).
 #       Full logs and results land in OUTDIR (default gpu-results/).
 #
 # With the device tool:  run(command="scripts/gpu-check.sh run $OUT", carry=[".gpu"])
@@ -71,7 +72,7 @@ run() {
     # The bench computes each input frame's stages once before it times
     # anything: the first dozen launches are one frame's depth, filter and
     # warp kernels.
-    ncu --section SourceCounters --section SpeedOfLight --launch-count 12 -o "$out/profile" \
+    ncu --section SourceCounters --section SpeedOfLight --launch-count "${P3D_PROFILE_LAUNCHES:-12}" -o "$out/profile" \
       "$p/bin/pseudo3d-bench" --device gpu --size "$size" --iterations 2 --out "$work/profile-bench.jsonl" \
       >"$out/ncu.log" 2>&1; rc[profile]=$?
     ncu --import "$out/profile.ncu-rep" --page source --csv --print-source sass >"$out/sass.csv" 2>>"$out/ncu.log"
