@@ -404,14 +404,19 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
 
 // ---------------------------------------------------------------- step 6 ---
 // Each thread writes kExpandPixels consecutive pixels of a row: one
-// division by the (run-time) block size for all of them, and one 16-byte
-// store where the row allows it. Measured per pixel (a division each,
-// 4-byte stores): 32 us at 4K under Nsight Compute, compute bound.
+// division by the block size for all of them, and one 16-byte store where
+// the row allows it. Measured per pixel (a division each, 4-byte stores):
+// 32 us at 4K under Nsight Compute, compute bound. kB > 0: B is kB, known
+// at compile time (the automatic sizes, as block_features_kernel), so the
+// divisions are shifts and a thread's four pixels of one block one load;
+// 0: any B.
 constexpr int kExpandPixels = 4;  // the float4 below
 static_assert(kExpandPixels == 4, "expand_kernel stores a float4");
-__global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int B, int width, int height,
+template <int kB>
+__global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int B_arg, int width, int height,
                               ImageView<float> depth) {
   chained_kernel_start();
+  const int B = kB > 0 ? kB : B_arg;
   const int x0 = (blockIdx.x * kExpandX + threadIdx.x) * kExpandPixels, y = blockIdx.y * kExpandY + threadIdx.y;
   if (x0 >= width || y >= height) return;
   const float *src = block_depth + static_cast<size_t>(y / B) * bx;
@@ -512,7 +517,8 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   // Step 6.
   const int ew = depth.width < bx * B ? depth.width : bx * B, eh = depth.height < by * B ? depth.height : by * B;
   if (!depth.empty()) {
-    P3D_CUDA_TRY(launch_chained(expand_kernel,
+    auto expand = B == 2 ? expand_kernel<2> : B == 4 ? expand_kernel<4> : B == 8 ? expand_kernel<8> : expand_kernel<0>;
+    P3D_CUDA_TRY(launch_chained(expand,
                                 dim3(grid_for(grid_for(ew, kExpandPixels), kExpandX), grid_for(eh, kExpandY)),
                                 dim3(kExpandX, kExpandY), 0, stream, block_depth_.as<float>(), bx, B, ew, eh, depth));
   }
