@@ -408,7 +408,7 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
 // the row allows it. Measured per pixel (a division each, 4-byte stores):
 // 32 us at 4K under Nsight Compute, compute bound. kB > 0: B is kB, known
 // at compile time (the automatic sizes, as block_features_kernel), so the
-// divisions are shifts and a thread's four pixels of one block one load;
+// divisions are shifts (and at 4 and 8 a thread's four pixels one load);
 // 0: any B.
 constexpr int kExpandPixels = 4;  // the float4 below
 static_assert(kExpandPixels == 4, "expand_kernel stores a float4");
