@@ -17,10 +17,9 @@
 // rounded mean luma of the cell's pixels, the depth of its first pixel:
 // bilateral_cell_luma(), as on the CPU) and each output is written to its
 // s x s cell (store_cell), so the coarse picture never goes through global
-// memory. The step-1 instances are the kernels as they were before the grid
-// (their PTX is unchanged but for the unused Cells parameter), so every
-// pixel's filter did not slow down: a runtime step in them cost 1.7 us at
-// 1080p and 7 us at 4K on an H100 (docs/benchmarks.md).
+// memory. The step is a template parameter, not a run-time branch in every
+// instance: a run-time step in the step-1 kernels cost 1.7 us at 1080p and
+// 7 us at 4K on an H100 (docs/benchmarks.md).
 #include "chained_launch.cuh"
 #include "bilateral_gpu.h"
 #include "launch_bounds.cuh"
