@@ -35,14 +35,16 @@ constexpr size_t kFilledOffset = sizeof(unsigned long long);
 constexpr size_t kTileCountOffset = kFilledOffset + sizeof(unsigned) * kWarpFillBatch;
 constexpr size_t kTileMarksOffset = kTileCountOffset + sizeof(unsigned);
 
-// Dynamic shared memory of the row kernel: [keys: W key words when in
-// shared memory] [the source row, W x RGBA] [per 32-pixel chunk: its hole
-// bits (bit i: pixel 32 c + i is a hole) and its clean bits
-// (BackgroundSmooth)]. key_bytes: a key word's size, 0 for keys in global
-// memory.
+// Dynamic shared memory of the row kernel: [keys: W key words an eye when
+// in shared memory] [the source row, W x RGBA] [per 32-pixel chunk and eye:
+// its hole bits (bit i: pixel 32 c + i is a hole)] [the same for its clean
+// bits (BackgroundSmooth)]. key_bytes: a key word's size, 0 for keys in
+// global memory; eyes: the eyes that have arrays of their own (2 when the
+// kernel renders them together, else 1).
 __host__ __device__ int row_chunks(int W) { return (W + 31) / 32; }
-size_t row_smem_bytes(int W, size_t key_bytes) {
-  return key_bytes * W + 4 * static_cast<size_t>(W) + 2 * sizeof(unsigned) * static_cast<size_t>(row_chunks(W));
+size_t row_smem_bytes(int W, size_t key_bytes, int eyes) {
+  return eyes * key_bytes * W + 4 * static_cast<size_t>(W) +
+         eyes * 2 * sizeof(unsigned) * static_cast<size_t>(row_chunks(W));
 }
 
 // Pixels of chunk c that are in the row: the low W - 32 c bits of the last.
@@ -151,7 +153,9 @@ struct SmoothScratch {
 };
 
 // What one block works on: output row y, its converted source row in shared
-// memory, its z-buffer, the chunk arrays of the Background fill.
+// memory, its z-buffers, the chunk arrays of the fills. Indexed by eye: a
+// kernel that renders the eyes one after the other points both entries at
+// one array; one that renders them together (kBothEyes) has one for each.
 template <class Keys>
 struct RowJob {
   FrameView out;
@@ -159,9 +163,9 @@ struct RowJob {
   EyeShifts eyes;
   float D, convergence;
   const float *depth_row;
-  typename Keys::Word *keys;
-  unsigned *hole_bits;   // per chunk (kFillBits)
-  unsigned *clean_bits;  // per chunk (BackgroundSmooth)
+  typename Keys::Word *keys[2];
+  unsigned *hole_bits[2];   // per chunk (kFillBits)
+  unsigned *clean_bits[2];  // per chunk (BackgroundSmooth)
   uint8_t *mask;  // NeighborAverage masks (2 eyes x H x W)
   SmoothScratch smooth;  // BackgroundSmooth
   unsigned long long *total;
@@ -195,85 +199,149 @@ __device__ void list_smooth_tile(const SmoothScratch &sc, int eye, int y, int c)
 template <class Keys>
 __device__ void smooth_chunk_flags(const RowJob<Keys> &j, int eye) {
   uint8_t *flags = j.smooth.chunk_holes + (static_cast<size_t>(eye) * j.H + j.y) * j.chunks;
+  const unsigned *hole_bits = j.hole_bits[eye];
   for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
-    const bool holes = j.hole_bits[c] != 0u;
+    const bool holes = hole_bits[c] != 0u;
     flags[c] = holes;
     if (holes) list_smooth_tile(j.smooth, eye, j.y, c);
   }
 }
 
-// The states and anchors of one rendered eye row whose keys are final and
-// whose chunks' hole bits the resolve loop took by ballot, for the chunks
-// with holes (the sums kernel reads no others): per chunk the clean bits
-// (no hole within kSmoothClean, read from the chunk and its neighbours'
-// hole bits), then each hole takes its nearest clean (else non-hole) pixel
-// on either side by bit search, and background_source() picks the anchor.
+// The clean bits of one rendered eye row (no hole within kSmoothClean),
+// per chunk from the chunk's and its neighbours' hole bits. Read by
+// smooth_anchor_row after a barrier.
+template <class Keys>
+__device__ void smooth_clean_bits(const RowJob<Keys> &j, int eye) {
+  const unsigned *hole_bits = j.hole_bits[eye];
+  for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
+    const unsigned h = hole_bits[c], prev = c > 0 ? hole_bits[c - 1] : 0u,
+                   next = c + 1 < j.chunks ? hole_bits[c + 1] : 0u;
+    unsigned near = h;  // bit i: a hole within kSmoothClean of pixel 32 c + i
+    for (int d = 1; d <= kSmoothClean; ++d) near |= (h << d) | (prev >> (32 - d)) | (h >> d) | (next << (32 - d));
+    j.clean_bits[eye][c] = chunk_valid_bits(c, j.W) & ~near;
+  }
+}
+
+// The states and anchors of one rendered eye row whose keys are final, whose
+// chunks' hole bits the resolve loop took by ballot and whose clean bits
+// smooth_clean_bits wrote, for the chunks with holes (the sums kernel reads
+// no others): each hole takes its nearest clean (else non-hole) pixel on
+// either side by bit search, and background_source() picks the anchor.
 // States: 0 for a non-hole, kStateHole, plus kStateAnchor where it has one.
 template <class Keys>
 __device__ void smooth_anchor_row(const RowJob<Keys> &j, int eye) {
-  for (int c = threadIdx.x; c < j.chunks; c += blockDim.x) {
-    const unsigned h = j.hole_bits[c], prev = c > 0 ? j.hole_bits[c - 1] : 0u,
-                   next = c + 1 < j.chunks ? j.hole_bits[c + 1] : 0u;
-    unsigned near = h;  // bit i: a hole within kSmoothClean of pixel 32 c + i
-    for (int d = 1; d <= kSmoothClean; ++d) near |= (h << d) | (prev >> (32 - d)) | (h >> d) | (next << (32 - d));
-    j.clean_bits[c] = chunk_valid_bits(c, j.W) & ~near;
-  }
-  __syncthreads();
+  const unsigned *hole_bits = j.hole_bits[eye], *clean_bits = j.clean_bits[eye];
+  const typename Keys::Word *keys = j.keys[eye];
   const size_t row = (static_cast<size_t>(eye) * j.H + j.y) * j.W;
   for (int X = threadIdx.x; X < j.W; X += blockDim.x) {
     const int c = X >> 5, bit = X & 31;
-    const unsigned chunk = j.hole_bits[c];
+    const unsigned chunk = hole_bits[c];
     if (!chunk) continue;
     if (!((chunk >> bit) & 1u)) {
       j.smooth.state[row + X] = 0;
       continue;
     }
-    const int l_any = nearest_left(j.hole_bits, true, j.W, c, bit);
-    const int r_any = nearest_right(j.hole_bits, true, j.W, j.chunks, c, bit);
-    const int l_clean = l_any < 0 ? -1 : nearest_left(j.clean_bits, false, j.W, c, bit);
-    const int r_clean = r_any < 0 ? -1 : nearest_right(j.clean_bits, false, j.W, j.chunks, c, bit);
+    const int l_any = nearest_left(hole_bits, true, j.W, c, bit);
+    const int r_any = nearest_right(hole_bits, true, j.W, j.chunks, c, bit);
+    const int l_clean = l_any < 0 ? -1 : nearest_left(clean_bits, false, j.W, c, bit);
+    const int r_clean = r_any < 0 ? -1 : nearest_right(clean_bits, false, j.W, j.chunks, c, bit);
     const int xl = smooth_side(l_clean, l_any), xr = smooth_side(r_clean, r_any);
-    const int pick = background_source(X, xl, key_depth_at<Keys>(j.keys, xl), xr, key_depth_at<Keys>(j.keys, xr));
+    const int pick = background_source(X, xl, key_depth_at<Keys>(keys, xl), xr, key_depth_at<Keys>(keys, xr));
     if (pick < 0) {
       j.smooth.state[row + X] = kStateHole;
       continue;
     }
     j.smooth.state[row + X] = kStateHole | kStateAnchor;
     j.smooth.anchor[row + X] =
-        rendered_colour(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, Keys::u(j.keys[pick], pick));
+        rendered_colour(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), j.W, Keys::u(keys[pick], pick));
   }
 }
 
-// Clears a row's W key words before an eye's scatter. In shared memory
-// (kShared: 16-byte aligned) 16 bytes a store, where a word a store cost
-// five instructions a pixel and eye; a row's keys in global memory (rows
-// too wide for shared memory) are not always 16-byte aligned.
+// Clears n key words before a scatter. In shared memory (kShared: 16-byte
+// aligned) 16 bytes a store, where a word a store cost five instructions a
+// pixel and eye; a row's keys in global memory (rows too wide for shared
+// memory) are not always 16-byte aligned.
 template <bool kShared, class Word>
-__device__ void zero_keys(Word *keys, int W) {
+__device__ void zero_keys(Word *keys, int n) {
   int done = 0;
   if (kShared) {
     constexpr int kPerStore = static_cast<int>(sizeof(uint4) / sizeof(Word));
-    const int stores = W / kPerStore;
+    const int stores = n / kPerStore;
     for (int i = threadIdx.x; i < stores; i += blockDim.x) reinterpret_cast<uint4 *>(keys)[i] = make_uint4(0, 0, 0, 0);
     done = stores * kPerStore;
   }
-  for (int X = done + threadIdx.x; X < W; X += blockDim.x) keys[X] = 0;
+  for (int X = done + threadIdx.x; X < n; X += blockDim.x) keys[X] = 0;
 }
 
 // Whether a fill needs each chunk's hole bits (its nearest-pixel searches).
 template <HoleFill kFill>
 constexpr bool kFillBits = kFill == HoleFill::Background || kFill == HoleFill::BackgroundSmooth;
 
+// Source pixel s's hits on the targets it covers (warp_span).
+template <class Keys>
+__device__ void scatter_source(typename Keys::Word *keys, const WarpSource &s, int W) {
+  const WarpSpan span = warp_span(s, W);
+  // Not unrolled: a span is one target for most pixels, and the unrolled
+  // loop's set-up cost more than the loop.
+#pragma unroll 1
+  for (int X = span.first; X <= span.last; ++X) atomicMax(keys + X, Keys::key(warp_hit_at(s, X, W), X));
+}
+
+// One eye's target X = base + lane of the row, from its final key: the
+// colour sampled at the key's u (sample_word on j.row, the load_rgba()
+// values of the source row, as the CPU's SourceRow), or a hole (counted in
+// *holes; kHoleColour for fill=None). Called warp-uniformly (a warp covers
+// one 32-pixel chunk) so that the fills take each chunk's hole bits by
+// ballot. All else the fills need per chunk (BackgroundSmooth's chunk
+// flags, tile list and states) is written after the loop, from the hole
+// bits: in the loop it cost about 18 instructions a pixel and eye, mostly
+// for chunks without a hole (4K warp: docs/benchmarks.md).
+template <class Keys, HoleFill kFill>
+__device__ void resolve_target(const RowJob<Keys> &j, int eye, const OutRow &out_row, uint8_t *mask_row, int base,
+                               int lane, int *holes) {
+  const int X = base + lane;
+  const bool in = X < j.W;
+  const typename Keys::Word key = in ? j.keys[eye][X] : 1u;  // past the row: not a hole
+  if (in) {
+    if (key != 0) {
+      out_row.store(X, sample_word(reinterpret_cast<const uint32_t *>(j.row.plane[0]), j.W, Keys::u(key, X)));
+    } else {
+      ++*holes;
+      if (kFill == HoleFill::None) out_row.store(X, rgba_word(kHoleColour));
+    }
+    if (kFill == HoleFill::NeighborAverage) mask_row[X] = key == 0 ? 1 : 0;
+  }
+  if (kFillBits<kFill>) {
+    const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
+    if (lane == 0) j.hole_bits[eye][base >> 5] = chunk_holes;
+  }
+}
+
+// An eye's NeighborAverage masks row (null for the other fills).
+template <class Keys, HoleFill kFill>
+__device__ uint8_t *mask_row_of(const RowJob<Keys> &j, int eye) {
+  return kFill == HoleFill::NeighborAverage ? j.mask + (static_cast<size_t>(eye) * j.H + j.y) * j.W : nullptr;
+}
+
+// The row fills of an eye whose resolve loop is done (behind a barrier):
+// Background's nearest-pixel fill, or BackgroundSmooth's anchors (its
+// clean bits are written before the barrier that precedes this).
+template <class Keys, HoleFill kFill>
+__device__ void fill_row(const RowJob<Keys> &j, int eye) {
+  if (kFill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye);
+  if (kFill == HoleFill::Background)
+    background_fill_row<Keys>(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), eye * j.W, j.y, j.keys[eye], j.W,
+                              j.chunks, j.hole_bits[eye]);
+}
+
 // Renders one eye of the row; every thread of the block calls it. The fill
 // is a template parameter, so that the per-pixel loops carry no test of the
 // fills they do not serve (the row kernel is instruction bound).
 template <class Keys, bool kSharedKeys, HoleFill kFill>
 __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
-  const int col0 = eye * j.W;
   const float shift = j.eyes.shift[eye];
-  uint8_t *mask_row =
-      kFill == HoleFill::NeighborAverage ? j.mask + (static_cast<size_t>(eye) * j.H + j.y) * j.W : nullptr;
-  const OutRow out_row(j.out, col0, j.y, j.words);
+  uint8_t *mask_row = mask_row_of<Keys, kFill>(j, eye);
+  const OutRow out_row(j.out, eye * j.W, j.y, j.words);
   if (shift == 0.f) {  // this eye is the source
     for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
       out_row.store(x, reinterpret_cast<const uint32_t *>(j.row.plane[0])[x]);
@@ -283,63 +351,88 @@ __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
   }
   __syncthreads();  // the previous eye is done with keys and row_holes
   if (threadIdx.x == 0) *row_holes = 0;
-  zero_keys<kSharedKeys>(j.keys, j.W);
+  zero_keys<kSharedKeys>(j.keys[eye], j.W);
+  __syncthreads();
+  for (int x = threadIdx.x; x < j.W; x += blockDim.x)
+    scatter_source<Keys>(j.keys[eye], warp_source(j.depth_row, x, j.W, shift, j.D, j.convergence), j.W);
   __syncthreads();
 
-  for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
-    const WarpSource s = warp_source(j.depth_row, x, j.W, shift, j.D, j.convergence);
-    const WarpSpan span = warp_span(s, j.W);
-    // Not unrolled: a span is one target for most pixels, and the unrolled
-    // loop's set-up cost more than the loop.
-#pragma unroll 1
-    for (int X = span.first; X <= span.last; ++X) atomicMax(j.keys + X, Keys::key(warp_hit_at(s, X, j.W), X));
-  }
-  __syncthreads();
-
-  // j.row holds the load_rgba() values of the source row, as the CPU's
-  // SourceRow does; sample_word reads them as words.
-  // The loop runs warp-uniformly (a warp covers one 32-pixel chunk per
-  // step) so that the fills take each chunk's hole bits by ballot. All
-  // else the fills need per chunk (BackgroundSmooth's chunk flags, tile
-  // list and states) is written after it, from the hole bits: in the loop
-  // it cost about 18 instructions a pixel and eye, mostly for chunks
-  // without a hole (4K warp: docs/benchmarks.md).
   int holes = 0;
   const int lane = threadIdx.x & 31;
-  for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
-    const int X = base + lane;
-    const bool in = X < j.W;
-    const typename Keys::Word key = in ? j.keys[X] : 1u;  // past the row: not a hole
-    if (in) {
-      if (key != 0) {
-        out_row.store(X, sample_word(reinterpret_cast<const uint32_t *>(j.row.plane[0]), j.W, Keys::u(key, X)));
-      } else {
-        ++holes;
-        if (kFill == HoleFill::None) out_row.store(X, rgba_word(kHoleColour));
-      }
-      if (kFill == HoleFill::NeighborAverage) mask_row[X] = key == 0 ? 1 : 0;
-    }
-    if (kFillBits<kFill>) {
-      const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
-      if (lane == 0) j.hole_bits[base >> 5] = chunk_holes;
-    }
-  }
+  for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x)
+    resolve_target<Keys, kFill>(j, eye, out_row, mask_row, base, lane, &holes);
   if (holes) atomicAdd(row_holes, holes);
   __syncthreads();  // also publishes this row's colours to the fill below
   if (kFill == HoleFill::BackgroundSmooth) smooth_chunk_flags(j, eye);
   const int row_total = *row_holes;
   if (row_total == 0) return;  // block-uniform
   if (threadIdx.x == 0) atomicAdd(j.total, static_cast<unsigned long long>(row_total));
-  if (kFill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye);
-  if (kFill == HoleFill::Background)
-    background_fill_row<Keys>(j.out, reinterpret_cast<const Rgba *>(j.row.plane[0]), col0, j.y, j.keys, j.W,
-                              j.chunks, j.hole_bits);
+  if (kFill == HoleFill::BackgroundSmooth) {
+    smooth_clean_bits(j, eye);
+    __syncthreads();
+  }
+  fill_row<Keys, kFill>(j, eye);
 }
 
-// One block = output row blockIdx.x, both eyes one after the other, so the
-// source row is converted once. Keys: the key word (NarrowKeys where they
-// fit, common/warp.h). kSharedKeys: the z-buffer in shared memory, else in
-// global_keys (one W-key row per block).
+// Renders both eyes of the row together (both shifts not 0, keys in shared
+// memory, one z-buffer an eye): a source pixel's depths, read and clamped
+// once, place it in both views (warp_source's arithmetic, so the same
+// targets), and a target resolves both eyes in one pass; the row takes
+// three barriers (four with BackgroundSmooth's clean bits) where the eyes
+// in turn take eight (ten). Every thread of the block calls it.
+template <class Keys, HoleFill kFill>
+__device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
+  if (threadIdx.x < 2) row_holes[threadIdx.x] = 0;
+  zero_keys<true>(j.keys[0], 2 * j.W);  // keys[1] follows keys[0]
+  __syncthreads();
+  const float s0 = j.eyes.shift[0], s1 = j.eyes.shift[1];
+  for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
+    const bool has_next = x + 1 < j.W;
+    const float d0 = warp_depth(j.depth_row[x]);
+    const float d1 = has_next ? warp_depth(j.depth_row[x + 1]) : d0;
+    scatter_source<Keys>(j.keys[0],
+                         warp_link(x, d0, warp_target(x, d0, s0, j.D, j.convergence), d1,
+                                   warp_target(x + 1, d1, s0, j.D, j.convergence), has_next),
+                         j.W);
+    scatter_source<Keys>(j.keys[1],
+                         warp_link(x, d0, warp_target(x, d0, s1, j.D, j.convergence), d1,
+                                   warp_target(x + 1, d1, s1, j.D, j.convergence), has_next),
+                         j.W);
+  }
+  __syncthreads();
+
+  int holes[2] = {0, 0};
+  uint8_t *mask_rows[2] = {mask_row_of<Keys, kFill>(j, 0), mask_row_of<Keys, kFill>(j, 1)};
+  const OutRow out_rows[2] = {OutRow(j.out, 0, j.y, j.words), OutRow(j.out, j.W, j.y, j.words)};
+  const int lane = threadIdx.x & 31;
+  for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
+    resolve_target<Keys, kFill>(j, 0, out_rows[0], mask_rows[0], base, lane, &holes[0]);
+    resolve_target<Keys, kFill>(j, 1, out_rows[1], mask_rows[1], base, lane, &holes[1]);
+  }
+  for (int eye = 0; eye < 2; ++eye)
+    if (holes[eye]) atomicAdd(row_holes + eye, holes[eye]);
+  __syncthreads();  // also publishes this row's colours to the fills below
+  const bool any[2] = {row_holes[0] != 0, row_holes[1] != 0};  // block-uniform
+  if (threadIdx.x == 0 && (any[0] || any[1]))
+    atomicAdd(j.total, static_cast<unsigned long long>(row_holes[0]) + static_cast<unsigned long long>(row_holes[1]));
+  if (kFill == HoleFill::BackgroundSmooth) {
+    for (int eye = 0; eye < 2; ++eye) {
+      smooth_chunk_flags(j, eye);
+      if (any[eye]) smooth_clean_bits(j, eye);
+    }
+    if (!any[0] && !any[1]) return;
+    __syncthreads();
+  }
+  for (int eye = 0; eye < 2; ++eye)
+    if (any[eye]) fill_row<Keys, kFill>(j, eye);
+}
+
+// One block = output row blockIdx.x, both eyes, so the source row is
+// converted once. Keys: the key word (NarrowKeys where they fit,
+// common/warp.h). kSharedKeys: the z-buffer in shared memory, else in
+// global_keys (one W-key row per block). kBothEyes: both eyes at once, a
+// z-buffer each (render_both_eyes; shared keys only), else one after the
+// other through one z-buffer (render_eye).
 // At most 512 threads, as many blocks per SM as it holds threads for
 // (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at most 32
 // registers a thread; 3 on the other Ampere to Blackwell parts, 40; 2 on
@@ -348,18 +441,22 @@ __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
 // so every further resident row helps: the third took the 4K warp from
 // 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB of shared
 // memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register bound
-// (sm_90) only the global-key kernels (64-bit keys, rows of about 19000
-// pixels and more) spill: 12 bytes with BackgroundSmooth, 4 with
-// NeighborAverage.
+// (sm_90) only the both-eyes NeighborAverage kernel spills (12 bytes).
+// Both eyes at once (a second z-buffer, 15 KB at 4K, still four rows an
+// SM) took the warp from 0.0682 to 0.0667 ms at 1080p and from 0.1983 to
+// 0.1967 at 4K (H200, docs/benchmarks.md); from about 4600 pixels a row
+// on Hopper it would cost a resident row, and the eyes go in turn.
 constexpr int kRowThreadsMax = 512;
-template <class Keys, bool kSharedKeys, HoleFill kFill>
+template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes>
 __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
                     unsigned long long *total, bool words) {
   chained_kernel_start();
+  static_assert(kSharedKeys || !kBothEyes, "both eyes at once keep their keys in shared memory");
   extern __shared__ __align__(16) unsigned long long smem[];  // 16: zero_keys() stores uint4
-  __shared__ int row_holes;
+  __shared__ int row_holes[2];
+  constexpr int kEyeArrays = kBothEyes ? 2 : 1;
   RowJob<Keys> j;
   j.y = blockIdx.x;
   j.W = src.width;
@@ -371,10 +468,13 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
   j.convergence = convergence;
   j.depth_row = depth.row(j.y);
   auto *shared_keys = reinterpret_cast<typename Keys::Word *>(smem);
-  j.keys = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(j.y) * j.W;
-  uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? shared_keys + j.W : shared_keys);
-  j.hole_bits = reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W));
-  j.clean_bits = j.hole_bits + j.chunks;
+  j.keys[0] = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(j.y) * j.W;
+  uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? shared_keys + kEyeArrays * j.W : shared_keys);
+  j.hole_bits[0] = reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W));
+  j.clean_bits[0] = j.hole_bits[0] + kEyeArrays * j.chunks;
+  j.keys[1] = j.keys[0] + (kBothEyes ? j.W : 0);
+  j.hole_bits[1] = j.hole_bits[0] + (kBothEyes ? j.chunks : 0);
+  j.clean_bits[1] = j.clean_bits[0] + (kBothEyes ? j.chunks : 0);
   j.mask = mask;
   j.smooth = smooth;
   j.total = total;
@@ -390,8 +490,12 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
   for (int x = 2 * threadIdx.x; x < j.W; x += 2 * blockDim.x)
     load_rgba_pair_words(src, x, j.y, m, reinterpret_cast<uint32_t *>(rgba) + x);
   __syncthreads();
-  render_eye<Keys, kSharedKeys, kFill>(j, 0, &row_holes);
-  render_eye<Keys, kSharedKeys, kFill>(j, 1, &row_holes);
+  if (kBothEyes) {
+    render_both_eyes<Keys, kFill>(j, row_holes);
+  } else {
+    render_eye<Keys, kSharedKeys, kFill>(j, 0, &row_holes[0]);
+    render_eye<Keys, kSharedKeys, kFill>(j, 1, &row_holes[0]);
+  }
 }
 
 // One Jacobi step of NeighborAverage over both eyes: reads mask_in and the
@@ -690,7 +794,10 @@ CudaStatus allow_shared_memory(const void *kernel, int smem_optin, std::vector<c
 // every hit is near its target (warp_narrow_keys_fit) and the row fits,
 // else WideKeys in shared memory, else WideKeys in global memory (rows of
 // about 19000 pixels and more on Hopper).
-enum class KeyPlace { NarrowShared, WideShared, WideGlobal };
+// NarrowSharedPerEye: NarrowKeys in shared memory, a z-buffer for each
+// eye, both eyes rendered at once (both warped, and the second z-buffer
+// costs no resident row: both_eyes_keep_rows).
+enum class KeyPlace { NarrowSharedPerEye, NarrowShared, WideShared, WideGlobal };
 
 struct RowLaunch {
   FrameView src;
@@ -712,45 +819,73 @@ struct RowLaunch {
   std::vector<const void *> *attributes_set;
 };
 
-template <class Keys, bool kSharedKeys, HoleFill kFill>
-CudaStatus launch_rows(const RowLaunch &l) {
-  const auto row_kernel = warp_row_kernel<Keys, kSharedKeys, kFill>;
-  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(row_kernel), l.smem_optin, l.attributes_set));
-  const int threads = l.src.width > 1024 ? kRowThreadsMax : 256;
-  static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
-  P3D_CUDA_TRY(launch_chained(row_kernel, l.src.height, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes,
-                              l.D, l.convergence, reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask,
-                              l.smooth, l.total, l.words));
-  return {};
+// The row kernel of a key word, key place, eye order and fill.
+template <class Keys, bool kSharedKeys, bool kBothEyes>
+auto row_kernel_for(HoleFill fill) -> decltype(&warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes>) {
+  switch (fill) {
+    case HoleFill::Background:
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::Background, kBothEyes>;
+    case HoleFill::NeighborAverage:
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::NeighborAverage, kBothEyes>;
+    case HoleFill::None:
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes>;
+    case HoleFill::BackgroundSmooth:
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes>;
+  }
+  return nullptr;
 }
 
-// The row kernel compiled for the run's fill.
-template <class Keys, bool kSharedKeys>
-CudaStatus launch_rows_for_fill(const RowLaunch &l) {
-  switch (l.fill) {
-    case HoleFill::Background:
-      return launch_rows<Keys, kSharedKeys, HoleFill::Background>(l);
-    case HoleFill::NeighborAverage:
-      return launch_rows<Keys, kSharedKeys, HoleFill::NeighborAverage>(l);
-    case HoleFill::None:
-      return launch_rows<Keys, kSharedKeys, HoleFill::None>(l);
-    case HoleFill::BackgroundSmooth:
-      return launch_rows<Keys, kSharedKeys, HoleFill::BackgroundSmooth>(l);
-  }
-  return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
+int row_threads(int W) { return W > 1024 ? kRowThreadsMax : 256; }
+
+template <class Keys, bool kSharedKeys, bool kBothEyes>
+CudaStatus launch_rows(const RowLaunch &l) {
+  const auto row_kernel = row_kernel_for<Keys, kSharedKeys, kBothEyes>(l.fill);
+  if (!row_kernel) return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(row_kernel), l.smem_optin, l.attributes_set));
+  static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
+  P3D_CUDA_TRY(launch_chained(row_kernel, l.src.height, row_threads(l.src.width), l.smem, l.stream, l.src, l.m,
+                              l.depth, l.out, l.eyes, l.D, l.convergence,
+                              reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth, l.total,
+                              l.words));
+  return {};
 }
 
 // The row kernel for the run's key place and fill.
 CudaStatus launch_row_kernel(const RowLaunch &l) {
   switch (l.keys) {
+    case KeyPlace::NarrowSharedPerEye:
+      return launch_rows<NarrowKeys, true, true>(l);
     case KeyPlace::NarrowShared:
-      return launch_rows_for_fill<NarrowKeys, true>(l);
+      return launch_rows<NarrowKeys, true, false>(l);
     case KeyPlace::WideShared:
-      return launch_rows_for_fill<WideKeys, true>(l);
+      return launch_rows<WideKeys, true, false>(l);
     case KeyPlace::WideGlobal:
-      return launch_rows_for_fill<WideKeys, false>(l);
+      return launch_rows<WideKeys, false, false>(l);
   }
   return CudaStatus{cudaErrorInvalidValue, "KeyPlace", __FILE__, __LINE__};
+}
+
+// Whether the row kernel that renders both eyes at once (a z-buffer an
+// eye) keeps as many rows of W pixels resident on an SM as the one that
+// renders them in turn: the second z-buffer costs 4 W bytes of shared
+// memory, which from about 6000 pixels (Hopper) leaves room for one row
+// fewer, and every resident row counts in this instruction-bound kernel.
+CudaStatus both_eyes_keep_rows(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
+                               bool *keep) {
+  *keep = false;
+  const size_t smem_both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2);
+  if (smem_both + 64 > static_cast<size_t>(smem_optin)) return {};
+  const auto in_turn = row_kernel_for<NarrowKeys, true, false>(fill);
+  const auto both = row_kernel_for<NarrowKeys, true, true>(fill);
+  if (!in_turn || !both) return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
+  int rows_in_turn = 0, rows_both = 0;
+  for (const void *k : {reinterpret_cast<const void *>(in_turn), reinterpret_cast<const void *>(both)})
+    P3D_CUDA_TRY_STATUS(allow_shared_memory(k, smem_optin, attributes_set));
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&rows_in_turn, in_turn, row_threads(W),
+                                                             row_smem_bytes(W, sizeof(NarrowKeys::Word), 1)));
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&rows_both, both, row_threads(W), smem_both));
+  *keep = rows_both >= rows_in_turn;
+  return {};
 }
 
 // BackgroundSmooth's sums for a frame: the eyes' radii, the tile rows, and
@@ -830,16 +965,30 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     P3D_CUDA_TRY(cudaDeviceGetAttribute(&smem_optin_, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
   }
   // 64 bytes: room for the kernel's static __shared__ counter.
-  auto fits = [&](size_t key_bytes) { return row_smem_bytes(W, key_bytes) + 64 <= static_cast<size_t>(smem_optin_); };
+  auto fits = [&](size_t key_bytes) {
+    return row_smem_bytes(W, key_bytes, 1) + 64 <= static_cast<size_t>(smem_optin_);
+  };
   const bool narrow = warp_narrow_keys_fit(eyes.shift[0], eyes.shift[1], D, p.convergence) &&
                       fits(sizeof(NarrowKeys::Word));
   const bool wide_shared = !narrow && fits(sizeof(WideKeys::Word));
-  const KeyPlace keys = narrow ? KeyPlace::NarrowShared : wide_shared ? KeyPlace::WideShared : KeyPlace::WideGlobal;
-  const size_t smem =
-      row_smem_bytes(W, narrow ? sizeof(NarrowKeys::Word) : wide_shared ? sizeof(WideKeys::Word) : 0);
   if (!fits(0))  // rows wider than ~50000 pixels on Hopper
     return CudaStatus{cudaErrorInvalidValue, "row_smem_bytes(W) <= cudaDevAttrMaxSharedMemoryPerBlockOptin", __FILE__,
                       __LINE__};
+  bool per_eye = false;
+  if (narrow && eyes.shift[0] != 0.f && eyes.shift[1] != 0.f) {
+    if (both_eyes_width_ != W || both_eyes_fill_ != p.fill) {
+      P3D_CUDA_TRY_STATUS(both_eyes_keep_rows(p.fill, W, smem_optin_, &attributes_set_, &both_eyes_));
+      both_eyes_width_ = W;
+      both_eyes_fill_ = p.fill;
+    }
+    per_eye = both_eyes_;
+  }
+  const KeyPlace keys = per_eye  ? KeyPlace::NarrowSharedPerEye
+                        : narrow ? KeyPlace::NarrowShared
+                        : wide_shared ? KeyPlace::WideShared
+                                      : KeyPlace::WideGlobal;
+  const size_t smem = row_smem_bytes(W, narrow ? sizeof(NarrowKeys::Word) : wide_shared ? sizeof(WideKeys::Word) : 0,
+                                     per_eye ? 2 : 1);
   if (keys == KeyPlace::WideGlobal)
     P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(WideKeys::Word)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes

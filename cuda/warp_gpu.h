@@ -14,7 +14,10 @@
 // for Background, fills the row's holes: a ballot per 32-pixel chunk gives
 // its hole bits, and each hole finds its nearest non-holes by searching
 // those bits (holes are narrow: rarely past the next chunk), no host sync.
-// An eye with shift 0 is copied.
+// An eye with shift 0 is copied. Where both eyes are warped and a second
+// z-buffer costs no resident row (rows up to about 4600 pixels on Hopper),
+// the block renders them together: each source pixel's depths are read
+// once and placed in both z-buffers, and each target resolves both eyes.
 //  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the
@@ -73,6 +76,12 @@ class WarpRendererGpu {
   // The kernels whose shared-memory attributes this renderer has set (once
   // per kernel, to the device's most, not every frame).
   std::vector<const void *> attributes_set_;
+  // Whether rows of both_eyes_width_ pixels with fill both_eyes_fill_ are
+  // rendered both eyes at once (cuda/warp.cu, both_eyes_keep_rows), asked
+  // once per width and fill.
+  int both_eyes_width_ = -1;
+  HoleFill both_eyes_fill_ = HoleFill::None;
+  bool both_eyes_ = false;
 };
 
 }  // namespace p3d
