@@ -537,12 +537,16 @@ __global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint
 // memory otherwise: very wide windows only); a tile without a hole returns
 // at once.
 constexpr int kSmoothTileW = 32, kSmoothSub = 8, kSmoothTileThreads = 256, kSmoothTileRowsMax = 32;
+// A tile's block has kSmoothTileThreads threads, or kSmoothTileThreadsMax
+// where an SM holds as many tiles of that size (smooth_tile_threads).
+constexpr int kSmoothTileThreadsMax = 512;
 constexpr int kSmoothCopyBatch = 4;  // pixels a thread copies at once (smooth_tile)
 constexpr int kSmoothTilesPerBlock = 8;  // the sums kernel's grid (smooth_tile_kernel)
 // Windows of at most this many rows up and down take tiles of 16 rows (plan_smooth).
 constexpr int kSmoothShortR = 32;
 static_assert(kSmoothTileW == 32, "a tile's columns are one chunk of the row kernel's chunk flags");
-static_assert(kSmoothTileThreads % 32 == 0, "whole warps: the row kernel's chunk loops and the copies");
+static_assert(kSmoothTileThreads % 32 == 0 && kSmoothTileThreadsMax % 32 == 0,
+              "whole warps: the row kernel's chunk loops and the copies");
 __host__ __device__ size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
 __host__ __device__ int smooth_tile_columns(int Rx) { return kSmoothTileW + 2 * Rx; }
 
@@ -742,7 +746,7 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
 // an H100, chained or not.)
 // A plain launch, with no chained_kernel_start(): see launch_smooth().
 template <bool kNarrow, bool kStaged>
-__global__ void __launch_bounds__(kSmoothTileThreads)
+__global__ void __launch_bounds__(kSmoothTileThreadsMax)
     smooth_tile_kernel(FrameView out, int W, int H, int2 radius, SmoothScratch sc) {
   extern __shared__ unsigned char smem_bytes[];
   const unsigned count = *sc.tile_count;
@@ -927,17 +931,40 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 // and listed the tiles with holes: one smooth_tile_kernel, a block for every
 // kSmoothTilesPerBlock tiles the list may hold (the host does not read the
 // count). No host sync.
+// The sums kernel's block size for a kernel and its shared memory:
+// kSmoothTileThreadsMax where an SM holds as many tiles of that size as of
+// kSmoothTileThreads, else kSmoothTileThreads. A tile's copy, walks and
+// row sums all share its threads out, so more threads finish a tile
+// sooner; but where registers, not shared memory, bound the tiles an SM
+// holds, twice the threads hold half the tiles, and a frame's tiles take
+// more waves. Measured on an H200 (warp, ms): 8K (3 tiles an SM either
+// way: 64 KB of shared memory a tile) 0.806 -> 0.786 with 512 threads;
+// 4K (6 tiles an SM with 256, 3 with 512) 0.1963 -> 0.2050; 1080p 0.0668
+// -> 0.0660 (docs/benchmarks.md).
+CudaStatus smooth_tile_threads(const void *kernel, size_t smem, SmoothSumsLaunch *cache) {
+  if (cache->kernel == kernel && cache->smem == smem) return {};
+  int tiles = 0, tiles_max = 0;
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles, kernel, kSmoothTileThreads, smem));
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles_max, kernel, kSmoothTileThreadsMax, smem));
+  cache->kernel = kernel;
+  cache->smem = smem;
+  cache->threads = tiles_max >= tiles ? kSmoothTileThreadsMax : kSmoothTileThreads;
+  return {};
+}
+
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
-                         cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set) {
+                         cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
+                         SmoothSumsLaunch *threads_cache) {
   const auto kernel = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true> : smooth_tile_kernel<true, false>)
                                   : (plan.staged ? smooth_tile_kernel<false, true> : smooth_tile_kernel<false, false>);
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), smem_optin, attributes_set));
+  P3D_CUDA_TRY_STATUS(smooth_tile_threads(reinterpret_cast<const void *>(kernel), plan.smem, threads_cache));
   // A plain launch, not launch_chained(): most of the grid's blocks return
   // at once (tiles without holes), and the chained start's two
   // instructions in each of them cost more than the overlap gains (4K warp
   // 0.2225 -> 0.2330 ms chained, on an H100; cuda/chained_launch.cuh).
   const unsigned blocks = static_cast<unsigned>((plan.tiles() + kSmoothTilesPerBlock - 1) / kSmoothTilesPerBlock);
-  kernel<<<blocks, kSmoothTileThreads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
+  kernel<<<blocks, threads_cache->threads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
   P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
   return {};
 }
@@ -1032,7 +1059,8 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
                          &attributes_set_};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
-  if (smooth) P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_));
+  if (smooth)
+    P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_, &sums_launch_));
 
   if (holes_out) {
     unsigned long long h = 0;

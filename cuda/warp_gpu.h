@@ -52,6 +52,14 @@ constexpr int kWarpFillBatch = 8;
 // byte per 32-pixel chunk of a row and eye (has it a hole).
 constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
 
+// The BackgroundSmooth sums kernel's block size last chosen, for a kernel
+// and its shared memory (cuda/warp.cu, smooth_tile_threads).
+struct SmoothSumsLaunch {
+  const void *kernel = nullptr;
+  size_t smem = 0;
+  int threads = 0;
+};
+
 class WarpRendererGpu {
  public:
   // src, depth, out: device memory (out is packed RGB, 2W x H). If
@@ -82,6 +90,7 @@ class WarpRendererGpu {
   int both_eyes_width_ = -1;
   HoleFill both_eyes_fill_ = HoleFill::None;
   bool both_eyes_ = false;
+  SmoothSumsLaunch sums_launch_;
 };
 
 }  // namespace p3d
