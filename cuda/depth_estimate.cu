@@ -63,11 +63,64 @@ __device__ void column_sums_420(const FrameView &f, int x, int y0, uint32_t *s0,
     cr += cr_stride;
   }
 }
+// column_sums_420 for the four columns x .. x + 3 at once (x a multiple
+// of 4, all four in the frame, rows 4-byte aligned: the launcher checks
+// that the frame's planes and strides allow it): a luma row is one 32-bit
+// load, the chroma of the four columns one more (NV12's interleaved
+// Cb Cr Cb Cr) or one 16-bit load a plane (I420). Bytes are added two a
+// word in 16-bit lanes (kB rows of 255, doubled for chroma, stay below
+// 2^16), then split into the columns' sums: the same integers as four
+// column_sums_420 calls with a quarter of their load instructions.
+template <int kB>
+__device__ void column_sums_420_x4(const FrameView &f, int x, int y0, uint32_t s0[4], uint32_t s1[4],
+                                   uint32_t s2[4]) {
+  static_assert(kB % 2 == 0 && 2 * kB * 255 < 65536, "16-bit lanes hold a column's sum");
+  const bool nv12 = f.format == PixelFormat::NV12;
+  const uint8_t *luma = f.plane[0] + static_cast<size_t>(y0) * f.stride[0] + x;
+  const size_t chroma_row = static_cast<size_t>(y0 / 2);
+  const uint8_t *c1 = f.plane[1] + chroma_row * f.stride[1] + (nv12 ? x : x / 2);
+  const uint8_t *c2 = nv12 ? c1 : f.plane[2] + chroma_row * f.stride[2] + x / 2;
+  const size_t c2_stride = nv12 ? f.stride[1] : f.stride[2];
+  uint32_t y02 = 0, y13 = 0;  // luma of columns 0 and 2, 1 and 3, in 16-bit lanes
+  uint32_t cb = 0, cr = 0;    // the two chroma samples' sums, in 16-bit lanes (low: columns 0-1)
+#pragma unroll
+  for (int dy = 0; dy < kB; dy += 2) {
+    const int y = y0 + dy;
+    if (y >= f.height) break;
+    const bool pair = y + 1 < f.height;
+    const uint32_t a = *reinterpret_cast<const uint32_t *>(luma);
+    const uint32_t b = pair ? *reinterpret_cast<const uint32_t *>(luma + f.stride[0]) : 0u;
+    y02 += (a & 0x00ff00ffu) + (b & 0x00ff00ffu);
+    y13 += ((a >> 8) & 0x00ff00ffu) + ((b >> 8) & 0x00ff00ffu);
+    const uint32_t n = pair ? 2u : 1u;
+    if (nv12) {
+      const uint32_t w = *reinterpret_cast<const uint32_t *>(c1);  // Cb0 Cr0 Cb1 Cr1
+      cb += n * (w & 0x00ff00ffu);
+      cr += n * ((w >> 8) & 0x00ff00ffu);
+    } else {
+      const uint32_t u = *reinterpret_cast<const uint16_t *>(c1), v = *reinterpret_cast<const uint16_t *>(c2);
+      cb += n * ((u & 0xffu) | (u & 0xff00u) << 8);
+      cr += n * ((v & 0xffu) | (v & 0xff00u) << 8);
+    }
+    luma += 2 * static_cast<size_t>(f.stride[0]);
+    c1 += f.stride[1];
+    c2 += c2_stride;
+  }
+  s0[0] = y02 & 0xffffu;
+  s0[1] = y13 & 0xffffu;
+  s0[2] = y02 >> 16;
+  s0[3] = y13 >> 16;
+  s1[0] = s1[1] = cb & 0xffffu;
+  s1[2] = s1[3] = cb >> 16;
+  s2[0] = s2[1] = cr & 0xffffu;
+  s2[2] = s2[3] = cr >> 16;
+}
+
 template <int kB>
 __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView frame, int B_arg, int bx, int by,
                                                                   float *__restrict__ features,
                                                                   const float *__restrict__ ref, bool have_state,
-                                                                  DepthDeviceState *state) {
+                                                                  DepthDeviceState *state, bool words) {
   chained_kernel_start();
   constexpr int kRows = kB > 0 ? (kB >= 16 ? 1 : 16 / kB) : kFeatureRowsMax;
   __shared__ uint32_t col[kRows][3][kThreads];
@@ -78,8 +131,30 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
   const int x = blockIdx.x * per_cta * B + t;
   const bool column_in = t < per_cta * B && x < frame.width;
   const int j0 = blockIdx.y * rows_per_cta;
+  if constexpr (kB > 0 && kB % 2 == 0) {
+    if (words) {  // 4:2:0, rows 4-byte aligned: a thread sums four columns of a block row
+      const int x_cta = blockIdx.x * per_cta * B;
+      for (int item = t; item < (kThreads / 4) * rows_per_cta; item += kThreads) {
+        const int r = item / (kThreads / 4), c0 = 4 * (item - r * (kThreads / 4)), x4 = x_cta + c0;
+        const int y0 = (j0 + r) * B;
+        uint32_t s0[4] = {0, 0, 0, 0}, s1[4] = {0, 0, 0, 0}, s2[4] = {0, 0, 0, 0};
+        if (x4 + 3 < frame.width && c0 + 3 < per_cta * B) {
+          column_sums_420_x4<kB>(frame, x4, y0, s0, s1, s2);
+        } else {
+          for (int k = 0; k < 4; ++k)
+            if (c0 + k < per_cta * B && x4 + k < frame.width) column_sums_420<kB>(frame, x4 + k, y0, &s0[k], &s1[k], &s2[k]);
+        }
+        for (int k = 0; k < 4; ++k) {
+          col[r][0][c0 + k] = s0[k];
+          col[r][1][c0 + k] = s1[k];
+          col[r][2][c0 + k] = s2[k];
+        }
+      }
+    }
+  }
 #pragma unroll
   for (int r = 0; r < kRows; ++r) {
+    if (kB > 0 && kB % 2 == 0 && words) break;  // summed above
     if (r >= rows_per_cta) break;  // kB > 0: never
     const int y0 = (j0 + r) * B;
     uint32_t s0 = 0, s1 = 0, s2 = 0;
@@ -484,9 +559,17 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
                          : B == 4 ? block_features_kernel<4>
                          : B == 8 ? block_features_kernel<8>
                                   : block_features_kernel<0>;
+  // 32-bit row loads (column_sums_420_x4) where every row of the 4:2:0
+  // planes starts 4-byte aligned (2-byte for I420's chroma rows).
+  auto aligned = [&](int plane, int to) {
+    return reinterpret_cast<uintptr_t>(frame.plane[plane]) % to == 0 && frame.stride[plane] % to == 0;
+  };
+  const bool words = frame.format == PixelFormat::NV12   ? aligned(0, 4) && aligned(1, 4)
+                     : frame.format == PixelFormat::I420 ? aligned(0, 4) && aligned(1, 2) && aligned(2, 2)
+                                                         : false;
   P3D_CUDA_TRY(launch_chained(features_kernel, dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0,
                               stream, frame, B, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid,
-                              state));
+                              state, words));
 
   // Step 2.
   const bool yuv = !is_packed_rgb(frame.format);

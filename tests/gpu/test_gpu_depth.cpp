@@ -250,6 +250,60 @@ TEST(GpuDepth, OddSizes) {
       }
 }
 
+// 4:2:0 frames whose device rows do not start 4-byte aligned (an odd
+// plane offset or stride, as a frame mapped from another allocator may
+// have) take the features kernel's byte loads; aligned ones (every other
+// test) its 32-bit loads. Both must give the CPU's result.
+TEST(GpuDepth, UnalignedRowsMatchCpu) {
+  std::mt19937 rng(fresh_seed());
+  const int layouts[][2] = {{1, 1}, {0, 3}, {2, 2}, {3, 0}, {0, 6}};  // plane offset, extra stride bytes ({0, 6}: aligned)
+  for (PixelFormat fmt : {PixelFormat::NV12, PixelFormat::I420})
+    for (const auto &l : layouts)
+      for (int B : {2, 4, 8}) {
+        HostFrame f(fmt, 250, 66, 1);
+        f.fill_random(rng());
+        DepthParams p;
+        p.block_size = B;
+        p.edge_threshold = 30.f;
+        const std::string what = describe(f, p) + " offset " + std::to_string(l[0]) + " stride+" + std::to_string(l[1]);
+        DepthEstimatorCpu cpu;
+        const Result want = run_cpu(cpu, p, f);
+        // The planes in one device buffer, each at `offset` bytes past a
+        // 256-byte boundary, rows `extra` bytes longer than their data.
+        const FrameView hv = f.view();
+        FrameView dv = hv;
+        size_t at[3] = {0, 0, 0}, total = 0;
+        for (int i = 0; i < frame_plane_count(fmt); ++i) {
+          int row_bytes = 0, rows = 0;
+          frame_plane_size(fmt, f.width(), f.height(), i, &row_bytes, &rows);
+          dv.stride[i] = row_bytes + l[1];
+          at[i] = total + static_cast<size_t>(l[0]);
+          total += (static_cast<size_t>(dv.stride[i]) * rows + l[0] + 255) / 256 * 256;
+        }
+        DeviceBuffer buf;
+        check_cuda(buf.ensure(total));
+        for (int i = 0; i < frame_plane_count(fmt); ++i) {
+          int row_bytes = 0, rows = 0;
+          frame_plane_size(fmt, f.width(), f.height(), i, &row_bytes, &rows);
+          dv.plane[i] = buf.as<uint8_t>() + at[i];
+          ASSERT_EQ(cudaSuccess, cudaMemcpy2D(dv.plane[i], dv.stride[i], hv.plane[i], hv.stride[i], row_bytes, rows,
+                                              cudaMemcpyHostToDevice));
+        }
+        GpuRunner gpu;
+        DeviceDepth depth(f.width(), f.height());
+        depth.poison();
+        Result got;
+        check_cuda(gpu.estimator().estimate(p, dv, depth.view(), gpu.stream()));
+        check_cuda(gpu.estimator().download_labels(got.labels, gpu.stream()));
+        check_cuda(gpu.estimator().download_block_depth(got.block_depth, gpu.stream()));
+        check_cuda(gpu.estimator().download_smoothed_features(got.smoothed, gpu.stream()));
+        check_cuda(gpu.estimator().last_decision(&got.decision, gpu.stream()));
+        check_cuda(gpu.estimator().last_diff(&got.diff, gpu.stream()));
+        got.depth = depth.download();
+        expect_same(want, got, what);
+      }
+}
+
 TEST(GpuDepth, Size3840x2160) {
   const cv::Mat aloe = test::load_data_image("aloeL.jpg");
   ASSERT_FALSE(aloe.empty());
