@@ -5,7 +5,9 @@
 // One estimate() queues, on the given stream and without host sync:
 //   memset    the fixed-point |difference| sum in the device state
 //   features  block sums in integers -> means (step 1), and each block's
-//             |feature - reference| added to the device sum (step 5)
+//             |feature - reference| added to the device sum (step 5); a
+//             4:2:0 frame with 4-byte aligned rows is read four columns a
+//             32-bit load
 //   labels    the smoothed features of step 2 (the decision of step 5 is
 //             derived from the device sum first: a cut restarts them), then
 //             union-find in shared memory per 32x32 tile of blocks, then

@@ -22,9 +22,10 @@
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the
 //    chunks with holes and whether each 32-pixel chunk of the row has a
-//    hole; then one
-//    block per tile of 32 columns x up to 32 rows and eye (tiles without
-//    holes return at once) copies the states and anchors of
+//    hole, and lists the tiles with holes; then a block (256 threads, 512
+//    where shared memory bounds the tiles an SM holds anyway) per listed
+//    tile of 32 columns x up to 32 rows and eye copies the states and
+//    anchors of
 //    its rows and R more above and below into shared memory, slides the
 //    +-R window down the column runs of holes (column sums V for its
 //    columns and Rx more either side) and sums V over +-Rx along each
