@@ -63,6 +63,7 @@ __device__ void column_sums_420(const FrameView &f, int x, int y0, uint32_t *s0,
     cr += cr_stride;
   }
 }
+
 // column_sums_420 for the four columns x .. x + 3 at once (x a multiple
 // of 4, all four in the frame, rows 4-byte aligned: the launcher checks
 // that the frame's planes and strides allow it): a luma row is one 32-bit
@@ -142,7 +143,8 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
           column_sums_420_x4<kB>(frame, x4, y0, s0, s1, s2);
         } else {
           for (int k = 0; k < 4; ++k)
-            if (c0 + k < per_cta * B && x4 + k < frame.width) column_sums_420<kB>(frame, x4 + k, y0, &s0[k], &s1[k], &s2[k]);
+            if (c0 + k < per_cta * B && x4 + k < frame.width)
+              column_sums_420<kB>(frame, x4 + k, y0, &s0[k], &s1[k], &s2[k]);
         }
         for (int k = 0; k < 4; ++k) {
           col[r][0][c0 + k] = s0[k];

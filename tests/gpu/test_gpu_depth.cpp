@@ -256,7 +256,8 @@ TEST(GpuDepth, OddSizes) {
 // test) its 32-bit loads. Both must give the CPU's result.
 TEST(GpuDepth, UnalignedRowsMatchCpu) {
   std::mt19937 rng(fresh_seed());
-  const int layouts[][2] = {{1, 1}, {0, 3}, {2, 2}, {3, 0}, {0, 6}};  // plane offset, extra stride bytes ({0, 6}: aligned)
+  // Plane offset and extra stride bytes; {0, 6} leaves NV12's rows aligned.
+  const int layouts[][2] = {{1, 1}, {0, 3}, {2, 2}, {3, 0}, {0, 6}};
   for (PixelFormat fmt : {PixelFormat::NV12, PixelFormat::I420})
     for (const auto &l : layouts)
       for (int B : {2, 4, 8}) {
