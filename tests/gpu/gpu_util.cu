@@ -35,6 +35,23 @@ DeviceFrame DeviceFrame::upload(const HostFrame &h) {
   return d;
 }
 
+DeviceFrame DeviceFrame::upload_at(const HostFrame &h, int offset, int extra) {
+  DeviceFrame d(h.format(), h.width(), h.height());
+  const FrameView hv = h.view();
+  for (int i = 0; i < frame_plane_count(h.format()); ++i) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(h.format(), h.width(), h.height(), i, &row_bytes, &rows);
+    const size_t stride = static_cast<size_t>(row_bytes) + extra;
+    const CudaStatus st = d.planes_[i].ensure(stride * rows + offset);
+    EXPECT_TRUE(st.ok()) << st.message();
+    d.view_.plane[i] = d.planes_[i].as<uint8_t>() + offset;
+    d.view_.stride[i] = static_cast<int>(stride);
+    EXPECT_EQ(cudaSuccess, cudaMemcpy2D(d.view_.plane[i], stride, hv.plane[i], hv.stride[i], row_bytes, rows,
+                                        cudaMemcpyHostToDevice));
+  }
+  return d;
+}
+
 HostFrame DeviceFrame::download() const {
   HostFrame h(view_.format, view_.width, view_.height, 8);
   const FrameView hv = h.view();

@@ -21,6 +21,10 @@ class DeviceFrame {
  public:
   DeviceFrame(PixelFormat format, int width, int height);
   static DeviceFrame upload(const HostFrame &h);
+  // The same with every plane starting `offset` bytes into its allocation
+  // and rows `extra` bytes longer than their data: the unaligned layouts a
+  // frame mapped from another allocator may have.
+  static DeviceFrame upload_at(const HostFrame &h, int offset, int extra);
   HostFrame download() const;
   FrameView view() const { return view_; }
 

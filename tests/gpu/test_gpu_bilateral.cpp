@@ -284,6 +284,33 @@ TEST_P(GpuBilateralFormats, CoarseGridOddSizesAndSteps) {
                            "scale " + std::to_string(scale) + " mode " + std::to_string(static_cast<int>(mode)));
 }
 
+// Guides whose rows do not start 2- or 4-byte aligned (odd plane offsets
+// and strides) take the cells' byte loads; aligned ones (every other test)
+// their 16- and 32-bit loads. Both must give the CPU's result.
+TEST(GpuBilateral, CoarseGridUnalignedGuideRows) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  BilateralFilterGpu filter;
+  const cv::Mat depth = random_depth(250, 66, seed);
+  // Plane offset and extra stride bytes; {0, 6} leaves NV12's luma rows 4-byte aligned.
+  const int layouts[][2] = {{1, 1}, {0, 3}, {2, 2}, {3, 0}, {0, 6}};
+  for (PixelFormat fmt : {PixelFormat::NV12, PixelFormat::I420})
+    for (const auto &l : layouts)
+      for (const int scale : {2, 4}) {
+        const HostFrame guide = random_guide(fmt, 250, 66, seed + scale);
+        const BilateralParams p = with_scale({5, 3.f, 12.f}, BilateralMode::Separable, scale);
+        SCOPED_TRACE(std::string(test::format_name(fmt)) + " scale " + std::to_string(scale) + " offset " +
+                     std::to_string(l[0]) + " stride+" + std::to_string(l[1]));
+        const DeviceFrame g = DeviceFrame::upload_at(guide, l[0], l[1]);
+        const DeviceDepth in = DeviceDepth::upload(depth);
+        DeviceDepth out(depth.cols, depth.rows);  // NaN-poisoned
+        test::check_cuda(filter.run(p, g.view(), as_const(in.view()), out.view(), nullptr));
+        const Result r = compare_exact(out.download(), run_cpu(p, guide, depth));
+        EXPECT_EQ(r.nonfinite, 0);
+        EXPECT_EQ(r.differing, 0) << "max |diff| " << r.max_abs;
+      }
+}
+
 // The defaults at 4K and 8K (the automatic step: 2 and 4) on a real picture
 // guiding the estimator-like blocky depth, and the exact mode at step 2.
 TEST(GpuBilateral, CoarseGridAutomaticAtUhdAnd8K) {

@@ -65,10 +65,10 @@ class GpuRunner {
   GpuRunner(const GpuRunner &) = delete;
   GpuRunner &operator=(const GpuRunner &) = delete;
 
-  Result run(const DepthParams &p, const HostFrame &f) {
+  Result run(const DepthParams &p, const HostFrame &f) { return run_on(p, DeviceFrame::upload(f)); }
+  Result run_on(const DepthParams &p, const DeviceFrame &frame) {
     Result r;
-    const DeviceFrame frame = DeviceFrame::upload(f);
-    DeviceDepth depth(f.width(), f.height());
+    DeviceDepth depth(frame.view().width, frame.view().height);
     depth.poison();
     check_cuda(est_.estimate(p, frame.view(), depth.view(), stream_));
     check_cuda(est_.download_labels(r.labels, stream_));
@@ -269,39 +269,8 @@ TEST(GpuDepth, UnalignedRowsMatchCpu) {
         const std::string what = describe(f, p) + " offset " + std::to_string(l[0]) + " stride+" + std::to_string(l[1]);
         DepthEstimatorCpu cpu;
         const Result want = run_cpu(cpu, p, f);
-        // The planes in one device buffer, each at `offset` bytes past a
-        // 256-byte boundary, rows `extra` bytes longer than their data.
-        const FrameView hv = f.view();
-        FrameView dv = hv;
-        size_t at[3] = {0, 0, 0}, total = 0;
-        for (int i = 0; i < frame_plane_count(fmt); ++i) {
-          int row_bytes = 0, rows = 0;
-          frame_plane_size(fmt, f.width(), f.height(), i, &row_bytes, &rows);
-          dv.stride[i] = row_bytes + l[1];
-          at[i] = total + static_cast<size_t>(l[0]);
-          total += (static_cast<size_t>(dv.stride[i]) * rows + l[0] + 255) / 256 * 256;
-        }
-        DeviceBuffer buf;
-        check_cuda(buf.ensure(total));
-        for (int i = 0; i < frame_plane_count(fmt); ++i) {
-          int row_bytes = 0, rows = 0;
-          frame_plane_size(fmt, f.width(), f.height(), i, &row_bytes, &rows);
-          dv.plane[i] = buf.as<uint8_t>() + at[i];
-          ASSERT_EQ(cudaSuccess, cudaMemcpy2D(dv.plane[i], dv.stride[i], hv.plane[i], hv.stride[i], row_bytes, rows,
-                                              cudaMemcpyHostToDevice));
-        }
         GpuRunner gpu;
-        DeviceDepth depth(f.width(), f.height());
-        depth.poison();
-        Result got;
-        check_cuda(gpu.estimator().estimate(p, dv, depth.view(), gpu.stream()));
-        check_cuda(gpu.estimator().download_labels(got.labels, gpu.stream()));
-        check_cuda(gpu.estimator().download_block_depth(got.block_depth, gpu.stream()));
-        check_cuda(gpu.estimator().download_smoothed_features(got.smoothed, gpu.stream()));
-        check_cuda(gpu.estimator().last_decision(&got.decision, gpu.stream()));
-        check_cuda(gpu.estimator().last_diff(&got.diff, gpu.stream()));
-        got.depth = depth.download();
-        expect_same(want, got, what);
+        expect_same(want, gpu.run_on(p, DeviceFrame::upload_at(f, l[0], l[1])), what);
       }
 }
 
