@@ -872,7 +872,7 @@ CudaStatus launch_row_kernel(const RowLaunch &l) {
 // Whether the row kernel that renders both eyes at once (a z-buffer an
 // eye) keeps as many rows of W pixels resident on an SM as the one that
 // renders them in turn: the second z-buffer costs 4 W bytes of shared
-// memory, which from about 6000 pixels (Hopper) leaves room for one row
+// memory, which from about 4600 pixels (Hopper) leaves room for one row
 // fewer, and every resident row counts in this instruction-bound kernel.
 CudaStatus both_eyes_keep_rows(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                                bool *keep) {
@@ -927,10 +927,6 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
   return p;
 }
 
-// BackgroundSmooth sums, after the row kernel wrote the states and anchors
-// and listed the tiles with holes: one smooth_tile_kernel, a block for every
-// kSmoothTilesPerBlock tiles the list may hold (the host does not read the
-// count). No host sync.
 // The sums kernel's block size for a kernel and its shared memory:
 // kSmoothTileThreadsMax where an SM holds as many tiles of that size as of
 // kSmoothTileThreads, else kSmoothTileThreads. A tile's copy, walks and
@@ -939,8 +935,10 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 // holds, twice the threads hold half the tiles, and a frame's tiles take
 // more waves. Measured on an H200 (warp, ms): 8K (3 tiles an SM either
 // way: 64 KB of shared memory a tile) 0.806 -> 0.786 with 512 threads;
-// 4K (6 tiles an SM with 256, 3 with 512) 0.1963 -> 0.2050; 1080p 0.0668
-// -> 0.0660 (docs/benchmarks.md).
+// 4K (6 tiles an SM with 256, 3 with 512) 0.1963 -> 0.2050; 1080p, whose
+// few tiles all fit either way, 0.0668 -> 0.0660 with 512 forced, but its
+// tiles are bound by registers as at 4K, so the rule keeps 256 there
+// (docs/benchmarks.md).
 CudaStatus smooth_tile_threads(const void *kernel, size_t smem, SmoothSumsLaunch *cache) {
   if (cache->kernel == kernel && cache->smem == smem) return {};
   int tiles = 0, tiles_max = 0;
@@ -952,6 +950,10 @@ CudaStatus smooth_tile_threads(const void *kernel, size_t smem, SmoothSumsLaunch
   return {};
 }
 
+// BackgroundSmooth sums, after the row kernel wrote the states and anchors
+// and listed the tiles with holes: one smooth_tile_kernel, a block for every
+// kSmoothTilesPerBlock tiles the list may hold (the host does not read the
+// count). No host sync.
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
                          cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
                          SmoothSumsLaunch *threads_cache) {
