@@ -68,26 +68,30 @@ cv::Mat run_cpu(const BilateralParams &p, const HostFrame &guide, const cv::Mat 
   return out;
 }
 
-cv::Mat run_gpu(BilateralFilterGpu &filter, const BilateralParams &p, const HostFrame &guide, const cv::Mat &depth,
-                cudaStream_t stream = nullptr) {
-  const DeviceFrame g = DeviceFrame::upload(guide);
+cv::Mat run_gpu_on(BilateralFilterGpu &filter, const BilateralParams &p, const DeviceFrame &g, const cv::Mat &depth,
+                   cudaStream_t stream = nullptr) {
   const DeviceDepth in = DeviceDepth::upload(depth);
   DeviceDepth out(depth.cols, depth.rows);  // NaN-poisoned
   test::check_cuda(filter.run(p, g.view(), as_const(in.view()), out.view(), stream));
   return out.download();
 }
 
-// GPU vs CPU on one input; `what` names the case in failures.
-void expect_identical(BilateralFilterGpu &filter, const BilateralParams &p, const HostFrame &guide,
-                      const cv::Mat &depth, const std::string &what) {
+// GPU vs CPU on one input, the guide in device memory as `device_guide`
+// holds it; `what` names the case in failures.
+void expect_identical_on(BilateralFilterGpu &filter, const BilateralParams &p, const HostFrame &guide,
+                         const DeviceFrame &device_guide, const cv::Mat &depth, const std::string &what) {
   SCOPED_TRACE(what + " " + test::format_name(guide.format()) + " " + std::to_string(depth.cols) + "x" +
                std::to_string(depth.rows) + " r=" + std::to_string(p.radius) +
                " ss=" + std::to_string(p.sigma_space) + " sr=" + std::to_string(p.sigma_range));
-  const cv::Mat gpu = run_gpu(filter, p, guide, depth);
+  const cv::Mat gpu = run_gpu_on(filter, p, device_guide, depth);
   const cv::Mat cpu = run_cpu(p, guide, depth);
   const Result r = compare_exact(gpu, cpu);
   EXPECT_EQ(r.nonfinite, 0);
   EXPECT_EQ(r.differing, 0) << "max |diff| " << r.max_abs;
+}
+void expect_identical(BilateralFilterGpu &filter, const BilateralParams &p, const HostFrame &guide,
+                      const cv::Mat &depth, const std::string &what) {
+  expect_identical_on(filter, p, guide, DeviceFrame::upload(guide), depth, what);
 }
 
 TEST(GpuBilateral, RandomDepthRandomGuide) {
@@ -298,16 +302,10 @@ TEST(GpuBilateral, CoarseGridUnalignedGuideRows) {
     for (const auto &l : layouts)
       for (const int scale : {2, 4}) {
         const HostFrame guide = random_guide(fmt, 250, 66, seed + scale);
-        const BilateralParams p = with_scale({5, 3.f, 12.f}, BilateralMode::Separable, scale);
-        SCOPED_TRACE(std::string(test::format_name(fmt)) + " scale " + std::to_string(scale) + " offset " +
-                     std::to_string(l[0]) + " stride+" + std::to_string(l[1]));
-        const DeviceFrame g = DeviceFrame::upload_at(guide, l[0], l[1]);
-        const DeviceDepth in = DeviceDepth::upload(depth);
-        DeviceDepth out(depth.cols, depth.rows);  // NaN-poisoned
-        test::check_cuda(filter.run(p, g.view(), as_const(in.view()), out.view(), nullptr));
-        const Result r = compare_exact(out.download(), run_cpu(p, guide, depth));
-        EXPECT_EQ(r.nonfinite, 0);
-        EXPECT_EQ(r.differing, 0) << "max |diff| " << r.max_abs;
+        expect_identical_on(filter, with_scale({5, 3.f, 12.f}, BilateralMode::Separable, scale), guide,
+                            DeviceFrame::upload_at(guide, l[0], l[1]), depth,
+                            "scale " + std::to_string(scale) + " offset " + std::to_string(l[0]) + " stride+" +
+                                std::to_string(l[1]));
       }
 }
 
