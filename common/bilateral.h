@@ -130,6 +130,14 @@ P3D_HD int bilateral_effective_scale(const BilateralParams &sanitised, int width
   return sanitised.scale == 0 ? bilateral_auto_scale(width, height) : sanitised.scale;
 }
 
+// The grid (p3d_defs.h DepthGrid) that holds the filter's output with one
+// value a cell: log2 s where the step s is a power of two above 1 (every
+// automatic step), else 0, the full-size map.
+P3D_HD int bilateral_grid_shift(const BilateralParams &sanitised, int width, int height) {
+  const int s = step_shift(bilateral_effective_scale(sanitised, width, height));
+  return s > 0 ? s : 0;
+}
+
 // The parameters the coarse grid's filter runs with at step s (see the
 // header comment): the same reach in the picture, scale 1. At s = 1 the
 // sanitised parameters themselves, at scale 1.

@@ -115,6 +115,14 @@ P3D_HD int effective_block_size(const DepthParams &p, int width, int height) {
   return clamp_value(p.block_size, 2, 64);
 }
 
+// The grid (p3d_defs.h DepthGrid) that holds a frame's depth with one value
+// a block: log2 B where the effective block B is a power of two (every
+// automatic size), else 0, the full-size map.
+P3D_HD int block_grid_shift(const DepthParams &p, int width, int height) {
+  const int s = step_shift(effective_block_size(p, width, height));
+  return s > 0 ? s : 0;
+}
+
 // Pixels of block number b along an axis of `pixels` (the last block may be partial).
 P3D_HD int block_extent(int b, int block, int pixels) {
   const int left = pixels - b * block;

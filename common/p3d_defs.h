@@ -38,6 +38,68 @@ P3D_HD ImageView<const T> as_const(const ImageView<T> &v) {
   return ImageView<const T>{v.data, v.width, v.height, v.pitch};
 }
 
+// A depth map of a width x height picture held on a grid of cells of
+// 2^shift x 2^shift pixels, one value a cell: pixel (x, y) has
+// cells.at(x >> shift, y >> shift); shift 0 is the full-size map. The
+// estimator's block depths and the filter's coarse-grid results are
+// constant over such cells, so the GPU stages hand them on as they are,
+// not copied out to every pixel (docs/architecture.md, "Depth between the
+// stages").
+template <typename T>
+struct DepthGrid {
+  ImageView<T> cells;  // grid_cells(width, shift) x grid_cells(height, shift)
+  int width = 0;
+  int height = 0;
+  int shift = 0;
+
+  // The cells of pixel row y.
+  P3D_HD T *cell_row(int y) const { return cells.row(y >> shift); }
+  P3D_HD T &at(int x, int y) const { return cell_row(y)[x >> shift]; }
+  P3D_HD bool empty() const { return cells.empty() || width <= 0 || height <= 0; }
+};
+
+// Cells along an axis of `pixels` at a shift.
+P3D_HD int grid_cells(int pixels, int shift) {
+  return static_cast<int>((static_cast<long long>(pixels) + (1LL << shift) - 1) >> shift);
+}
+
+// A full-size map as a grid (shift 0).
+template <typename T>
+P3D_HD DepthGrid<T> full_grid(const ImageView<T> &v) {
+  return DepthGrid<T>{v, v.width, v.height, 0};
+}
+template <typename T>
+P3D_HD DepthGrid<const T> as_const(const DepthGrid<T> &g) {
+  return DepthGrid<const T>{as_const(g.cells), g.width, g.height, g.shift};
+}
+// Whether g's cells have the size its picture and shift call for.
+template <typename T>
+P3D_HD bool grid_fits(const DepthGrid<T> &g) {
+  return g.shift >= 0 && g.shift < 16 && g.cells.width == grid_cells(g.width, g.shift) &&
+         g.cells.height == grid_cells(g.height, g.shift);
+}
+// A grid copied out to every pixel of a full-size map of its picture's
+// size (host code: pseudo3ddepthout's read-back, the tests).
+template <typename T>
+inline void expand_grid(const DepthGrid<const T> &g, const ImageView<T> &out) {
+  for (int y = 0; y < g.height; ++y) {
+    const T *cells = g.cell_row(y);
+    T *row = out.row(y);
+    for (int x = 0; x < g.width; ++x) row[x] = cells[x >> g.shift];
+  }
+}
+
+// log2(step) for a power-of-two step >= 1, else -1: the grids a stage can
+// hand on at its step.
+P3D_HD int step_shift(int step) {
+  int s = 0;
+  while (step > 1 && (step & 1) == 0) {
+    step >>= 1;
+    ++s;
+  }
+  return step == 1 ? s : -1;
+}
+
 template <typename T>
 P3D_HD T clamp_value(T v, T lo, T hi) {
   return v < lo ? lo : (v > hi ? hi : v);

@@ -277,13 +277,20 @@ P3D_HD WarpSource warp_link(int x, float d0, float t0, float d1, float t1, bool 
   return s;
 }
 
-P3D_HD WarpSource warp_source(const float *depth_row, int x, int width, float shift, float D, float convergence) {
-  const float d0 = warp_depth(depth_row[x]);
+// Source pixel x placed in a view with shift factor `shift` from its own and
+// its right neighbour's read depths d0, d1 (d1 unused without one): where
+// every caller places a source pixel, so that a renderer that reads the
+// depths once for both eyes places it as warp_source() does.
+P3D_HD WarpSource warp_place(int x, float d0, float d1, bool has_next, float shift, float D, float convergence) {
   const float t0 = warp_target(x, d0, shift, D, convergence);
-  const bool has_next = x + 1 < width;
-  const float d1 = has_next ? warp_depth(depth_row[x + 1]) : d0;
   const float t1 = has_next ? warp_target(x + 1, d1, shift, D, convergence) : t0;
   return warp_link(x, d0, t0, d1, t1, has_next);
+}
+
+P3D_HD WarpSource warp_source(const float *depth_row, int x, int width, float shift, float D, float convergence) {
+  const bool has_next = x + 1 < width;
+  const float d0 = warp_depth(depth_row[x]);
+  return warp_place(x, d0, has_next ? warp_depth(depth_row[x + 1]) : d0, has_next, shift, D, convergence);
 }
 
 // Whether x covers target X (footprint or connected span). t0 +- 0.5f is
@@ -449,10 +456,15 @@ P3D_HD Rgba smooth_mean(const SmoothSum &s) {
 
 // Whether the frames fit together: src W x H (W, H > 0), depth W x H, out
 // packed RGB 2W x H.
+// A depth grid (p3d_defs.h DepthGrid, the GPU's input) fits when it is of
+// the picture's size and its cells fit it.
+inline bool warp_frames_fit(const FrameView &src, const DepthGrid<const float> &depth, const FrameView &out) {
+  return src.width > 0 && src.height > 0 && src.plane[0] && depth.cells.data && depth.width == src.width &&
+         depth.height == src.height && grid_fits(depth) && out.plane[0] && is_packed_rgb(out.format) &&
+         out.width == 2 * src.width && out.height == src.height;
+}
 inline bool warp_frames_fit(const FrameView &src, ImageView<const float> depth, const FrameView &out) {
-  return src.width > 0 && src.height > 0 && src.plane[0] && depth.data && depth.width == src.width &&
-         depth.height == src.height && out.plane[0] && is_packed_rgb(out.format) && out.width == 2 * src.width &&
-         out.height == src.height;
+  return warp_frames_fit(src, full_grid(depth), out);
 }
 
 // Renders the stereo pair side by side into `out` (packed RGB, 2W x H: left

@@ -12,14 +12,16 @@
 // outer, dx inner) through bilateral_accumulate() on the same host-made
 // weights, so the result is bit-identical to the CPU's.
 //
-// At a grid step s > 1 (BilateralParams::scale) the kernels' kCells
-// instances run on the coarse grid: the tile's texels are cells (the
-// rounded mean luma of the cell's pixels, the depth of its first pixel:
-// bilateral_cell_luma(), as on the CPU) and each output is written to its
-// s x s cell (store_cell), so the coarse picture never goes through global
-// memory. The step is a template parameter, not a run-time branch in every
-// instance: a run-time step in the step-1 kernels cost 1.7 us at 1080p and
-// 7 us at 4K on an H100 (docs/benchmarks.md).
+// At a grid step s > 1 (BilateralParams::scale) the kernels' cell
+// instances (GridIo) run on the coarse grid: the tile's texels are cells
+// (the rounded mean luma of the cell's pixels, the depth of its first
+// pixel: bilateral_cell_luma(), as on the CPU) and each output is written
+// to its s x s cell (store_cell), or once to an output grid of the cells'
+// size (the depth handoff on grids, docs/architecture.md), so the coarse
+// picture never goes through global memory. The step is a template
+// parameter, not a run-time branch in every instance: a run-time step in
+// the step-1 kernels cost 1.7 us at 1080p and 7 us at 4K on an H100
+// (docs/benchmarks.md).
 #include "chained_launch.cuh"
 #include "bilateral_gpu.h"
 #include "launch_bounds.cuh"
@@ -89,13 +91,28 @@ struct Cells {
   int w, h, s;
 };
 
+// The grid a kernel instance filters, and how its depth comes in and goes
+// out (a template parameter, so that the instances that run the full-size
+// maps carry none of the grids' run-time shifts: in the step-2 kernel they
+// cost 40 bytes of spills and the 4K filter 0.0390 -> 0.0455 ms on an
+// H200 on full-size maps):
+//  * kPixelGrid: the pixels (step 1); the depth read through its grid's
+//    shift (the estimator's blocks), the output full-size;
+//  * kCellsFullSize: the cells of a step s > 1, the depth read from a
+//    full-size map at each cell's first pixel and each result written to
+//    the cell's s x s pixels;
+//  * kCellsOnGrids: the same with the depth read through its grid's shift
+//    and each result written once to an output grid of the cells' own size
+//    (shift log2 s), or to the s x s pixels of a full-size output.
+enum GridIo : int { kPixelGrid = 0, kCellsFullSize = 1, kCellsOnGrids = 2 };
+
 // The grid's size: the cells' (kCells) or the image's.
 template <bool kCells>
-__device__ __forceinline__ int grid_width(const ImageView<const float> &depth_in, const Cells &cells) {
+__device__ __forceinline__ int grid_width(const DepthGrid<const float> &depth_in, const Cells &cells) {
   return kCells ? cells.w : depth_in.width;
 }
 template <bool kCells>
-__device__ __forceinline__ int grid_height(const ImageView<const float> &depth_in, const Cells &cells) {
+__device__ __forceinline__ int grid_height(const DepthGrid<const float> &depth_in, const Cells &cells) {
   return kCells ? cells.h : depth_in.height;
 }
 
@@ -147,12 +164,13 @@ __device__ __forceinline__ int cell_luma(const FrameView &guide, int cx, int cy,
 // their loads are in flight together (one store after each load left the
 // staging waiting on each texel's loads in turn: 37 % of the 4K step-2
 // filter's stall samples, docs/benchmarks.md).
-template <int kTileW, int kTexels, int kTables, bool kCells>
-__device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageView<const float> &depth_in,
+template <int kTileW, int kTexels, int kTables, GridIo kIo>
+__device__ __forceinline__ void stage_tile(const FrameView &guide, const DepthGrid<const float> &depth_in,
                                            const Cells &cells, int ox, int oy, const float *__restrict__ tables,
                                            Texel *tile, float *s_tables) {
   const int tid = threadIdx.y * kBlockX + threadIdx.x;
   for (int i = tid; i < kTables; i += kThreads) s_tables[i] = tables[i];
+  constexpr bool kCells = kIo != kPixelGrid;
   const int w = grid_width<kCells>(depth_in, cells), h = grid_height<kCells>(depth_in, cells);
   constexpr int kPerThread = (kTexels + kThreads - 1) / kThreads;
   Texel t[kPerThread];
@@ -164,10 +182,12 @@ __device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageVi
     const int gx = ox + tx, gy = oy + ty;
     in[k] = i < kTexels && gx >= 0 && gx < w && gy >= 0 && gy < h;
     if (!in[k]) continue;
-    if constexpr (kCells)
-      t[k] = Texel{depth_in.row(gy * cells.s)[gx * cells.s], kLumaBytes * cell_luma(guide, gx, gy, cells.s)};
+    if constexpr (kIo == kCellsFullSize)  // shift 0
+      t[k] = Texel{depth_in.cells.row(gy * cells.s)[gx * cells.s], kLumaBytes * cell_luma(guide, gx, gy, cells.s)};
+    else if constexpr (kIo == kCellsOnGrids)
+      t[k] = Texel{depth_in.at(gx * cells.s, gy * cells.s), kLumaBytes * cell_luma(guide, gx, gy, cells.s)};
     else
-      t[k] = Texel{depth_in.row(gy)[gx], kLumaBytes * load_luma(guide, gx, gy)};
+      t[k] = Texel{depth_in.at(gx, gy), kLumaBytes * load_luma(guide, gx, gy)};
   }
 #pragma unroll
   for (int k = 0; k < kPerThread; ++k)
@@ -176,12 +196,19 @@ __device__ __forceinline__ void stage_tile(const FrameView &guide, const ImageVi
 }
 
 // Output v of cell (cx, cy): its s x s pixels inside the image; at s = 2 a
-// row's two as one 8-byte store where the address allows.
-__device__ __forceinline__ void store_cell(const ImageView<float> &out, int s, int cx, int cy, float v) {
+// row's two as one 8-byte store where the address allows. kOnGrids: an
+// output grid of the cells' own size (out.shift = log2 s, checked by the
+// launcher) takes the value itself.
+template <bool kOnGrids>
+__device__ __forceinline__ void store_cell(const DepthGrid<float> &out, int s, int cx, int cy, float v) {
+  if (kOnGrids && out.shift > 0) {
+    out.cells.at(cx, cy) = v;
+    return;
+  }
   const int x0 = cx * s, y0 = cy * s;
   const int x1 = min(x0 + s, out.width), y1 = min(y0 + s, out.height);
   for (int y = y0; y < y1; ++y) {
-    float *r = out.row(y);
+    float *r = out.cells.row(y);
     if (s == 2 && x1 == x0 + 2 && (reinterpret_cast<uintptr_t>(r + x0) & 7) == 0) {
       *reinterpret_cast<float2 *>(r + x0) = make_float2(v, v);
       continue;
@@ -190,13 +217,13 @@ __device__ __forceinline__ void store_cell(const ImageView<float> &out, int s, i
   }
 }
 
-// Output v of grid point (x, y): a pixel, or a cell's pixels.
-template <bool kCells>
-__device__ __forceinline__ void store_output(const ImageView<float> &out, const Cells &cells, int x, int y, float v) {
-  if constexpr (kCells)
-    store_cell(out, cells.s, x, y, v);
+// Output v of grid point (x, y): a pixel, or a cell (store_cell).
+template <GridIo kIo>
+__device__ __forceinline__ void store_output(const DepthGrid<float> &out, const Cells &cells, int x, int y, float v) {
+  if constexpr (kIo == kPixelGrid)
+    out.cells.row(y)[x] = v;  // shift 0 at step 1 (the launcher checks)
   else
-    out.row(y)[x] = v;
+    store_cell<kIo == kCellsOnGrids>(out, cells.s, x, y, v);
 }
 
 // Tile row t of the thread's window column holds tap row dy = t - j of its
@@ -262,11 +289,12 @@ __device__ void filter_unclipped(const Texel *tile, const float *range_sym, cons
   for (int j = 0; j < K; ++j) out[j] = sum_wd[j] / sum_w[j];
 }
 
-template <int R, bool kCells>
-__global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, ImageView<const float> depth_in,
-                                                            ImageView<float> depth_out,
+template <int R, GridIo kIo>
+__global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, DepthGrid<const float> depth_in,
+                                                            DepthGrid<float> depth_out,
                                                             const float *__restrict__ tables, Cells cells) {
   chained_kernel_start();
+  constexpr bool kCells = kIo != kPixelGrid;
   using G = Geometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
   Texel *tile = reinterpret_cast<Texel *>(smem);
@@ -276,7 +304,7 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
 
   const int w = grid_width<kCells>(depth_in, cells), h = grid_height<kCells>(depth_in, cells);
   const int ox = blockIdx.x * kBlockX - R, oy = blockIdx.y * kOutY - R;  // tile origin in the grid
-  stage_tile<G::kTileW, G::kTexels, G::kTables, kCells>(guide, depth_in, cells, ox, oy, tables, tile, s_tables);
+  stage_tile<G::kTileW, G::kTexels, G::kTables, kIo>(guide, depth_in, cells, ox, oy, tables, tile, s_tables);
 
   const int x = blockIdx.x * kBlockX + threadIdx.x;
   const int y0 = blockIdx.y * kOutY + threadIdx.y * kRowsPerThread;
@@ -286,14 +314,14 @@ __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, Im
     float out[kRowsPerThread];
     filter_unclipped<R>(tile, s_range_sym, s_space, out);
 #pragma unroll
-    for (int j = 0; j < kRowsPerThread; ++j) store_output<kCells>(depth_out, cells, x, y0 + j, out[j]);
+    for (int j = 0; j < kRowsPerThread; ++j) store_output<kIo>(depth_out, cells, x, y0 + j, out[j]);
     return;
   }
   auto at = [=](int qx, int qy) { return tile[(qy - oy) * G::kTileW + (qx - ox)]; };
   auto guide_at = [=](int qx, int qy) { return at(qx, qy).luma(); };
   auto depth_at = [=](int qx, int qy) { return at(qx, qy).depth; };
   for (int y = y0; y < y0 + kRowsPerThread && y < h; ++y)
-    store_output<kCells>(depth_out, cells, x, y,
+    store_output<kIo>(depth_out, cells, x, y,
                          bilateral_pixel(x, y, w, h, R, s_space, s_range_sym + kRangeMid, guide_at, depth_at));
 }
 
@@ -337,11 +365,12 @@ __device__ __forceinline__ float pass_unclipped(int centre4, const float (&space
 // cuda/launch_bounds.cuh): at most 40 registers a thread, where the
 // compiler took 58 and so ran 4 blocks on an H100 (4K filter 0.133 -> 0.120
 // ms; a bound of 5 blocks gave 0.124).
-template <int R, bool kCells>
+template <int R, GridIo kIo>
 __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
-    separable_kernel(FrameView guide, ImageView<const float> depth_in, ImageView<float> depth_out,
+    separable_kernel(FrameView guide, DepthGrid<const float> depth_in, DepthGrid<float> depth_out,
                      const float *__restrict__ tables, Cells cells) {
   chained_kernel_start();
+  constexpr bool kCells = kIo != kPixelGrid;
   using G = SeparableGeometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
   Texel *tile = reinterpret_cast<Texel *>(smem);
@@ -353,7 +382,7 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
   const int w = grid_width<kCells>(depth_in, cells), h = grid_height<kCells>(depth_in, cells);
   const int bx = blockIdx.x * kBlockX, by = blockIdx.y * kOutY;  // the block's first output
   const int ox = bx - R, oy = by - R;                             // tile origin in the grid
-  stage_tile<G::kTileW, G::kTexels, G::kTables, kCells>(guide, depth_in, cells, ox, oy, tables, tile, s_tables);
+  stage_tile<G::kTileW, G::kTexels, G::kTables, kIo>(guide, depth_in, cells, ox, oy, tables, tile, s_tables);
   const int tid = threadIdx.y * kBlockX + threadIdx.x;
   // The 1-D space weights space(d, 0) in registers: the unclipped taps
   // index them by compile-time constants instead of loading them from
@@ -408,11 +437,12 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
         out[j] = pass_unclipped<R>(luma4[j + R], space_1d, s_range_sym, [&](int d) { return luma4[j + R + d]; },
                                    [&](int d) { return value[j + R + d]; });
 #pragma unroll
-      for (int j = 0; j < kRowsPerThread; ++j) store_cell(depth_out, cells.s, x, by + ly0 + j, out[j]);
+      for (int j = 0; j < kRowsPerThread; ++j)
+        store_cell<kIo == kCellsOnGrids>(depth_out, cells.s, x, by + ly0 + j, out[j]);
     } else {
 #pragma unroll
       for (int j = 0; j < kRowsPerThread; ++j)
-        depth_out.row(by + ly0 + j)[x] =
+        depth_out.cells.row(by + ly0 + j)[x] =
             pass_unclipped<R>(luma4[j + R], space_1d, s_range_sym, [&](int d) { return luma4[j + R + d]; },
                               [&](int d) { return value[j + R + d]; });
     }
@@ -422,36 +452,40 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
   for (int j = 0; j < kRowsPerThread; ++j) {
     const int y = by + ly0 + j;
     if (y >= h) return;
-    store_output<kCells>(depth_out, cells, x, y,
+    store_output<kIo>(depth_out, cells, x, y,
                          bilateral_pass_pixel(x, y, 0, 1, h, R, s_space, range, guide_at, mid_at));
   }
 }
 
-using KernelFn = void (*)(FrameView, ImageView<const float>, ImageView<float>, const float *, Cells);
+using KernelFn = void (*)(FrameView, DepthGrid<const float>, DepthGrid<float>, const float *, Cells);
 struct KernelEntry {
   KernelFn fn;
   size_t shared_bytes;
 };
 
-template <bool kCells, int... R>
+template <GridIo kIo, int... R>
 constexpr auto make_kernels(std::integer_sequence<int, R...>) {
   return std::array<KernelEntry, sizeof...(R)>{
-      KernelEntry{bilateral_kernel<R, kCells>, Geometry<R>::kSharedBytes}...};
+      KernelEntry{bilateral_kernel<R, kIo>, Geometry<R>::kSharedBytes}...};
 }
-template <bool kCells, int... R>
+template <GridIo kIo, int... R>
 constexpr auto make_separable_kernels(std::integer_sequence<int, R...>) {
   return std::array<KernelEntry, sizeof...(R)>{
-      KernelEntry{separable_kernel<R, kCells>, SeparableGeometry<R>::kSharedBytes}...};
+      KernelEntry{separable_kernel<R, kIo>, SeparableGeometry<R>::kSharedBytes}...};
 }
 
 // Every radius at step 1; on a grid of step s >= 2 the radius is
 // ceil(r / s) <= ceil(kMaxBilateralRadius / 2).
 constexpr int kMaxCellRadius = (kMaxBilateralRadius + 1) / 2;
-const auto kKernels = make_kernels<false>(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
+const auto kKernels = make_kernels<kPixelGrid>(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
 const auto kSeparableKernels =
-    make_separable_kernels<false>(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
-const auto kCellKernels = make_kernels<true>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
-const auto kCellSeparableKernels = make_separable_kernels<true>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
+    make_separable_kernels<kPixelGrid>(std::make_integer_sequence<int, kMaxBilateralRadius + 1>{});
+const auto kCellKernels = make_kernels<kCellsFullSize>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
+const auto kCellSeparableKernels =
+    make_separable_kernels<kCellsFullSize>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
+const auto kCellGridKernels = make_kernels<kCellsOnGrids>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
+const auto kCellGridSeparableKernels =
+    make_separable_kernels<kCellsOnGrids>(std::make_integer_sequence<int, kMaxCellRadius + 1>{});
 
 CudaStatus invalid(const char *what, int line) { return CudaStatus{cudaErrorInvalidValue, what, __FILE__, line}; }
 
@@ -474,12 +508,19 @@ CudaStatus BilateralFilterGpu::upload_tables(const BilateralParams &s, cudaStrea
 
 CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameView &guide,
                                    ImageView<const float> depth_in, ImageView<float> depth_out, cudaStream_t stream) {
+  return run(params, guide, full_grid(depth_in), full_grid(depth_out), stream);
+}
+
+CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameView &guide,
+                                   DepthGrid<const float> depth_in, DepthGrid<float> depth_out, cudaStream_t stream) {
   if (guide.width != depth_in.width || guide.height != depth_in.height)
     return invalid("BilateralFilterGpu::run: guide and depth sizes differ", __LINE__);
   if (depth_out.width != depth_in.width || depth_out.height != depth_in.height)
     return invalid("BilateralFilterGpu::run: depth_in and depth_out sizes differ", __LINE__);
   if (depth_in.empty() || depth_out.empty()) return {};
-  if (static_cast<const void *>(depth_in.data) == static_cast<const void *>(depth_out.data))
+  if (!grid_fits(depth_in) || !grid_fits(depth_out))
+    return invalid("BilateralFilterGpu::run: a depth grid's cells do not fit its picture and shift", __LINE__);
+  if (static_cast<const void *>(depth_in.cells.data) == static_cast<const void *>(depth_out.cells.data))
     return invalid("BilateralFilterGpu::run: depth_in aliases depth_out", __LINE__);
   if (guide.plane[0] == nullptr) return invalid("BilateralFilterGpu::run: guide has no plane 0", __LINE__);
 
@@ -490,12 +531,17 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
       s.sigma_range != uploaded_.sigma_range)
     P3D_CUDA_TRY_STATUS(upload_tables(s, stream));
 
+  if (depth_out.shift != 0 && depth_out.shift != bilateral_grid_shift(sanitised, depth_in.width, depth_in.height))
+    return invalid("BilateralFilterGpu::run: depth_out's shift is neither 0 nor bilateral_grid_shift()", __LINE__);
   const Cells cells{bilateral_cells(depth_in.width, step), bilateral_cells(depth_in.height, step), step};
   const bool separable = s.mode == BilateralMode::Separable;
   if (step > 1 && s.radius > kMaxCellRadius)  // bilateral_coarse_params() rules it out
     return invalid("BilateralFilterGpu::run: grid radius beyond the cell kernels", __LINE__);
-  const KernelEntry &k = step > 1 ? (separable ? kCellSeparableKernels[s.radius] : kCellKernels[s.radius])
-                                  : (separable ? kSeparableKernels[s.radius] : kKernels[s.radius]);
+  const bool grids = depth_in.shift > 0 || depth_out.shift > 0;
+  const KernelEntry &k =
+      step == 1 ? (separable ? kSeparableKernels[s.radius] : kKernels[s.radius])
+      : grids   ? (separable ? kCellGridSeparableKernels[s.radius] : kCellGridKernels[s.radius])
+                : (separable ? kCellSeparableKernels[s.radius] : kCellKernels[s.radius]);
   const dim3 block(kBlockX, kBlockY);
   const dim3 grid((cells.w + kBlockX - 1) / kBlockX, (cells.h + kOutY - 1) / kOutY);
   P3D_CUDA_TRY(launch_chained(k.fn, grid, block, k.shared_bytes, stream, guide, depth_in, depth_out,

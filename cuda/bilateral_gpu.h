@@ -24,6 +24,15 @@ class BilateralFilterGpu {
   // (bilateral_sanitize). Empty images: no-op.
   CudaStatus run(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                  ImageView<float> depth_out, cudaStream_t stream);
+  // The same on grids (p3d_defs.h DepthGrid): depth_in at any shift (the
+  // estimator's block grid is read in place), depth_out at shift 0 (the
+  // full-size map) or at bilateral_grid_shift(), one value a cell of the
+  // coarse grid, which the filter then writes once instead of to each of
+  // the cell's pixels. Widths and heights are the picture's; another
+  // output shift, or cells that do not fit (grid_fits), give
+  // cudaErrorInvalidValue.
+  CudaStatus run(const BilateralParams &params, const FrameView &guide, DepthGrid<const float> depth_in,
+                 DepthGrid<float> depth_out, cudaStream_t stream);
 
  private:
   CudaStatus upload_tables(const BilateralParams &sanitised, cudaStream_t stream);

@@ -460,7 +460,8 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
                                    const uint32_t *__restrict__ region_counts, const uint32_t *__restrict__ region_max,
                                    const float *__restrict__ features,
                                    float *__restrict__ ref, float *__restrict__ block_depth, DepthDeviceState *state,
-                                   DepthParams params, bool have_state, int n, int bx, int B, int width, int height) {
+                                   DepthParams params, bool have_state, int n, int bx, int B, int width, int height,
+                                   ImageView<float> grid) {
   chained_kernel_start();
   const int i = blockIdx.x * kThreads + threadIdx.x;
   if (i >= n) return;
@@ -470,12 +471,20 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
     state->diff = diff;
     state->decision = static_cast<int>(decision);
   }
-  if (decision == TemporalDecision::Reuse) return;  // previous depth and reference stay
+  // grid (not empty): the output map held at the blocks' own cells, one
+  // value a block (estimate() with a DepthGrid of shift log2(B)), written
+  // here instead of expanded.
+  if (decision == TemporalDecision::Reuse) {  // previous depth and reference stay
+    if (!grid.empty()) grid.at(i % bx, i / bx) = block_depth[i];
+    return;
+  }
   const int label = labels[i];
   const uint32_t hq = block_hypothesis_q(params.hypothesis, i % bx, i / bx, B, width, height);
   const float fresh = block_depth_value(params, region_sums[label], region_counts[label], region_max[label], hq);
   const float prev = decision == TemporalDecision::Smooth ? block_depth[i] : 0.f;  // a cut never reads stale memory
-  block_depth[i] = temporal_output(decision, prev, fresh, params.temporal_smoothing);
+  const float d = temporal_output(decision, prev, fresh, params.temporal_smoothing);
+  block_depth[i] = d;
+  if (!grid.empty()) grid.at(i % bx, i / bx) = d;
   for (int c = 0; c < 3; ++c) ref[static_cast<size_t>(i) * 3 + c] = features[static_cast<size_t>(i) * 3 + c];
 }
 
@@ -530,11 +539,21 @@ void DepthEstimatorGpu::reset() { have_state_ = false; }
 
 CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, ImageView<float> depth,
                                        cudaStream_t stream) {
+  return estimate(params, frame, full_grid(depth), stream);
+}
+
+CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth,
+                                       cudaStream_t stream) {
   const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
   if (W <= 0 || H <= 0) {
     reset();
     return {};
   }
+  const bool block_grid = depth.shift > 0;  // the blocks' own cells: no expansion
+  if (block_grid && (!grid_fits(depth) || (1 << depth.shift) != B || depth.width != W || depth.height != H))
+    return CudaStatus{cudaErrorInvalidValue,
+                      "DepthEstimatorGpu::estimate: a depth grid of shift > 0 has the blocks' cells", __FILE__,
+                      __LINE__};
   const int bx = blocks_along(W, B), by = blocks_along(H, B);
   const int n = bx * by;
   const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;
@@ -597,15 +616,17 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   P3D_CUDA_TRY(launch_chained(block_depth_kernel, grid_for(n, kThreads), kThreads, 0, stream, labels_.as<int>(),
                               region_sums_.as<unsigned long long>(), region_counts_.as<uint32_t>(),
                               region_max_.as<uint32_t>(), features_.as<float>(), ref_features_.as<float>(),
-                              block_depth_.as<float>(), state, params, same_grid, n, bx, B, W, H));
+                              block_depth_.as<float>(), state, params, same_grid, n, bx, B, W, H,
+                              block_grid ? depth.cells : ImageView<float>{}));
 
-  // Step 6.
+  // Step 6, for a full-size map.
   const int ew = depth.width < bx * B ? depth.width : bx * B, eh = depth.height < by * B ? depth.height : by * B;
-  if (!depth.empty()) {
+  if (!block_grid && !depth.cells.empty()) {
     auto expand = B == 2 ? expand_kernel<2> : B == 4 ? expand_kernel<4> : B == 8 ? expand_kernel<8> : expand_kernel<0>;
     P3D_CUDA_TRY(launch_chained(expand,
                                 dim3(grid_for(grid_for(ew, kExpandPixels), kExpandX), grid_for(eh, kExpandY)),
-                                dim3(kExpandX, kExpandY), 0, stream, block_depth_.as<float>(), bx, B, ew, eh, depth));
+                                dim3(kExpandX, kExpandY), 0, stream, block_depth_.as<float>(), bx, B, ew, eh,
+                                depth.cells));
   }
 
   have_state_ = true;

@@ -20,7 +20,9 @@
 //             from the device sum (same input, same function, same answer),
 //             thread 0 records it in the device state; the reference features
 //             are updated unless the frame is reused
-//   expand    block depth -> full-resolution float depth (step 6)
+//   expand    block depth -> full-resolution float depth (step 6); into a
+//             grid at the blocks' own cells the depth kernel writes each
+//             block's value instead, and nothing is expanded
 // Buffers are DeviceBuffer members grown when the block grid grows.
 #pragma once
 
@@ -36,6 +38,12 @@ class DepthEstimatorGpu {
  public:
   // frame and depth are device memory; work is queued on `stream`.
   CudaStatus estimate(const DepthParams &params, const FrameView &frame, ImageView<float> depth, cudaStream_t stream);
+  // The same into a grid: shift 0 is the full-size map above; a shift > 0
+  // must be log2 of effective_block_size() (block_grid_shift()), and the
+  // grid then gets one value a block, written by the depth kernel, with no
+  // expansion (cudaErrorInvalidValue, nothing queued, for another shift or
+  // a grid not of the frame's size).
+  CudaStatus estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth, cudaStream_t stream);
   void reset();
 
   // For tests (synchronise the stream, copy to host).

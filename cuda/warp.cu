@@ -162,7 +162,8 @@ struct RowJob {
   FrameView row;  // the source row as RGBA bytes in shared memory (y = 0)
   EyeShifts eyes;
   float D, convergence;
-  const float *depth_row;
+  const float *depth_row;  // the cells of row y: pixel x's depth is depth_row[x >> depth_shift]
+  int depth_shift;
   typename Keys::Word *keys[2];
   unsigned *hole_bits[2];   // per chunk (kFillBits)
   unsigned *clean_bits[2];  // per chunk (BackgroundSmooth)
@@ -287,6 +288,22 @@ __device__ void scatter_source(typename Keys::Word *keys, const WarpSource &s, i
   for (int X = span.first; X <= span.last; ++X) atomicMax(keys + X, Keys::key(warp_hit_at(s, X, W), X));
 }
 
+// Source pixel x's depth as the warp reads it (warp_depth), from the
+// row's cells.
+template <class Keys>
+__device__ float source_depth(const RowJob<Keys> &j, int x) {
+  return warp_depth(j.depth_row[x >> j.depth_shift]);
+}
+
+// Source pixel x placed in an eye with shift factor `shift`: warp_source()
+// on the row's cells.
+template <class Keys>
+__device__ WarpSource place_source(const RowJob<Keys> &j, int x, float shift) {
+  const bool has_next = x + 1 < j.W;
+  const float d0 = source_depth(j, x);
+  return warp_place(x, d0, has_next ? source_depth(j, x + 1) : d0, has_next, shift, j.D, j.convergence);
+}
+
 // One eye's target X = base + lane of the row, from its final key: the
 // colour sampled at the key's u (sample_word on j.row, the load_rgba()
 // values of the source row, as the CPU's SourceRow), or a hole (counted in
@@ -354,7 +371,7 @@ __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
   zero_keys<kSharedKeys>(j.keys[eye], j.W);
   __syncthreads();
   for (int x = threadIdx.x; x < j.W; x += blockDim.x)
-    scatter_source<Keys>(j.keys[eye], warp_source(j.depth_row, x, j.W, shift, j.D, j.convergence), j.W);
+    scatter_source<Keys>(j.keys[eye], place_source(j, x, shift), j.W);
   __syncthreads();
 
   int holes = 0;
@@ -388,16 +405,10 @@ __device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
   const float s0 = j.eyes.shift[0], s1 = j.eyes.shift[1];
   for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
     const bool has_next = x + 1 < j.W;
-    const float d0 = warp_depth(j.depth_row[x]);
-    const float d1 = has_next ? warp_depth(j.depth_row[x + 1]) : d0;
-    scatter_source<Keys>(j.keys[0],
-                         warp_link(x, d0, warp_target(x, d0, s0, j.D, j.convergence), d1,
-                                   warp_target(x + 1, d1, s0, j.D, j.convergence), has_next),
-                         j.W);
-    scatter_source<Keys>(j.keys[1],
-                         warp_link(x, d0, warp_target(x, d0, s1, j.D, j.convergence), d1,
-                                   warp_target(x + 1, d1, s1, j.D, j.convergence), has_next),
-                         j.W);
+    const float d0 = source_depth(j, x);
+    const float d1 = has_next ? source_depth(j, x + 1) : d0;
+    scatter_source<Keys>(j.keys[0], warp_place(x, d0, d1, has_next, s0, j.D, j.convergence), j.W);
+    scatter_source<Keys>(j.keys[1], warp_place(x, d0, d1, has_next, s1, j.D, j.convergence), j.W);
   }
   __syncthreads();
 
@@ -432,7 +443,9 @@ __device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
 // common/warp.h). kSharedKeys: the z-buffer in shared memory, else in
 // global_keys (one W-key row per block). kBothEyes: both eyes at once, a
 // z-buffer each (render_both_eyes; shared keys only), else one after the
-// other through one z-buffer (render_eye).
+// other through one z-buffer (render_eye). depth: the picture's depth on
+// any grid (p3d_defs.h DepthGrid; the filter's coarse cells are read in
+// place, one shift a read).
 // At most 512 threads, as many blocks per SM as it holds threads for
 // (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at most 32
 // registers a thread; 3 on the other Ampere to Blackwell parts, 40; 2 on
@@ -449,7 +462,7 @@ __device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
 constexpr int kRowThreadsMax = 512;
 template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes>
 __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
-    warp_row_kernel(FrameView src, YuvToRgb m, ImageView<const float> depth, FrameView out, EyeShifts eyes, float D,
+    warp_row_kernel(FrameView src, YuvToRgb m, DepthGrid<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
                     unsigned long long *total, bool words) {
   chained_kernel_start();
@@ -466,7 +479,8 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
   j.eyes = eyes;
   j.D = D;
   j.convergence = convergence;
-  j.depth_row = depth.row(j.y);
+  j.depth_row = depth.cell_row(j.y);
+  j.depth_shift = depth.shift;
   auto *shared_keys = reinterpret_cast<typename Keys::Word *>(smem);
   j.keys[0] = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(j.y) * j.W;
   uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? shared_keys + kEyeArrays * j.W : shared_keys);
@@ -806,7 +820,7 @@ enum class KeyPlace { NarrowSharedPerEye, NarrowShared, WideShared, WideGlobal }
 struct RowLaunch {
   FrameView src;
   YuvToRgb m;
-  ImageView<const float> depth;
+  DepthGrid<const float> depth;
   FrameView out;
   EyeShifts eyes;
   float D, convergence;
@@ -979,6 +993,12 @@ CudaStatus invalid_frames() {
 
 CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                                    ImageView<const float> depth, const FrameView &out, cudaStream_t stream,
+                                   long long *holes_out) {
+  return render(params, src, m, full_grid(depth), out, stream, holes_out);
+}
+
+CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                                   DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
                                    long long *holes_out) {
   if (!warp_frames_fit(src, depth, out)) return invalid_frames();
   const WarpParams p = warp_sanitize(params);

@@ -70,6 +70,10 @@ class WarpRendererGpu {
   // nothing is launched.
   CudaStatus render(const WarpParams &params, const FrameView &src, const YuvToRgb &m, ImageView<const float> depth,
                     const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr);
+  // The same with the depth on a grid (p3d_defs.h DepthGrid): the filter's
+  // coarse cells, read in place; the result is the full-size map's.
+  CudaStatus render(const WarpParams &params, const FrameView &src, const YuvToRgb &m, DepthGrid<const float> depth,
+                    const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr);
 
  private:
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);

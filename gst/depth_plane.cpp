@@ -16,10 +16,11 @@ DepthPlane::~DepthPlane() {
 }
 
 ImageView<float> DepthPlane::view() {
+  const int w = grid_cells(width, shift), h = grid_cells(height, shift);
 #if HAVE_CUDA
-  if (on_device) return ImageView<float>{device.as<float>(), width, height, device.pitch()};
+  if (on_device) return ImageView<float>{device.as<float>(), w, h, device.pitch()};
 #endif
-  return ImageView<float>{host.data(), width, height, static_cast<size_t>(width) * sizeof(float)};
+  return ImageView<float>{host.data(), w, h, static_cast<size_t>(w) * sizeof(float)};
 }
 
 DepthPlanePool::DepthPlanePool() : state_(std::make_shared<State>()) {}
@@ -30,18 +31,19 @@ void DepthPlanePool::clear() {
 }
 
 #if HAVE_CUDA
-DepthPlanePtr DepthPlanePool::acquire(int width, int height, GstCudaContext *context, std::string *error) {
+DepthPlanePtr DepthPlanePool::acquire(int width, int height, int shift, GstCudaContext *context, std::string *error) {
 #else
-DepthPlanePtr DepthPlanePool::acquire(int width, int height, std::nullptr_t context, std::string *error) {
+DepthPlanePtr DepthPlanePool::acquire(int width, int height, int shift, std::nullptr_t context, std::string *error) {
 #endif
   const bool device = context != nullptr;
+  if (!device) shift = 0;  // host planes are full-size
   std::unique_ptr<DepthPlane> plane;
   {
     std::lock_guard<std::mutex> g(state_->lock);
     auto &idle = state_->idle;
     for (auto it = idle.begin(); it != idle.end(); ++it) {
       DepthPlane &p = **it;
-      bool same = p.width == width && p.height == height && p.on_device == device;
+      bool same = p.width == width && p.height == height && p.shift == shift && p.on_device == device;
 #if HAVE_CUDA
       same = same && p.context == context;
 #endif
@@ -58,11 +60,13 @@ DepthPlanePtr DepthPlanePool::acquire(int width, int height, std::nullptr_t cont
     plane = std::make_unique<DepthPlane>();
     plane->width = width;
     plane->height = height;
+    plane->shift = shift;
     plane->on_device = device;
     if (device) {
 #if HAVE_CUDA
       plane->context = static_cast<GstCudaContext *>(gst_object_ref(context));
-      const CudaStatus st = plane->device.ensure_2d(static_cast<size_t>(width) * sizeof(float), height);
+      const CudaStatus st = plane->device.ensure_2d(static_cast<size_t>(grid_cells(width, shift)) * sizeof(float),
+                                                    grid_cells(height, shift));
       if (!st.ok()) {
         if (error) *error = st.message();
         return nullptr;

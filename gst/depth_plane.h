@@ -24,8 +24,14 @@
 namespace p3d::gst {
 
 struct DepthPlane {
-  int width = 0;
+  int width = 0;   // the picture's size
   int height = 0;
+  // The plane holds one value a cell of 2^shift x 2^shift pixels
+  // (p3d_defs.h DepthGrid): the GPU stages hand on the estimator's block
+  // depths and the filter's coarse-grid results as they are, not copied to
+  // every pixel. Host planes are always full-size (shift 0): the CPU
+  // stages, the staged GPU path and the meta's scaling read them per pixel.
+  int shift = 0;
   bool on_device = false;
   std::vector<float> host;  // row-major, pitch = width * 4, when !on_device
 #if HAVE_CUDA
@@ -33,7 +39,10 @@ struct DepthPlane {
   GstCudaContext *context = nullptr;  // owning context (ref held)
 #endif
   ~DepthPlane();
+  // The stored values: grid_cells(width, shift) x grid_cells(height, shift),
+  // the full-size map at shift 0.
   ImageView<float> view();
+  DepthGrid<float> grid() { return DepthGrid<float>{view(), width, height, shift}; }
 };
 
 using DepthPlanePtr = std::shared_ptr<DepthPlane>;
@@ -43,13 +52,14 @@ using DepthPlanePtr = std::shared_ptr<DepthPlane>;
 class DepthPlanePool {
  public:
   DepthPlanePool();
-  // A plane of width x height; on the device of `context` when given (the
-  // context must be pushed by the caller), else in host memory. Returns
-  // null on allocation failure (*error says why).
+  // A plane of a width x height picture holding a value a 2^shift x
+  // 2^shift cell (shift > 0 only on the device); on the device of `context`
+  // when given (the context must be pushed by the caller), else in host
+  // memory. Returns null on allocation failure (*error says why).
 #if HAVE_CUDA
-  DepthPlanePtr acquire(int width, int height, GstCudaContext *context, std::string *error);
+  DepthPlanePtr acquire(int width, int height, int shift, GstCudaContext *context, std::string *error);
 #else
-  DepthPlanePtr acquire(int width, int height, std::nullptr_t, std::string *error);
+  DepthPlanePtr acquire(int width, int height, int shift, std::nullptr_t, std::string *error);
 #endif
   void clear();  // drop the idle planes
 

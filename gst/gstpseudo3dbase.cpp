@@ -89,15 +89,17 @@ CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging:
   return read ? staging.upload(slot, frame, dev, self->gpu->stream()) : staging.allocate(slot, frame, dev);
 }
 
-CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, ImageView<float> depth,
-                        bool read, ImageView<float> *dev) {
+CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, DepthGrid<float> depth,
+                        bool read, DepthGrid<float> *dev) {
   if (path == GST_PSEUDO3D_PATH_GPU) {
     *dev = depth;
     return {};
   }
+  // A host plane: full-size (shift 0), staged as it is.
   GpuStaging &staging = self->gpu->staging();
-  return read ? staging.upload_depth(slot, as_const(depth), dev, self->gpu->stream())
-              : staging.allocate_depth(slot, depth.width, depth.height, dev);
+  *dev = depth;
+  return read ? staging.upload_depth(slot, as_const(depth.cells), &dev->cells, self->gpu->stream())
+              : staging.allocate_depth(slot, depth.cells.width, depth.cells.height, &dev->cells);
 }
 
 CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host) {
@@ -105,10 +107,10 @@ CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const Fram
   return self->gpu->staging().download(dev, host, self->gpu->stream());
 }
 
-CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, ImageView<const float> dev,
-                         ImageView<float> host) {
+CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, DepthGrid<const float> dev,
+                         DepthGrid<float> host) {
   if (path != GST_PSEUDO3D_PATH_STAGED) return {};
-  return self->gpu->staging().download_depth(dev, host, self->gpu->stream());
+  return self->gpu->staging().download_depth(dev.cells, host.cells, self->gpu->stream());
 }
 
 }  // namespace p3d::gst
@@ -680,14 +682,16 @@ p3d::gst::DepthPlane *gst_pseudo3d_base_frame_depth(GstPseudo3DBase *self, GstBu
 }
 
 p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::gst::DepthPlanePool &pool,
-                                                    GstPseudo3DPath path, int width, int height) {
+                                                    GstPseudo3DPath path, int width, int height, int shift) {
   std::string error;
 #if HAVE_CUDA
+  const bool device = path == GST_PSEUDO3D_PATH_GPU;
   p3d::gst::DepthPlanePtr plane =
-      pool.acquire(width, height, path == GST_PSEUDO3D_PATH_GPU ? self->gpu->context() : nullptr, &error);
+      pool.acquire(width, height, device ? shift : 0, device ? self->gpu->context() : nullptr, &error);
 #else
   (void)path;
-  p3d::gst::DepthPlanePtr plane = pool.acquire(width, height, nullptr, &error);
+  (void)shift;
+  p3d::gst::DepthPlanePtr plane = pool.acquire(width, height, 0, nullptr, &error);
 #endif
   if (!plane)
     GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,

@@ -124,9 +124,11 @@ p3d::gst::DepthPlane *gst_pseudo3d_base_frame_depth(GstPseudo3DBase *self, GstBu
 gboolean gst_pseudo3d_base_depth_fits(GstPseudo3DBase *self, const p3d::gst::DepthPlane *plane, GstPseudo3DPath path,
                                       int width, int height);
 /* A depth plane for a frame of `path` from `pool`; posts an element error
- * with the size on failure and returns null. */
+ * with the size on failure and returns null. shift: on GST_PSEUDO3D_PATH_GPU
+ * the plane holds a value a 2^shift x 2^shift cell (depth_plane.h); host
+ * planes are full-size whatever it says. */
 p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::gst::DepthPlanePool &pool,
-                                                    GstPseudo3DPath path, int width, int height);
+                                                    GstPseudo3DPath path, int width, int height, int shift = 0);
 
 /* Caps helpers for transform_geometry: value * num / den for an int, an int
  * range or a list of them (clamped to 1..G_MAXINT); caps holding one copy
@@ -168,12 +170,12 @@ namespace p3d::gst {
  * GST_PSEUDO3D_PATH_GPU, a staging buffer on GST_PSEUDO3D_PATH_STAGED. */
 CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, const FrameView &frame,
                         bool read, FrameView *dev);
-CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, ImageView<float> depth,
-                        bool read, ImageView<float> *dev);
+CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, DepthGrid<float> depth,
+                        bool read, DepthGrid<float> *dev);
 /* After the kernels: a staged result goes back to host memory (no-op on the GPU path). */
 CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host);
-CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, ImageView<const float> dev,
-                         ImageView<float> host);
+CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, DepthGrid<const float> dev,
+                         DepthGrid<float> host);
 
 /* The GPU part of one frame, the same for every stage: `launch` queues the
  * work on the element's stream (returning the first failure), then the

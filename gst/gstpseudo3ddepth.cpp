@@ -155,18 +155,21 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   if (gst_pseudo3d_base_depth_fits(base, pseudo3d_buffer_get_depth(buf), path, view.width, view.height))
     return GST_FLOW_OK;
   const p3d::DepthParams params = frame_params(self);
-  p3d::gst::DepthPlanePtr plane = gst_pseudo3d_base_new_depth(base, self->state->pool, path, view.width, view.height);
+  // On CUDA memory the plane holds a value a block (no full-size copy;
+  // depth_plane.h) where the block is a power of two.
+  p3d::gst::DepthPlanePtr plane = gst_pseudo3d_base_new_depth(base, self->state->pool, path, view.width, view.height,
+                                                              p3d::block_grid_shift(params, view.width, view.height));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path != GST_PSEUDO3D_PATH_CPU) {
     using p3d::gst::GpuStaging;
     const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&]() -> p3d::CudaStatus {
       p3d::FrameView f;
-      p3d::ImageView<float> d;
+      p3d::DepthGrid<float> d;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, view, true, &f));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, plane->view(), false, &d));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, plane->grid(), false, &d));
       P3D_CUDA_TRY_STATUS(self->state->gpu.estimate(params, f, d, base->gpu->stream()));
-      return p3d::gst::depth_to_host(base, path, p3d::as_const(d), plane->view());
+      return p3d::gst::depth_to_host(base, path, p3d::as_const(d), plane->grid());
     });
     if (ret != GST_FLOW_OK) return ret;
   } else

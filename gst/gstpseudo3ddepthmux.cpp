@@ -162,7 +162,7 @@ static p3d::gst::DepthPlanePtr depth_plane_for(GstPseudo3DDepthMux *self, GstBuf
   src.pitch = GST_VIDEO_FRAME_PLANE_STRIDE(&df, 0);
   const int bits = GST_VIDEO_FRAME_FORMAT(&df) == GST_VIDEO_FORMAT_GRAY8 ? 8 : 16;
   std::string error;
-  p3d::gst::DepthPlanePtr host = st.pool.acquire(w, h, nullptr, &error);
+  p3d::gst::DepthPlanePtr host = st.pool.acquire(w, h, 0, nullptr, &error);
   if (host) p3d::import_depth_cpu(params, src, bits, host->view());
   gst_video_frame_unmap(&df);
   if (!host) {
@@ -174,7 +174,7 @@ static p3d::gst::DepthPlanePtr depth_plane_for(GstPseudo3DDepthMux *self, GstBuf
   if (cuda) {
     // The GPU stages read the depth where the frame is.
     p3d::gst::CudaContextScope scope(cuda);
-    plane = scope.ok() ? st.pool.acquire(w, h, cuda, &error) : nullptr;
+    plane = scope.ok() ? st.pool.acquire(w, h, 0, cuda, &error) : nullptr;
     if (!scope.ok()) error = "could not make the frame's CUDA context current";
     if (plane) {
       const p3d::ImageView<float> d = plane->view(), hv = host->view();

@@ -109,23 +109,33 @@ static gboolean host_depth(GstPseudo3DDepthOut *self, p3d::gst::DepthPlane *plan
     return TRUE;
   }
 #if HAVE_CUDA
+  // A compact plane (depth_plane.h) comes back as its cells, behind the
+  // full-size map in the same vector, and is copied out to the pixels.
   const size_t row = static_cast<size_t>(plane->width) * sizeof(float);
-  self->staging->resize(static_cast<size_t>(plane->width) * plane->height);
+  const size_t pixels = static_cast<size_t>(plane->width) * plane->height;
+  const p3d::ImageView<float> d = plane->view();  // its cells
+  const size_t cells_row = static_cast<size_t>(d.width) * sizeof(float);
+  self->staging->resize(pixels + (plane->shift > 0 ? static_cast<size_t>(d.width) * d.height : 0));
+  float *landing = plane->shift > 0 ? self->staging->data() + pixels : self->staging->data();
   p3d::gst::CudaContextScope scope(plane->context);
-  const p3d::ImageView<float> d = plane->view();
   if (!scope.ok()) {
     GST_ELEMENT_ERROR(self, RESOURCE, READ, ("Could not read the depth map back from the GPU"),
                       ("could not make the depth's CUDA context current"));
     return FALSE;
   }
   const cudaError_t err =
-      cudaMemcpy2D(self->staging->data(), row, d.data, d.pitch, row, plane->height, cudaMemcpyDeviceToHost);
+      cudaMemcpy2D(landing, cells_row, d.data, d.pitch, cells_row, d.height, cudaMemcpyDeviceToHost);
   if (err != cudaSuccess) {
     GST_ELEMENT_ERROR(self, RESOURCE, READ, ("Could not read the depth map back from the GPU"),
                       ("cudaMemcpy2D: %s", cudaGetErrorName(err)));
     return FALSE;
   }
-  *out = p3d::ImageView<const float>{self->staging->data(), plane->width, plane->height, row};
+  const p3d::ImageView<float> full{self->staging->data(), plane->width, plane->height, row};
+  if (plane->shift > 0)
+    p3d::expand_grid(p3d::DepthGrid<const float>{p3d::ImageView<const float>{landing, d.width, d.height, cells_row},
+                                                  plane->width, plane->height, plane->shift},
+                     full);
+  *out = p3d::as_const(full);
   return TRUE;
 #else
   GST_ELEMENT_ERROR(self, STREAM, FAILED, ("The depth map is in GPU memory, but this build has no CUDA"), (nullptr));

@@ -56,19 +56,23 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   GST_OBJECT_LOCK(self);
   const p3d::BilateralParams params = self->params;
   GST_OBJECT_UNLOCK(self);
-  p3d::gst::DepthPlanePtr out = gst_pseudo3d_base_new_depth(base, self->state->pool, path, depth->width, depth->height);
+  // On CUDA memory the output holds a value a cell of the coarse grid (no
+  // full-size copy; depth_plane.h) where the grid step is a power of two.
+  const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), depth->width, depth->height);
+  p3d::gst::DepthPlanePtr out =
+      gst_pseudo3d_base_new_depth(base, self->state->pool, path, depth->width, depth->height, shift);
   if (!out) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path != GST_PSEUDO3D_PATH_CPU) {
     using p3d::gst::GpuStaging;
     const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&]() -> p3d::CudaStatus {
       p3d::FrameView g;
-      p3d::ImageView<float> din, dout;
+      p3d::DepthGrid<float> din, dout;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, guide, true, &g));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->view(), true, &din));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, out->view(), false, &dout));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->grid(), true, &din));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, out->grid(), false, &dout));
       P3D_CUDA_TRY_STATUS(self->state->gpu.run(params, g, p3d::as_const(din), dout, base->gpu->stream()));
-      return p3d::gst::depth_to_host(base, path, p3d::as_const(dout), out->view());
+      return p3d::gst::depth_to_host(base, path, p3d::as_const(dout), out->grid());
     });
     if (ret != GST_FLOW_OK) return ret;
   } else

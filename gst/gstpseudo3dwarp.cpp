@@ -92,9 +92,9 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
     using p3d::gst::GpuStaging;
     return p3d::gst::run_gpu(base, "rendering the views", [&]() -> p3d::CudaStatus {
       p3d::FrameView fin, fout;
-      p3d::ImageView<float> d;
+      p3d::DepthGrid<float> d;
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->view(), true, &d));
+      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->grid(), true, &d));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
       P3D_CUDA_TRY_STATUS(self->state->gpu.render(params, fin, yuv, p3d::as_const(d), fout, base->gpu->stream()));
       return p3d::gst::frame_to_host(base, path, fout, dst);

@@ -72,13 +72,15 @@ struct DevFrame {
   }
 };
 
+// A width x height picture's depth on a grid of 2^shift-pixel cells.
 struct DevDepth {
   DeviceBuffer buf;
-  ImageView<float> view;
+  DepthGrid<float> view;
 
-  CudaStatus allocate(int width, int height) {
-    P3D_CUDA_TRY_STATUS(buf.ensure_2d(static_cast<size_t>(width) * sizeof(float), static_cast<size_t>(height)));
-    view = ImageView<float>{buf.as<float>(), width, height, buf.pitch()};
+  CudaStatus allocate(int width, int height, int shift) {
+    const int w = grid_cells(width, shift), h = grid_cells(height, shift);
+    P3D_CUDA_TRY_STATUS(buf.ensure_2d(static_cast<size_t>(w) * sizeof(float), static_cast<size_t>(h)));
+    view = DepthGrid<float>{ImageView<float>{buf.as<float>(), w, h, buf.pitch()}, width, height, shift};
     return {};
   }
 };
@@ -156,6 +158,9 @@ struct SizeBench {
   CudaStatus allocate(const StageParams &p, const std::vector<HostFrame> &host) {
     const int w = host[0].width(), h = host[0].height();
     const PixelFormat sf = stereo_format(host[0].format());
+    // The grids the elements hand on (gst/depth_plane.h), or full-size maps.
+    const int depth_shift = p.depth_grids ? block_grid_shift(p.depth, w, h) : 0;
+    const int filtered_shift = p.depth_grids ? bilateral_grid_shift(bilateral_sanitize(p.filter), w, h) : 0;
     int pw = 0, ph = 0;
     pack_size(p.pack.layout, w, h, &pw, &ph);
     frames.resize(host.size());
@@ -165,11 +170,11 @@ struct SizeBench {
     for (size_t k = 0; k < host.size(); ++k) {
       P3D_CUDA_TRY_STATUS(frames[k].upload(host[k]));
       P3D_CUDA_TRY_STATUS(stereo[k].allocate(sf, 2 * w, h));
-      P3D_CUDA_TRY_STATUS(depth[k].allocate(w, h));
-      P3D_CUDA_TRY_STATUS(filtered[k].allocate(w, h));
+      P3D_CUDA_TRY_STATUS(depth[k].allocate(w, h, depth_shift));
+      P3D_CUDA_TRY_STATUS(filtered[k].allocate(w, h, filtered_shift));
     }
-    P3D_CUDA_TRY_STATUS(out_depth.allocate(w, h));
-    P3D_CUDA_TRY_STATUS(out_filtered.allocate(w, h));
+    P3D_CUDA_TRY_STATUS(out_depth.allocate(w, h, depth_shift));
+    P3D_CUDA_TRY_STATUS(out_filtered.allocate(w, h, filtered_shift));
     P3D_CUDA_TRY_STATUS(out_stereo.allocate(sf, 2 * w, h));
     P3D_CUDA_TRY_STATUS(out_packed.allocate(sf, pw, ph));
     P3D_CUDA_TRY_STATUS(out_rgba.allocate(PixelFormat::RGBA, w, h));

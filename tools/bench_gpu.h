@@ -23,6 +23,11 @@ struct StageParams {
   WarpParams warp;
   PackParams pack;
   YuvToRgb yuv;
+  // GPU: the stages hand depth on as the elements do on CUDA memory, on
+  // grids (p3d_defs.h DepthGrid: the estimator's blocks, the filter's
+  // cells); false: as full-size maps, the layout before 2026-11-26, for
+  // same-binary A/B runs (--depth-handoff full).
+  bool depth_grids = true;
 };
 
 // Stages in the order they are timed; "convert" is load_rgba -> RGBA, the

@@ -113,6 +113,8 @@ void print_usage(std::ostream &os) {
         "                          2 at 4K, 4 at 8K), 1 every pixel, up to 8\n"
         "  --max-disparity P       percent of width (default 3)\n"
         "  --fill F                background-smooth (default), background, neighbor-average, none\n"
+        "  --depth-handoff H       GPU depth between the stages: grid (default, as the elements on\n"
+        "                          CUDA memory: block and cell values) or full (full-size maps)\n"
         "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
         "  --warmup N              GPU warm-up iterations (default 10; CPU always 1)\n"
         "  --cpu-threads N         OpenCV worker threads for the CPU timings\n"
@@ -176,6 +178,9 @@ Options parse_args(int argc, char **argv) {
       o.params.warp.max_disparity = parse_float(a, v);
     } else if (a == "--fill") {
       o.params.warp.fill = parse_name(a, v, kFills);
+    } else if (a == "--depth-handoff") {
+      if (v != "grid" && v != "full") usage_error("--depth-handoff wants grid or full");
+      o.params.depth_grids = v == "grid";
     } else if (a == "--iterations") {
       o.iterations = parse_int(a, v, 1, 100000);
     } else if (a == "--warmup") {
@@ -270,7 +275,18 @@ int filter_step(const BilateralParams &filter, Size s) {
   return bilateral_effective_scale(bilateral_sanitize(filter), s.width, s.height);
 }
 
-double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageParams &p) {
+// Bytes of one depth value a cell of 2^shift pixels, over the picture.
+double grid_bytes(Size s, int shift) {
+  return 4.0 * grid_cells(s.width, shift) * grid_cells(s.height, shift);
+}
+
+// gpu: the GPU's depth handoff (StageParams::depth_grids); the CPU stages
+// hand full-size maps on.
+double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageParams &p, bool gpu) {
+  const bool grids = gpu && p.depth_grids;
+  const double depth_map = grid_bytes(s, grids ? block_grid_shift(p.depth, s.width, s.height) : 0);
+  const double filtered_map =
+      grid_bytes(s, grids ? bilateral_grid_shift(bilateral_sanitize(p.filter), s.width, s.height) : 0);
   const PackParams &pack = p.pack;
   const double wh = static_cast<double>(s.width) * s.height;
   const double frame = frame_bytes(f, s.width, s.height);
@@ -278,16 +294,17 @@ double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageP
   int pw = 0, ph = 0;
   pack_size(pack.layout, s.width, s.height, &pw, &ph);
   const double packed = 4.0 * pw * ph;
-  if (stage == "convert" || stage == "depth") return frame + 4 * wh;
+  if (stage == "convert") return frame + 4 * wh;
+  if (stage == "depth") return frame + depth_map;
   if (stage == "filter") {
     const int step = filter_step(p.filter, s);
-    return 4 * wh / (step * step) + luma + 4 * wh;
+    return 4 * wh / (step * step) + luma + filtered_map;
   }
-  if (stage == "warp") return frame + 4 * wh + 8 * wh;
+  if (stage == "warp") return frame + filtered_map + 8 * wh;
   if (stage == "pack") return 8 * wh + packed;
   if (stage == "chain") {
     double sum = 0;
-    for (const char *st : {"depth", "filter", "warp", "pack"}) sum += stage_bytes(st, f, s, p);
+    for (const char *st : {"depth", "filter", "warp", "pack"}) sum += stage_bytes(st, f, s, p, gpu);
     return sum;
   }
   return 0;
@@ -350,6 +367,7 @@ class Reporter {
     j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kLayouts, o_.params.pack.layout));
     j.str("filter_mode", name_of(kFilterModes, o_.params.filter.mode)).str("fill", name_of(kFills, o_.params.warp.fill));
     j.integer("filter_scale", filter_step(o_.params.filter, m.size));
+    if (m.device == "gpu") j.str("depth_handoff", o_.params.depth_grids ? "grid" : "full");
     j.integer("iterations", m.iterations);
     j.num("median_ms", m.st.median_ms).num("min_ms", m.st.min_ms).num("fps", m.fps());
     j.integer("bytes", std::llround(m.bytes)).num("gbps", m.gbps());
@@ -459,7 +477,7 @@ void bench_cpu(const Options &o, Size s, std::vector<HostFrame> frames, Reporter
     m.size = s;
     m.iterations = iterations;
     m.st = stats_of(time_cpu([&](int i) { b.run_stage(stage, o.params, i); }, o.cpu_warmup, iterations));
-    m.bytes = stage_bytes(stage, o.format, s, o.params);
+    m.bytes = stage_bytes(stage, o.format, s, o.params, false);
     rep.emit(m);
   }
 }
@@ -510,7 +528,7 @@ void bench_gpu(const Options &o, const GpuContext &g, Size s, const std::vector<
     m.size = s;
     m.iterations = plan.iterations;
     m.st = stats_of(t.ms);
-    m.bytes = stage_bytes(t.stage, o.format, s, o.params);
+    m.bytes = stage_bytes(t.stage, o.format, s, o.params, true);
     m.share = g.copy_gbps > 0 ? m.gbps() / g.copy_gbps : 0;
     rep.emit(m);
   }

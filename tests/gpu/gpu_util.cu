@@ -65,27 +65,40 @@ HostFrame DeviceFrame::download() const {
   return h;
 }
 
-DeviceDepth::DeviceDepth(int width, int height) {
-  const CudaStatus st = buf_.ensure_2d(static_cast<size_t>(width) * sizeof(float) + 128, height);
+DeviceDepth::DeviceDepth(int width, int height, int shift) {
+  const int w = grid_cells(width, shift), h = grid_cells(height, shift);
+  const CudaStatus st = buf_.ensure_2d(static_cast<size_t>(w) * sizeof(float) + 128, h);
   EXPECT_TRUE(st.ok()) << st.message();
-  view_ = ImageView<float>{buf_.as<float>(), width, height, buf_.pitch()};
+  grid_ = DepthGrid<float>{ImageView<float>{buf_.as<float>(), w, h, buf_.pitch()}, width, height, shift};
   poison();
 }
 
 void DeviceDepth::poison() { cudaMemset(buf_.get(), 0xFF, buf_.size()); }  // 0xFFFFFFFF is a NaN
 
-DeviceDepth DeviceDepth::upload(const cv::Mat &depth) {
-  DeviceDepth d(depth.cols, depth.rows);
-  EXPECT_EQ(cudaSuccess, cudaMemcpy2D(d.view_.data, d.view_.pitch, depth.data, depth.step, depth.cols * sizeof(float),
-                                      depth.rows, cudaMemcpyHostToDevice));
+DeviceDepth DeviceDepth::upload(const cv::Mat &depth) { return upload_grid(depth, 0); }
+
+DeviceDepth DeviceDepth::upload_grid(const cv::Mat &depth, int shift) {
+  DeviceDepth d(depth.cols, depth.rows, shift);
+  const ImageView<float> &c = d.grid_.cells;
+  cv::Mat cells(c.height, c.width, CV_32FC1);
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) cells.at<float>(y, x) = depth.at<float>(y << shift, x << shift);
+  EXPECT_EQ(cudaSuccess, cudaMemcpy2D(c.data, c.pitch, cells.data, cells.step, c.width * sizeof(float), c.height,
+                                      cudaMemcpyHostToDevice));
   return d;
 }
 
 cv::Mat DeviceDepth::download() const {
-  cv::Mat m(view_.height, view_.width, CV_32FC1);
+  const ImageView<float> &c = grid_.cells;
+  cv::Mat cells(c.height, c.width, CV_32FC1);
   EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
-  EXPECT_EQ(cudaSuccess, cudaMemcpy2D(m.data, m.step, view_.data, view_.pitch, view_.width * sizeof(float),
-                                      view_.height, cudaMemcpyDeviceToHost));
+  EXPECT_EQ(cudaSuccess, cudaMemcpy2D(cells.data, cells.step, c.data, c.pitch, c.width * sizeof(float), c.height,
+                                      cudaMemcpyDeviceToHost));
+  cv::Mat m(grid_.height, grid_.width, CV_32FC1);
+  expand_grid(DepthGrid<const float>{ImageView<const float>{reinterpret_cast<const float *>(cells.data), c.width,
+                                                             c.height, cells.step},
+                                     grid_.width, grid_.height, grid_.shift},
+              ImageView<float>{reinterpret_cast<float *>(m.data), m.cols, m.rows, m.step});
   return m;
 }
 

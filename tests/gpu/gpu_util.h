@@ -33,18 +33,25 @@ class DeviceFrame {
   FrameView view_;
 };
 
-// A float image in device memory (pitched).
+// A float image in device memory (pitched): the depth of a width x height
+// picture on a grid of 2^shift-pixel cells (p3d_defs.h DepthGrid; shift 0:
+// a full-size map).
 class DeviceDepth {
  public:
-  DeviceDepth(int width, int height);
+  DeviceDepth(int width, int height, int shift = 0);
   static DeviceDepth upload(const cv::Mat &depth);  // CV_32FC1
+  // The cells of a full-size map at a shift: each cell takes its first
+  // pixel's value (what a cell-constant map holds everywhere in the cell).
+  static DeviceDepth upload_grid(const cv::Mat &depth, int shift);
+  // Full-size (a grid copied out to its pixels: expand_grid).
   cv::Mat download() const;
-  ImageView<float> view() const { return view_; }
+  ImageView<float> view() const { return grid_.cells; }  // the cells: the full-size map at shift 0
+  DepthGrid<float> grid() const { return grid_; }
   void poison();  // fill with NaN, so unwritten pixels show
 
  private:
   DeviceBuffer buf_;
-  ImageView<float> view_;
+  DepthGrid<float> grid_;
 };
 
 // Asserts inside: fails the current test on a CUDA error.

@@ -68,22 +68,38 @@ cv::Mat run_cpu(const BilateralParams &p, const HostFrame &guide, const cv::Mat 
   return out;
 }
 
+// in_shift: the depth handed in on a grid of 2^in_shift-pixel cells (the
+// estimator's blocks; `depth` must be constant over them, as
+// cell_constant() makes it); grid_out: the output on the filter's own cell
+// grid (bilateral_grid_shift()), as the elements hand them on on CUDA
+// memory. The result comes back full-size either way.
 cv::Mat run_gpu_on(BilateralFilterGpu &filter, const BilateralParams &p, const DeviceFrame &g, const cv::Mat &depth,
-                   cudaStream_t stream = nullptr) {
-  const DeviceDepth in = DeviceDepth::upload(depth);
-  DeviceDepth out(depth.cols, depth.rows);  // NaN-poisoned
-  test::check_cuda(filter.run(p, g.view(), as_const(in.view()), out.view(), stream));
+                   cudaStream_t stream = nullptr, int in_shift = 0, bool grid_out = false) {
+  const DeviceDepth in = DeviceDepth::upload_grid(depth, in_shift);
+  const int out_shift = grid_out ? bilateral_grid_shift(bilateral_sanitize(p), depth.cols, depth.rows) : 0;
+  DeviceDepth out(depth.cols, depth.rows, out_shift);  // NaN-poisoned
+  test::check_cuda(filter.run(p, g.view(), as_const(in.grid()), out.grid(), stream));
   return out.download();
+}
+
+// Each pixel takes the value of its 2^shift-pixel cell's first pixel.
+cv::Mat cell_constant(const cv::Mat &depth, int shift) {
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x)
+      out.at<float>(y, x) = depth.at<float>(y >> shift << shift, x >> shift << shift);
+  return out;
 }
 
 // GPU vs CPU on one input, the guide in device memory as `device_guide`
 // holds it; `what` names the case in failures.
 void expect_identical_on(BilateralFilterGpu &filter, const BilateralParams &p, const HostFrame &guide,
-                         const DeviceFrame &device_guide, const cv::Mat &depth, const std::string &what) {
+                         const DeviceFrame &device_guide, const cv::Mat &depth, const std::string &what,
+                         int in_shift = 0, bool grid_out = false) {
   SCOPED_TRACE(what + " " + test::format_name(guide.format()) + " " + std::to_string(depth.cols) + "x" +
                std::to_string(depth.rows) + " r=" + std::to_string(p.radius) +
                " ss=" + std::to_string(p.sigma_space) + " sr=" + std::to_string(p.sigma_range));
-  const cv::Mat gpu = run_gpu_on(filter, p, device_guide, depth);
+  const cv::Mat gpu = run_gpu_on(filter, p, device_guide, depth, nullptr, in_shift, grid_out);
   const cv::Mat cpu = run_cpu(p, guide, depth);
   const Result r = compare_exact(gpu, cpu);
   EXPECT_EQ(r.nonfinite, 0);
@@ -286,6 +302,50 @@ TEST_P(GpuBilateralFormats, CoarseGridOddSizesAndSteps) {
                            random_guide(GetParam(), sz.width, sz.height, seed + r),
                            random_depth(sz.width, sz.height, seed + 7 * r + scale),
                            "scale " + std::to_string(scale) + " mode " + std::to_string(static_cast<int>(mode)));
+}
+
+// The depth in on the estimator's block grid and the output on the filter's
+// cell grid (what the elements hand on on CUDA memory): the CPU's result
+// on the same maps at full size. Every step (3 has no grid: its output is
+// full-size), blocks finer and coarser than the cells, partial cells and
+// blocks at the edges, both modes.
+TEST_P(GpuBilateralFormats, DepthGridsInAndOut) {
+  BilateralFilterGpu filter;
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  for (const cv::Size sz : {cv::Size(1, 1), cv::Size(3, 2), cv::Size(33, 17), cv::Size(161, 83), cv::Size(256, 128)})
+    for (const int in_shift : {1, 2, 3}) {
+      const HostFrame guide = random_guide(GetParam(), sz.width, sz.height, seed + in_shift);
+      const DeviceFrame device_guide = DeviceFrame::upload(guide);
+      const cv::Mat depth = cell_constant(random_depth(sz.width, sz.height, seed + 11 * in_shift), in_shift);
+      for (const int scale : {1, 2, 3, 4, 8})
+        for (const int r : {1, 5})
+          for (const BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable})
+            for (const bool grid_out : {false, true})
+              expect_identical_on(filter, with_scale({r, 0.6f * r + 0.5f, 15.f}, mode, scale), guide, device_guide,
+                                  depth,
+                                  "blocks of " + std::to_string(1 << in_shift) + " scale " + std::to_string(scale) +
+                                      " mode " + std::to_string(static_cast<int>(mode)) +
+                                      (grid_out ? " grid out" : " full out"),
+                                  in_shift, grid_out);
+    }
+}
+
+// An output grid of another shift than the filter's cells is refused
+// before anything is queued.
+TEST(GpuBilateral, DepthGridOfAnotherShiftIsRefused) {
+  const DeviceFrame g(PixelFormat::RGBA, 64, 32);
+  const DeviceDepth in(64, 32, 2), out1(64, 32, 1), out2(64, 32, 2);
+  BilateralFilterGpu filter;
+  const BilateralParams at4 = with_scale({5, 3.f, 12.f}, BilateralMode::Separable, 4);
+  EXPECT_EQ(filter.run(at4, g.view(), as_const(in.grid()), out1.grid(), nullptr).code, cudaErrorInvalidValue);
+  const BilateralParams at1 = with_scale({5, 3.f, 12.f}, BilateralMode::Separable, 1);
+  EXPECT_EQ(filter.run(at1, g.view(), as_const(in.grid()), out2.grid(), nullptr).code, cudaErrorInvalidValue);
+  DepthGrid<const float> short_in = as_const(in.grid());
+  short_in.cells.height -= 1;
+  EXPECT_EQ(filter.run(at4, g.view(), short_in, out2.grid(), nullptr).code, cudaErrorInvalidValue);
+  EXPECT_TRUE(filter.run(at4, g.view(), as_const(in.grid()), out2.grid(), nullptr).ok());
+  EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
 }
 
 // Guides whose rows do not start 2- or 4-byte aligned (odd plane offsets

@@ -58,9 +58,15 @@ Result run_cpu(DepthEstimatorCpu &est, const DepthParams &p, const HostFrame &f)
   return r;
 }
 
+// block_grid: the estimate goes into the grid of the blocks' own cells
+// (block_grid_shift(), what pseudo3ddepth hands on on CUDA memory) and is
+// copied out to the pixels here, so every comparison with the CPU's
+// full-size map holds for it too.
 class GpuRunner {
  public:
-  GpuRunner() { EXPECT_EQ(cudaSuccess, cudaStreamCreate(&stream_)); }
+  explicit GpuRunner(bool block_grid = false) : block_grid_(block_grid) {
+    EXPECT_EQ(cudaSuccess, cudaStreamCreate(&stream_));
+  }
   ~GpuRunner() { cudaStreamDestroy(stream_); }
   GpuRunner(const GpuRunner &) = delete;
   GpuRunner &operator=(const GpuRunner &) = delete;
@@ -68,9 +74,9 @@ class GpuRunner {
   Result run(const DepthParams &p, const HostFrame &f) { return run_on(p, DeviceFrame::upload(f)); }
   Result run_on(const DepthParams &p, const DeviceFrame &frame) {
     Result r;
-    DeviceDepth depth(frame.view().width, frame.view().height);
-    depth.poison();
-    check_cuda(est_.estimate(p, frame.view(), depth.view(), stream_));
+    const int w = frame.view().width, h = frame.view().height;
+    DeviceDepth depth(w, h, block_grid_ ? block_grid_shift(p, w, h) : 0);  // NaN-poisoned
+    check_cuda(est_.estimate(p, frame.view(), depth.grid(), stream_));
     check_cuda(est_.download_labels(r.labels, stream_));
     check_cuda(est_.download_block_depth(r.block_depth, stream_));
     check_cuda(est_.download_smoothed_features(r.smoothed, stream_));
@@ -85,6 +91,7 @@ class GpuRunner {
  private:
   DepthEstimatorGpu est_;
   cudaStream_t stream_ = nullptr;
+  bool block_grid_;
 };
 
 void expect_same(const Result &cpu, const Result &gpu, const std::string &what) {
@@ -115,11 +122,14 @@ void expect_same(const Result &cpu, const Result &gpu, const std::string &what) 
   EXPECT_EQ(cpu.diff, gpu.diff) << what;
 }
 
-// One fresh CPU and GPU estimator on one frame.
+// One fresh CPU and GPU estimator on one frame, the GPU's map full-size
+// and on the blocks' grid.
 void compare_one(const DepthParams &p, const HostFrame &f, const std::string &what) {
   DepthEstimatorCpu cpu;
-  GpuRunner gpu;
-  expect_same(run_cpu(cpu, p, f), gpu.run(p, f), what);
+  GpuRunner gpu, gpu_grid(true);
+  const Result c = run_cpu(cpu, p, f);
+  expect_same(c, gpu.run(p, f), what);
+  expect_same(c, gpu_grid.run(p, f), what + " (block grid)");
 }
 
 std::string describe(const HostFrame &f, const DepthParams &p) {
@@ -254,6 +264,33 @@ TEST(GpuDepth, OddSizes) {
 // plane offset or stride, as a frame mapped from another allocator may
 // have) take the features kernel's byte loads; aligned ones (every other
 // test) its 32-bit loads. Both must give the CPU's result.
+// A grid whose cells are not the blocks (another shift, a block that is no
+// power of two, cells of another size) is refused before anything is
+// queued; the blocks' own grid is taken.
+TEST(GpuDepth, BlockGridOfAnotherShiftIsRefused) {
+  HostFrame f(PixelFormat::NV12, 64, 48, 2);
+  f.fill_random(fresh_seed());
+  const DeviceFrame df = DeviceFrame::upload(f);
+  DepthEstimatorGpu est;
+  DepthParams p;
+  p.block_size = 4;
+  const DeviceDepth two(64, 48, 1), four(64, 48, 2), eight(64, 48, 3);
+  EXPECT_EQ(est.estimate(p, df.view(), two.grid(), nullptr).code, cudaErrorInvalidValue);
+  EXPECT_EQ(est.estimate(p, df.view(), eight.grid(), nullptr).code, cudaErrorInvalidValue);
+  DepthGrid<float> narrow = four.grid();
+  narrow.cells.width -= 1;
+  EXPECT_EQ(est.estimate(p, df.view(), narrow, nullptr).code, cudaErrorInvalidValue);
+  DepthGrid<float> other_picture = four.grid();
+  other_picture.width = 60;
+  EXPECT_EQ(est.estimate(p, df.view(), other_picture, nullptr).code, cudaErrorInvalidValue);
+  p.block_size = 6;
+  EXPECT_EQ(block_grid_shift(p, 64, 48), 0);
+  EXPECT_EQ(est.estimate(p, df.view(), two.grid(), nullptr).code, cudaErrorInvalidValue);
+  p.block_size = 4;
+  EXPECT_TRUE(est.estimate(p, df.view(), four.grid(), nullptr).ok());
+  EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
+}
+
 TEST(GpuDepth, UnalignedRowsMatchCpu) {
   std::mt19937 rng(fresh_seed());
   // Plane offset and extra stride bytes; {0, 6} leaves NV12's rows aligned.
@@ -345,7 +382,7 @@ TEST(GpuDepth, TemporalSequenceMatches) {
   };
   for (PixelFormat fmt : kAllFormats) {
     DepthEstimatorCpu cpu;
-    GpuRunner gpu;
+    GpuRunner gpu, gpu_grid(true);  // the grid's Reuse frames write the kept block depths
     for (size_t i = 0; i < steps.size(); ++i) {
       const HostFrame f = HostFrame::from_bgr(steps[i].picture, fmt, 2);
       DepthParams p;
@@ -354,6 +391,7 @@ TEST(GpuDepth, TemporalSequenceMatches) {
       const Result c = run_cpu(cpu, p, f), g = gpu.run(p, f);
       EXPECT_EQ(c.decision, steps[i].expected) << what << " (cpu diff " << c.diff << ")";
       expect_same(c, g, what);
+      expect_same(c, gpu_grid.run(p, f), what + " (block grid)");
     }
   }
 }

@@ -143,6 +143,31 @@ INSTANTIATE_TEST_SUITE_P(Formats, GpuChain,
                                   "x" + std::to_string(info.param.h);
                          });
 
+// On CUDA memory the stages hand depth on as grids (gst/depth_plane.h):
+// the estimator's blocks where they are a power of two, the filter's cells
+// where its step is. Block sizes and filter steps with and without grids,
+// finer and coarser than each other, against the CPU chain.
+TEST(GpuChainGrids, MatchTheCpuChain) {
+  std::vector<HostFrame> frames;
+  for (uint32_t s = 0; s < 3; ++s) frames.push_back(picture(PixelFormat::I420, 642, 362, 500 + s));
+  const int blocks[] = {2, 8, 6}, scales[] = {1, 2, 4, 3};
+  for (const int b : blocks)
+    for (const int scale : scales) {
+      std::string launch[2];
+      for (int gpu = 0; gpu < 2; ++gpu) {
+        const std::string p = gpu ? " processing=gpu" : " processing=cpu";
+        launch[gpu] = std::string(gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") +
+                      "pseudo3ddepth block-size=" + std::to_string(b) + p + " ! pseudo3dfilter scale=" +
+                      std::to_string(scale) + p + " ! pseudo3dwarp max-disparity=4" + p +
+                      " ! pseudo3dpack layout=anaglyph" + p + (gpu ? " ! cudadownload" : "") +
+                      " ! capsfilter caps=video/x-raw,format=RGBA";
+      }
+      const auto gpu = run_chain(launch[1], PixelFormat::I420, 642, 362, frames);
+      const auto cpu = run_chain(launch[0], PixelFormat::I420, 642, 362, frames);
+      expect_same(gpu, cpu, "block " + std::to_string(b) + " scale " + std::to_string(scale));
+    }
+}
+
 // Real data: Aloe through the whole chain, GPU against CPU.
 TEST(GpuChainReal, AloeMatchesCpu) {
   const cv::Mat aloe = load_data_image("aloeL.jpg");
@@ -379,21 +404,25 @@ TEST(GpuDepthMux, CudaFramesMatchTheCpuChain) {
 
 // pseudo3ddepthout reads a device depth back: the grey video of the GPU
 // chain is the CPU chain's, 16 and 8 bits.
+// On CUDA memory the depth reaches pseudo3ddepthout full-size (filter at
+// step 1), on the filter's cell grid (scale 4) or on the estimator's block
+// grid (no filter): each reads back as the CPU chain's full-size map.
 TEST(GpuDepthOut, DeviceDepthReadsBackAsTheCpuChain) {
-  for (const char *format : {"GRAY16_LE", "GRAY8"}) {
-    std::vector<cv::Mat> out[2];
-    for (int gpu = 0; gpu < 2; ++gpu) {
-      const std::string p = gpu ? "gpu" : "cpu";
-      const std::string launch =
-          std::string("videotestsrc num-buffers=3 pattern=ball ! video/x-raw,format=NV12,width=320,height=240 ! ") +
-          (gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") + "pseudo3ddepth processing=" + p +
-          " ! pseudo3dfilter processing=" + p + " ! pseudo3ddepthout ! video/x-raw,format=" + format +
-          " ! videoconvert ! video/x-raw,format=RGBA ! appsink name=out sync=false";
-      out[gpu] = play_and_pull(launch);
+  for (const char *filter : {" ! pseudo3dfilter", " ! pseudo3dfilter scale=4", ""})
+    for (const char *format : {"GRAY16_LE", "GRAY8"}) {
+      std::vector<cv::Mat> out[2];
+      for (int gpu = 0; gpu < 2; ++gpu) {
+        const std::string p = gpu ? "gpu" : "cpu";
+        const std::string launch =
+            std::string("videotestsrc num-buffers=3 pattern=ball ! video/x-raw,format=NV12,width=320,height=240 ! ") +
+            (gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") + "pseudo3ddepth processing=" + p + filter +
+            (*filter ? " processing=" + p : std::string()) + " ! pseudo3ddepthout ! video/x-raw,format=" + format +
+            " ! videoconvert ! video/x-raw,format=RGBA ! appsink name=out sync=false";
+        out[gpu] = play_and_pull(launch);
+      }
+      ASSERT_EQ(out[0].size(), 3u) << format << filter;
+      expect_same(out[1], out[0], std::string("depthout ") + format + filter);
     }
-    ASSERT_EQ(out[0].size(), 3u) << format;
-    expect_same(out[1], out[0], std::string("depthout ") + format);
-  }
 }
 
 // cudaupload on one CUDA context, the stages given another (both device 0,

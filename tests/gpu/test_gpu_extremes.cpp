@@ -344,6 +344,24 @@ class GpuExtreme : public ::testing::Test {
     EXPECT_EQ(c_holes, g_holes) << "warp stage";
     EXPECT_EQ(frame_mismatch(c_warped, d_warped.download()), "") << "warp stage";
     EXPECT_EQ(frame_mismatch(c_packed, d_packed.download()), "") << "pack stage";
+
+    // Again with the depth handed on as the elements do on CUDA memory: on
+    // the estimator's block grid and the filter's cell grid (p3d_defs.h
+    // DepthGrid; full-size where a block or step is no power of two).
+    DeviceDepth grid_depth(w, h, block_grid_shift(cp.depth, w, h)),
+        grid_filtered(w, h, bilateral_grid_shift(bilateral_sanitize(cp.filter), w, h));
+    const DeviceFrame grid_warped(of, 2 * w, h);  // 0xA5
+    long long grid_holes = -7;
+    depth_.reset();
+    check_cuda(depth_.estimate(cp.depth, d_src.view(), grid_depth.grid(), stream_));
+    check_cuda(filter_.run(cp.filter, d_src.view(), as_const(grid_depth.grid()), grid_filtered.grid(), stream_));
+    check_cuda(warp_.render(cp.warp, d_src.view(), YuvToRgb(), as_const(grid_filtered.grid()), grid_warped.view(),
+                            stream_, &grid_holes));
+    sync();
+    EXPECT_EQ(depth_mismatch(c_depth, grid_depth.download()), "") << "depth stage, block grid";
+    EXPECT_EQ(depth_mismatch(c_filtered, grid_filtered.download()), "") << "filter stage, cell grid";
+    EXPECT_EQ(c_holes, grid_holes) << "warp stage, cell grid";
+    EXPECT_EQ(frame_mismatch(c_warped, grid_warped.download()), "") << "warp stage, cell grid";
   }
 
   DepthEstimatorGpu depth_;

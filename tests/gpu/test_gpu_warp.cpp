@@ -95,8 +95,11 @@ class GpuWarpTest : public ::testing::Test {
   }
 
   // Renders on both sides and asserts identical bytes and hole counts.
+  // depth_shift: the GPU reads the depth on a grid of 2^depth_shift-pixel
+  // cells (the filter's cells, as the elements hand them on on CUDA
+  // memory); `depth` must then be constant over them (cell_constant).
   void expect_same(const WarpParams &p, const HostFrame &src, const cv::Mat &depth,
-                   PixelFormat out_format = PixelFormat::RGBA, const YuvToRgb &m = YuvToRgb()) {
+                   PixelFormat out_format = PixelFormat::RGBA, const YuvToRgb &m = YuvToRgb(), int depth_shift = 0) {
     const int w = src.width(), h = src.height();
     SCOPED_TRACE(describe(p, src.format(), out_format, w, h));
     HostFrame cpu(out_format, 2 * w, h, 12);
@@ -105,10 +108,10 @@ class GpuWarpTest : public ::testing::Test {
     ASSERT_GE(cpu_holes, 0);
 
     const test::DeviceFrame dsrc = test::DeviceFrame::upload(src);
-    const test::DeviceDepth ddepth = test::DeviceDepth::upload(depth);
+    const test::DeviceDepth ddepth = test::DeviceDepth::upload_grid(depth, depth_shift);
     const test::DeviceFrame dout(out_format, 2 * w, h);  // poisoned
     long long gpu_holes = -7;
-    test::check_cuda(renderer_.render(p, dsrc.view(), m, as_const(ddepth.view()), dout.view(), stream_, &gpu_holes));
+    test::check_cuda(renderer_.render(p, dsrc.view(), m, as_const(ddepth.grid()), dout.view(), stream_, &gpu_holes));
     ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
     EXPECT_EQ(gpu_holes, cpu_holes);
     EXPECT_EQ(first_difference(cpu, dout.download()), "");
@@ -135,6 +138,57 @@ TEST_F(GpuWarp, AllModesRandomDepth) {
     for (StereoView v : kAllViews)
       for (HoleFill f : kAllFills) expect_same(warp_params(1.f + 24.f * u01(rng), u01(rng), v, f), src, depth);
   }
+}
+
+// Each pixel takes the value of its 2^shift-pixel cell's first pixel.
+cv::Mat cell_constant(const cv::Mat &depth, int shift) {
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x)
+      out.at<float>(y, x) = depth.at<float>(y >> shift << shift, x >> shift << shift);
+  return out;
+}
+
+// The depth read in place on the filter's cell grid (what the elements
+// hand on on CUDA memory): the CPU's render of the same map at full size,
+// every fill and view, cells cut at the right and bottom edges, and cells
+// out of range or NaN (the warp's clamping happens per read, on both
+// sides).
+TEST_F(GpuWarp, DepthOnCellGrids) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u01(0.f, 1.f);
+  const int sizes[][2] = {{257, 131}, {33, 17}, {3, 2}};
+  for (const int shift : {1, 2, 3})
+    for (const auto &s : sizes)
+      for (DepthKind kind : {DepthKind::Smooth, DepthKind::Noise}) {
+        SCOPED_TRACE(::testing::Message() << "cells of " << (1 << shift) << " " << kind_name(kind));
+        HostFrame src(PixelFormat::NV12, s[0], s[1], 6);
+        src.fill_random(rng());
+        cv::Mat depth = random_depth(s[0], s[1], kind, rng());
+        const float specials[] = {NAN, -0.5f, 1.5f, 0.f, 1.f};
+        for (const float v : specials) depth.at<float>(rng() % s[1], rng() % s[0]) = v;
+        depth = cell_constant(depth, shift);
+        for (StereoView v : kAllViews)
+          for (HoleFill f : kAllFills)
+            expect_same(warp_params(1.f + 24.f * u01(rng), u01(rng), v, f), src, depth, PixelFormat::RGBA, YuvToRgb(),
+                        shift);
+      }
+}
+
+// A depth grid whose cells do not fit its picture is refused.
+TEST_F(GpuWarp, DepthGridThatDoesNotFitIsRefused) {
+  const test::DeviceFrame src(PixelFormat::NV12, 64, 32), out(PixelFormat::RGBA, 128, 32);
+  const test::DeviceDepth cells(64, 32, 2);
+  DepthGrid<const float> g = as_const(cells.grid());
+  g.cells.width -= 1;
+  EXPECT_EQ(renderer_.render(WarpParams(), src.view(), YuvToRgb(), g, out.view(), stream_).code, cudaErrorInvalidValue);
+  g = as_const(cells.grid());
+  g.shift = 1;
+  EXPECT_EQ(renderer_.render(WarpParams(), src.view(), YuvToRgb(), g, out.view(), stream_).code, cudaErrorInvalidValue);
+  EXPECT_TRUE(renderer_.render(WarpParams(), src.view(), YuvToRgb(), as_const(cells.grid()), out.view(), stream_).ok());
+  EXPECT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
 }
 
 // Every source format into every packed output format; BT.709 full range for
