@@ -23,20 +23,23 @@ unsigned grid_for(long long items, int per_block) { return static_cast<unsigned>
 // ---------------------------------------------------------------- step 1 ---
 // A CTA covers `per_cta` blocks side by side (per_cta * B <= 256 pixel
 // columns, one thread a column) and `rows_per_cta` block rows
-// (feature_rows_per_cta: 16 pixel rows, 32 at B = 8). First every thread sums its column over each of the
-// CTA's block rows in integers, all of its loads independent of each other
-// so that they are in flight together (one loop per block row, each waiting
-// for its loads, took 37 us at 4K under Nsight Compute, 29 us this way);
-// then one thread per block adds the block's B column sums, so every block
-// sum is formed by one thread, exactly. kB > 0: B is kB, known at compile
+// (feature_rows_per_cta: 8 up to B = 8). First every thread sums its
+// column over each of the CTA's block rows in integers, all of its loads
+// independent of each other so that they are in flight together (one
+// loop per block row, each waiting for its loads, took 37 us at 4K under
+// Nsight Compute, 29 us this way); then one thread per block adds the
+// block's B column sums, so every block sum is formed by one thread,
+// exactly. kB > 0: B is kB, known at compile
 // time (the automatic sizes); 0: any B.
-constexpr int kFeatureRowsMax = 8;  // block rows a CTA holds: feature_rows_per_cta(2)
+constexpr int kFeatureRowsMax = 8;  // block rows a CTA holds: feature_rows_per_cta(B) at most
 
-// Block rows a CTA of the features kernel sums: 16 pixel rows where B
-// divides 16, but 32 at B = 8 (the automatic size at 8K), where 16 rows
-// left half the threads without a four-column item on 4:2:0 frames
-// (kThreads / 4 items a block row, two block rows).
-__host__ __device__ constexpr int feature_rows_per_cta(int B) { return B >= 16 ? 1 : B == 8 ? 4 : 16 / B; }
+// Block rows a CTA of the features kernel sums: 8 up to B = 8 (16, 32 and
+// 64 pixel rows at the automatic 2, 4 and 8), else 1. With 16 pixel rows a
+// CTA at B = 4 and 8, a thread summed a single four-column item or none
+// (8K: half the threads idle); more rows give every thread loads in
+// flight: depth 4K 0.0651 -> 0.0637 ms, 8K 0.1055 -> 0.0919 (32 rows) ->
+// 0.0881 (64) on an H200 (docs/benchmarks.md).
+__host__ __device__ constexpr int feature_rows_per_cta(int B) { return B <= 8 ? 8 : 1; }
 
 // Column x's sums over the kB rows from y0 (clipped to the frame) of a
 // 4:2:0 frame (NV12, I420), load_native3()'s values added up: with kB even
@@ -579,8 +582,9 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   auto *state = state_.as<DepthDeviceState>();
   P3D_CUDA_TRY(zero_chained(state, sizeof(DepthDeviceState), stream));
 
-  // Step 1 (+ the difference sum of step 5). 16 or 32 pixel rows a CTA, so
-  // that small blocks do not make one atomic per handful of pixels.
+  // Step 1 (+ the difference sum of step 5). 8 block rows a CTA (up to
+  // B = 8), so that small blocks do not make one atomic per handful of
+  // pixels and every thread has loads in flight.
   const int per_cta = kThreads / B, rows_per_cta = feature_rows_per_cta(B);
   auto features_kernel = B == 2 ? block_features_kernel<2>
                          : B == 4 ? block_features_kernel<4>
