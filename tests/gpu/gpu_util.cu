@@ -75,6 +75,14 @@ DeviceDepth::DeviceDepth(int width, int height, int shift) {
 
 void DeviceDepth::poison() { cudaMemset(buf_.get(), 0xFF, buf_.size()); }  // 0xFFFFFFFF is a NaN
 
+cv::Mat cell_constant(const cv::Mat &depth, int shift) {
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x)
+      out.at<float>(y, x) = depth.at<float>(y >> shift << shift, x >> shift << shift);
+  return out;
+}
+
 DeviceDepth DeviceDepth::upload(const cv::Mat &depth) { return upload_grid(depth, 0); }
 
 DeviceDepth DeviceDepth::upload_grid(const cv::Mat &depth, int shift) {

@@ -54,6 +54,11 @@ class DeviceDepth {
   DepthGrid<float> grid_;
 };
 
+// A full-size map made constant over cells of 2^shift pixels: each pixel
+// takes its cell's first pixel's value (what a stage hands on on a grid,
+// DeviceDepth::upload_grid, holds).
+cv::Mat cell_constant(const cv::Mat &depth, int shift);
+
 // Asserts inside: fails the current test on a CUDA error.
 void check_cuda(const CudaStatus &st);
 

@@ -25,6 +25,7 @@ namespace {
 
 using test::DeviceDepth;
 using test::DeviceFrame;
+using test::cell_constant;
 
 uint32_t fresh_seed() { return std::random_device{}(); }
 
@@ -82,14 +83,6 @@ cv::Mat run_gpu_on(BilateralFilterGpu &filter, const BilateralParams &p, const D
   return out.download();
 }
 
-// Each pixel takes the value of its 2^shift-pixel cell's first pixel.
-cv::Mat cell_constant(const cv::Mat &depth, int shift) {
-  cv::Mat out(depth.size(), CV_32FC1);
-  for (int y = 0; y < depth.rows; ++y)
-    for (int x = 0; x < depth.cols; ++x)
-      out.at<float>(y, x) = depth.at<float>(y >> shift << shift, x >> shift << shift);
-  return out;
-}
 
 // GPU vs CPU on one input, the guide in device memory as `device_guide`
 // holds it; `what` names the case in failures.

@@ -29,6 +29,7 @@ using test::kAllFills;
 using test::kAllViews;
 using test::kAllFormats;
 using test::kPackedFormats;
+using test::cell_constant;
 
 constexpr uint8_t kCpuPoison = 0x5A;  // DeviceFrame poisons with 0xA5: unwritten bytes differ
 
@@ -138,15 +139,6 @@ TEST_F(GpuWarp, AllModesRandomDepth) {
     for (StereoView v : kAllViews)
       for (HoleFill f : kAllFills) expect_same(warp_params(1.f + 24.f * u01(rng), u01(rng), v, f), src, depth);
   }
-}
-
-// Each pixel takes the value of its 2^shift-pixel cell's first pixel.
-cv::Mat cell_constant(const cv::Mat &depth, int shift) {
-  cv::Mat out(depth.size(), CV_32FC1);
-  for (int y = 0; y < depth.rows; ++y)
-    for (int x = 0; x < depth.cols; ++x)
-      out.at<float>(y, x) = depth.at<float>(y >> shift << shift, x >> shift << shift);
-  return out;
 }
 
 // The depth read in place on the filter's cell grid (what the elements
