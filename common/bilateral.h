@@ -131,8 +131,9 @@ P3D_HD int bilateral_effective_scale(const BilateralParams &sanitised, int width
 }
 
 // The grid (p3d_defs.h DepthGrid) that holds the filter's output with one
-// value a cell: log2 s where the step s is a power of two above 1 (every
-// automatic step), else 0, the full-size map.
+// value a cell: log2 s where the step s is a power of two above 1 (the
+// automatic 2 and 4 at 4K and 8K; not 3 at 3240 rows), else 0, the
+// full-size map.
 P3D_HD int bilateral_grid_shift(const BilateralParams &sanitised, int width, int height) {
   const int s = step_shift(bilateral_effective_scale(sanitised, width, height));
   return s > 0 ? s : 0;

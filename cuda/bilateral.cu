@@ -92,10 +92,11 @@ struct Cells {
 };
 
 // The grid a kernel instance filters, and how its depth comes in and goes
-// out (a template parameter, so that the instances that run the full-size
-// maps carry none of the grids' run-time shifts: in the step-2 kernel they
-// cost 40 bytes of spills and the 4K filter 0.0390 -> 0.0455 ms on an
-// H200 on full-size maps):
+// out (a template parameter, so that the cell instances that run
+// full-size maps carry none of the grids' run-time shifts: in the step-2
+// kernel they cost 40 bytes of spills and the 4K filter 0.0390 -> 0.0455
+// ms on an H200 on full-size maps; the step-1 instances read through the
+// shift whatever the map, at no measured cost on grids):
 //  * kPixelGrid: the pixels (step 1); the depth read through its grid's
 //    shift (the estimator's blocks), the output full-size;
 //  * kCellsFullSize: the cells of a step s > 1, the depth read from a
@@ -527,12 +528,12 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
   const BilateralParams sanitised = bilateral_sanitize(params);
   const int step = bilateral_effective_scale(sanitised, depth_in.width, depth_in.height);
   const BilateralParams s = bilateral_coarse_params(sanitised, step);  // what the grid's filter runs
+  if (depth_out.shift != 0 && depth_out.shift != bilateral_grid_shift(sanitised, depth_in.width, depth_in.height))
+    return invalid("BilateralFilterGpu::run: depth_out's shift is neither 0 nor bilateral_grid_shift()", __LINE__);
   if (s.radius != uploaded_.radius || s.sigma_space != uploaded_.sigma_space ||
       s.sigma_range != uploaded_.sigma_range)
     P3D_CUDA_TRY_STATUS(upload_tables(s, stream));
 
-  if (depth_out.shift != 0 && depth_out.shift != bilateral_grid_shift(sanitised, depth_in.width, depth_in.height))
-    return invalid("BilateralFilterGpu::run: depth_out's shift is neither 0 nor bilateral_grid_shift()", __LINE__);
   const Cells cells{bilateral_cells(depth_in.width, step), bilateral_cells(depth_in.height, step), step};
   const bool separable = s.mode == BilateralMode::Separable;
   if (step > 1 && s.radius > kMaxCellRadius)  // bilateral_coarse_params() rules it out

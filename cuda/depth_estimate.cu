@@ -559,10 +559,15 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
     return {};
   }
   const bool block_grid = depth.shift > 0;  // the blocks' own cells: no expansion
-  if (block_grid && (!grid_fits(depth) || (1 << depth.shift) != B || depth.width != W || depth.height != H))
+  // A full-size map is expanded within its own size (as an ImageView always
+  // was); a grid must have the cells of its picture, and a block grid the
+  // frame's blocks.
+  if ((!depth.cells.empty() && !grid_fits(depth)) ||
+      (block_grid && (depth.cells.empty() || (1 << depth.shift) != B || depth.width != W || depth.height != H)))
     return CudaStatus{cudaErrorInvalidValue,
-                      "DepthEstimatorGpu::estimate: a depth grid of shift > 0 has the blocks' cells", __FILE__,
-                      __LINE__};
+                      "DepthEstimatorGpu::estimate: the depth grid's cells fit it, and one of shift > 0 is the "
+                      "frame's blocks",
+                      __FILE__, __LINE__};
   const int bx = blocks_along(W, B), by = blocks_along(H, B);
   const int n = bx * by;
   const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;

@@ -685,18 +685,19 @@ p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::
                                                     GstPseudo3DPath path, int width, int height, int shift) {
   std::string error;
 #if HAVE_CUDA
-  const bool device = path == GST_PSEUDO3D_PATH_GPU;
+  if (path != GST_PSEUDO3D_PATH_GPU) shift = 0;  // host planes are full-size
   p3d::gst::DepthPlanePtr plane =
-      pool.acquire(width, height, device ? shift : 0, device ? self->gpu->context() : nullptr, &error);
+      pool.acquire(width, height, shift, path == GST_PSEUDO3D_PATH_GPU ? self->gpu->context() : nullptr, &error);
 #else
   (void)path;
-  (void)shift;
+  shift = 0;
   p3d::gst::DepthPlanePtr plane = pool.acquire(width, height, 0, nullptr, &error);
 #endif
   if (!plane)
     GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,
                       ("Could not allocate a %dx%d depth map (%" G_GSIZE_FORMAT " bytes)", width, height,
-                       static_cast<gsize>(width) * height * sizeof(float)),
+                       static_cast<gsize>(p3d::grid_cells(width, shift)) * p3d::grid_cells(height, shift) *
+                           sizeof(float)),
                       ("%s", error.c_str()));
   return plane;
 }

@@ -296,9 +296,9 @@ double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageP
   const double packed = 4.0 * pw * ph;
   if (stage == "convert") return frame + 4 * wh;
   if (stage == "depth") return frame + depth_map;
-  if (stage == "filter") {
+  if (stage == "filter") {  // one depth a cell, from the block grid where it is coarser
     const int step = filter_step(p.filter, s);
-    return 4 * wh / (step * step) + luma + filtered_map;
+    return std::min(4 * wh / (step * step), depth_map) + luma + filtered_map;
   }
   if (stage == "warp") return frame + filtered_map + 8 * wh;
   if (stage == "pack") return 8 * wh + packed;

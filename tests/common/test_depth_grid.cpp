@@ -37,15 +37,17 @@ TEST(DepthGrid, StepShiftIsLog2OfPowersOfTwoOnly) {
 TEST(DepthGrid, ExpandCopiesEachCellToItsPixels) {
   for (int shift : {0, 1, 2, 3}) {
     const int w = 13, h = 6, cw = grid_cells(w, shift), ch = grid_cells(h, shift);
-    std::vector<float> cells(static_cast<size_t>(cw) * ch);
-    for (size_t i = 0; i < cells.size(); ++i) cells[i] = static_cast<float>(i) + 0.5f;
-    const DepthGrid<const float> g{ImageView<const float>{cells.data(), cw, ch, cw * sizeof(float)}, w, h, shift};
+    const int pitch = cw + 3;  // padded rows: a pitch taken for the width shows
+    std::vector<float> cells(static_cast<size_t>(pitch) * ch, NAN);
+    for (int y = 0; y < ch; ++y)
+      for (int x = 0; x < cw; ++x) cells[static_cast<size_t>(y) * pitch + x] = static_cast<float>(y * cw + x) + 0.5f;
+    const DepthGrid<const float> g{ImageView<const float>{cells.data(), cw, ch, pitch * sizeof(float)}, w, h, shift};
     EXPECT_TRUE(grid_fits(g));
     std::vector<float> full(static_cast<size_t>(w) * h, NAN);
     expand_grid(g, ImageView<float>{full.data(), w, h, w * sizeof(float)});
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        const float want = cells[static_cast<size_t>(y >> shift) * cw + (x >> shift)];
+        const float want = static_cast<float>((y >> shift) * cw + (x >> shift)) + 0.5f;
         EXPECT_EQ(full[static_cast<size_t>(y) * w + x], want) << "shift " << shift << " at " << x << "," << y;
         EXPECT_EQ(g.at(x, y), want);
       }
@@ -61,13 +63,15 @@ TEST(DepthGrid, FitsOnlyWithTheCellsOfItsPictureAndShift) {
   EXPECT_FALSE(grid_fits(DepthGrid<const float>{one, 4, 4, -1}));
 }
 
-// The estimator hands its blocks on where they are a power of two (every
-// automatic size), the filter its cells where its step is one above 1.
+// The estimator hands its blocks on where they are a power of two (the
+// automatic sizes at 1080p, 4K and 8K, not at 1620 rows), the filter its
+// cells where its step is one above 1.
 TEST(DepthGrid, StagesHandOnAtTheirPowerOfTwoSteps) {
   DepthParams d;
   EXPECT_EQ(block_grid_shift(d, 1920, 1080), 1);  // automatic block 2
   EXPECT_EQ(block_grid_shift(d, 3840, 2160), 2);  // 4
   EXPECT_EQ(block_grid_shift(d, 7680, 4320), 3);  // 8
+  EXPECT_EQ(block_grid_shift(d, 2880, 1620), 0);  // 3: full-size
   d.block_size = 6;
   EXPECT_EQ(block_grid_shift(d, 3840, 2160), 0);
   d.block_size = 1000;  // clamped to 64

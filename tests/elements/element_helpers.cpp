@@ -102,12 +102,30 @@ cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps) {
 
 // The plugin is a loaded module, not linked into the tests: find the meta
 // by its registered API name and read the plane's fields directly.
-cv::Mat buffer_depth(GstBuffer *buf) {
+static const p3d::gst::DepthPlane *meta_plane(GstBuffer *buf) {
   const GType api = g_type_from_name("Pseudo3DDepthMetaAPI");
-  if (!api) return cv::Mat();
+  if (!api) return nullptr;
   auto *meta = reinterpret_cast<Pseudo3DDepthMeta *>(gst_buffer_get_meta(buf, api));
-  if (!meta || !meta->plane || !*meta->plane) return cv::Mat();
-  const p3d::gst::DepthPlane &d = **meta->plane;
+  if (!meta || !meta->plane || !*meta->plane) return nullptr;
+  return meta->plane->get();
+}
+
+DepthPlaneInfo buffer_depth_info(GstBuffer *buf) {
+  DepthPlaneInfo i;
+  if (const p3d::gst::DepthPlane *d = meta_plane(buf)) {
+    i.present = true;
+    i.on_device = d->on_device;
+    i.width = d->width;
+    i.height = d->height;
+    i.shift = d->shift;
+  }
+  return i;
+}
+
+cv::Mat buffer_depth(GstBuffer *buf) {
+  const p3d::gst::DepthPlane *plane = meta_plane(buf);
+  if (!plane) return cv::Mat();
+  const p3d::gst::DepthPlane &d = *plane;
   if (d.on_device) return cv::Mat();
   cv::Mat m(d.height, d.width, CV_32FC1);
   memcpy(m.data, d.host.data(), d.host.size() * sizeof(float));

@@ -28,8 +28,15 @@ GstBuffer *buffer_from_grey(const cv::Mat &grey);
 std::string grey_caps(const cv::Mat &grey);
 // The buffer's pixels as BGRA through load_rgba (info from caps).
 cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps);
-// The depth meta as a CV_32FC1 copy; empty if none.
+// The depth meta as a CV_32FC1 copy; empty if none (or on the device).
 cv::Mat buffer_depth(GstBuffer *buf);
+// Where the depth meta's plane is and how it is held (gst/depth_plane.h);
+// present false without one.
+struct DepthPlaneInfo {
+  bool present = false, on_device = false;
+  int width = 0, height = 0, shift = 0;
+};
+DepthPlaneInfo buffer_depth_info(GstBuffer *buf);
 // Runs a launch line to EOS (timeout in seconds); returns the error message
 // or "" on success. at_eos, if given, sees the pipeline at EOS before it is
 // stopped (negotiated caps and sink statistics are still there).

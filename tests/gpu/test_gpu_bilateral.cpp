@@ -83,7 +83,6 @@ cv::Mat run_gpu_on(BilateralFilterGpu &filter, const BilateralParams &p, const D
   return out.download();
 }
 
-
 // GPU vs CPU on one input, the guide in device memory as `device_guide`
 // holds it; `what` names the case in failures.
 void expect_identical_on(BilateralFilterGpu &filter, const BilateralParams &p, const HostFrame &guide,

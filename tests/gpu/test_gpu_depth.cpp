@@ -260,10 +260,6 @@ TEST(GpuDepth, OddSizes) {
       }
 }
 
-// 4:2:0 frames whose device rows do not start 4-byte aligned (an odd
-// plane offset or stride, as a frame mapped from another allocator may
-// have) take the features kernel's byte loads; aligned ones (every other
-// test) its 32-bit loads. Both must give the CPU's result.
 // A grid whose cells are not the blocks (another shift, a block that is no
 // power of two, cells of another size) is refused before anything is
 // queued; the blocks' own grid is taken.
@@ -281,16 +277,27 @@ TEST(GpuDepth, BlockGridOfAnotherShiftIsRefused) {
   narrow.cells.width -= 1;
   EXPECT_EQ(est.estimate(p, df.view(), narrow, nullptr).code, cudaErrorInvalidValue);
   DepthGrid<float> other_picture = four.grid();
-  other_picture.width = 60;
+  other_picture.width = 62;  // its cells fit (16 a row), its picture is not the frame's
   EXPECT_EQ(est.estimate(p, df.view(), other_picture, nullptr).code, cudaErrorInvalidValue);
   p.block_size = 6;
   EXPECT_EQ(block_grid_shift(p, 64, 48), 0);
   EXPECT_EQ(est.estimate(p, df.view(), two.grid(), nullptr).code, cudaErrorInvalidValue);
   p.block_size = 4;
+  DepthGrid<float> no_cells = four.grid();
+  no_cells.cells.data = nullptr;
+  EXPECT_EQ(est.estimate(p, df.view(), no_cells, nullptr).code, cudaErrorInvalidValue);
+  const DeviceDepth full(64, 48);
+  DepthGrid<float> full_short = full.grid();  // a full-size map whose cells miss a row
+  full_short.cells.height -= 1;
+  EXPECT_EQ(est.estimate(p, df.view(), full_short, nullptr).code, cudaErrorInvalidValue);
   EXPECT_TRUE(est.estimate(p, df.view(), four.grid(), nullptr).ok());
   EXPECT_EQ(cudaSuccess, cudaDeviceSynchronize());
 }
 
+// 4:2:0 frames whose device rows do not start 4-byte aligned (an odd
+// plane offset or stride, as a frame mapped from another allocator may
+// have) take the features kernel's byte loads; aligned ones (every other
+// test) its 32-bit loads. Both must give the CPU's result.
 TEST(GpuDepth, UnalignedRowsMatchCpu) {
   std::mt19937 rng(fresh_seed());
   // Plane offset and extra stride bytes; {0, 6} leaves NV12's rows aligned.

@@ -168,6 +168,38 @@ TEST(GpuChainGrids, MatchTheCpuChain) {
     }
 }
 
+// The planes the stages attach on CUDA memory: the estimator's block grid
+// and the filter's cell grid where their steps are powers of two, else
+// full-size, as docs/architecture.md says (the chains above compare the
+// output; this says which handoff they ran).
+TEST(GpuChainGrids, StagesAttachGridPlanes) {
+  const HostFrame frame = picture(PixelFormat::NV12, 640, 360, 9);
+  struct Case {
+    const char *stages;
+    int shift;
+  } cases[] = {{"pseudo3ddepth", 1},                          // automatic block 2
+               {"pseudo3ddepth block-size=8", 3},
+               {"pseudo3ddepth block-size=6", 0},             // no power of two: full-size
+               {"pseudo3ddepth ! pseudo3dfilter", 0},          // step 1 up to 2159 rows
+               {"pseudo3ddepth ! pseudo3dfilter scale=4", 2},
+               {"pseudo3ddepth ! pseudo3dfilter scale=3", 0},
+               {"pseudo3ddepth block-size=4 ! pseudo3dfilter radius=0", 2}};  // passed through
+  for (const Case &c : cases) {
+    GstHarness *hx =
+        gst_harness_new_parse((std::string("cudaupload ! video/x-raw(memory:CUDAMemory) ! ") + c.stages).c_str());
+    gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::NV12, 640, 360).c_str());
+    GstBuffer *b = gst_harness_push_and_pull(hx, buffer_from_frame(frame));
+    ASSERT_NE(b, nullptr) << c.stages;
+    const DepthPlaneInfo d = buffer_depth_info(b);
+    EXPECT_TRUE(d.present && d.on_device) << c.stages;
+    EXPECT_EQ(d.width, 640) << c.stages;
+    EXPECT_EQ(d.height, 360) << c.stages;
+    EXPECT_EQ(d.shift, c.shift) << c.stages;
+    gst_buffer_unref(b);
+    gst_harness_teardown(hx);
+  }
+}
+
 // Real data: Aloe through the whole chain, GPU against CPU.
 TEST(GpuChainReal, AloeMatchesCpu) {
   const cv::Mat aloe = load_data_image("aloeL.jpg");
