@@ -15,7 +15,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <climits>
+#include <thread>
 #include <cstdlib>
 
 #include "../elements/element_helpers.h"
@@ -410,6 +413,39 @@ std::vector<cv::Mat> play_and_pull(const std::string &launch) {
   gst_element_set_state(p, GST_STATE_NULL);
   gst_object_unref(p);
   return frames;
+}
+
+// The grids change under a playing pipeline: a second thread sets the
+// estimator's block size and the filter's step to values with and without
+// grids (and back) while frames flow on CUDA memory, so consecutive frames
+// hand on planes of other shifts through the same pools. The stream ends
+// with no error.
+TEST(GpuChainGrids, BlockAndStepChangedWhilePlaying) {
+  GstElement *p = gst_parse_launch(
+      "videotestsrc num-buffers=240 pattern=ball ! video/x-raw,format=NV12,width=640,height=360 ! cudaupload ! "
+      "video/x-raw(memory:CUDAMemory) ! pseudo3ddepth name=d ! pseudo3dfilter name=f ! pseudo3dwarp ! "
+      "pseudo3dpack ! fakesink sync=false",
+      nullptr);
+  ASSERT_NE(p, nullptr);
+  GstElement *d = gst_bin_get_by_name(GST_BIN(p), "d"), *f = gst_bin_get_by_name(GST_BIN(p), "f");
+  std::atomic<bool> stop{false};
+  gst_element_set_state(p, GST_STATE_PLAYING);
+  std::thread changer([&] {
+    const int blocks[] = {0, 8, 6, 4, 2}, steps[] = {0, 4, 3, 2, 8, 1};
+    for (int i = 0; !stop; ++i) {
+      g_object_set(d, "block-size", blocks[i % 5], NULL);
+      g_object_set(f, "scale", steps[i % 6], NULL);
+      std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    }
+  });
+  const std::string err = wait_end(p, nullptr);
+  stop = true;
+  changer.join();
+  EXPECT_EQ(err, "");
+  gst_element_set_state(p, GST_STATE_NULL);
+  gst_object_unref(d);
+  gst_object_unref(f);
+  gst_object_unref(p);
 }
 
 // pseudo3ddepthmux on CUDA memory: the depth goes to the frame's context
