@@ -33,6 +33,13 @@ struct FrameView {
   int stride[3] = {0, 0, 0};
 };
 
+// Whether every row of plane `plane` starts `bytes`-aligned (its start and
+// its stride are multiples of it): the host-side check the kernels' word
+// and vector paths take once per launch.
+inline bool rows_aligned(const FrameView &f, int plane, int bytes) {
+  return reinterpret_cast<uintptr_t>(f.plane[plane]) % bytes == 0 && f.stride[plane] % bytes == 0;
+}
+
 // 4-byte aligned, so that a whole pixel in shared memory or a host array
 // can move as one 32-bit word. Kernels that move whole words or 16-byte
 // vectors through global frame rows check the rows' alignment once per

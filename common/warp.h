@@ -454,10 +454,9 @@ P3D_HD Rgba smooth_mean(const SmoothSum &s) {
   return c;
 }
 
-// Whether the frames fit together: src W x H (W, H > 0), depth W x H, out
+// Whether the frames fit together: src W x H (W, H > 0), depth W x H (a
+// DepthGrid, the GPU's input, of that picture with cells that fit it), out
 // packed RGB 2W x H.
-// A depth grid (p3d_defs.h DepthGrid, the GPU's input) fits when it is of
-// the picture's size and its cells fit it.
 inline bool warp_frames_fit(const FrameView &src, const DepthGrid<const float> &depth, const FrameView &out) {
   return src.width > 0 && src.height > 0 && src.plane[0] && depth.cells.data && depth.width == src.width &&
          depth.height == src.height && grid_fits(depth) && out.plane[0] && is_packed_rgb(out.format) &&

@@ -597,12 +597,11 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
                                   : block_features_kernel<0>;
   // 32-bit row loads (column_sums_420_x4) where every row of the 4:2:0
   // planes starts 4-byte aligned (2-byte for I420's chroma rows).
-  auto aligned = [&](int plane, int to) {
-    return reinterpret_cast<uintptr_t>(frame.plane[plane]) % to == 0 && frame.stride[plane] % to == 0;
-  };
-  const bool words = frame.format == PixelFormat::NV12   ? aligned(0, 4) && aligned(1, 4)
-                     : frame.format == PixelFormat::I420 ? aligned(0, 4) && aligned(1, 2) && aligned(2, 2)
-                                                         : false;
+  const bool words =
+      frame.format == PixelFormat::NV12   ? rows_aligned(frame, 0, 4) && rows_aligned(frame, 1, 4)
+      : frame.format == PixelFormat::I420 ? rows_aligned(frame, 0, 4) && rows_aligned(frame, 1, 2) &&
+                                                rows_aligned(frame, 2, 2)
+                                          : false;
   P3D_CUDA_TRY(launch_chained(features_kernel, dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0,
                               stream, frame, B, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid,
                               state, words));

@@ -1075,7 +1075,7 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     sc.tiles_x = plan.tiles_x;
     sc.tiles_y = plan.tiles_y;
   }
-  const bool words = reinterpret_cast<uintptr_t>(out.plane[0]) % 4 == 0 && out.stride[0] % 4 == 0;
+  const bool words = rows_aligned(out, 0, 4);
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, smem_optin_,
                          &attributes_set_};
