@@ -448,6 +448,53 @@ TEST(GpuChainGrids, BlockAndStepChangedWhilePlaying) {
   gst_object_unref(p);
 }
 
+// A flushing seek while CUDA frames play: the estimator's history restarts
+// at the seek, so the depth after it (handed on as the estimator's block
+// grid and the filter's cell grid, read back by pseudo3ddepthout) is the
+// CPU chain's frame for frame: 40 frames, a seek to 3 s, two more.
+TEST(GpuChainGrids, FlushingSeekMatchesTheCpuChain) {
+  std::vector<cv::Mat> out[2];
+  GstClockTime after_seek[2] = {GST_CLOCK_TIME_NONE, GST_CLOCK_TIME_NONE};
+  for (int gpu = 0; gpu < 2; ++gpu) {
+    const std::string p = gpu ? " processing=gpu" : " processing=cpu";
+    const std::string launch =
+        std::string("videotestsrc pattern=ball ! video/x-raw,format=NV12,width=640,height=360,framerate=30/1 ! ") +
+        (gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") + "pseudo3ddepth" + p +
+        " ! pseudo3dfilter scale=2" + p +
+        " ! pseudo3ddepthout ! video/x-raw,format=GRAY16_LE ! videoconvert ! video/x-raw,format=RGBA ! "
+        "appsink name=out sync=false max-buffers=4";
+    GstElement *pipe = gst_parse_launch(launch.c_str(), nullptr);
+    ASSERT_NE(pipe, nullptr) << launch;
+    GstElement *sink = gst_bin_get_by_name(GST_BIN(pipe), "out");
+    gst_element_set_state(pipe, GST_STATE_PLAYING);
+    auto pull = [&](GstClockTime *pts) {
+      GstSample *s = gst_app_sink_try_pull_sample(GST_APP_SINK(sink), 30 * GST_SECOND);
+      if (!s) return false;
+      out[gpu].push_back(buffer_to_bgra(gst_sample_get_buffer(s), gst_sample_get_caps(s)));
+      if (pts) *pts = GST_BUFFER_PTS(gst_sample_get_buffer(s));
+      gst_sample_unref(s);
+      return true;
+    };
+    for (int i = 0; i < 40; ++i) ASSERT_TRUE(pull(nullptr)) << launch;
+    ASSERT_TRUE(gst_element_seek_simple(pipe, GST_FORMAT_TIME,
+                                        (GstSeekFlags)(GST_SEEK_FLAG_FLUSH | GST_SEEK_FLAG_ACCURATE), 3 * GST_SECOND));
+    ASSERT_TRUE(pull(&after_seek[gpu])) << launch;
+    ASSERT_TRUE(pull(nullptr)) << launch;
+    GstBus *bus = gst_element_get_bus(pipe);
+    if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
+      ADD_FAILURE() << launch << ": " << message_text(m);
+      gst_message_unref(m);
+    }
+    gst_object_unref(bus);
+    gst_element_set_state(pipe, GST_STATE_NULL);
+    gst_object_unref(sink);
+    gst_object_unref(pipe);
+  }
+  EXPECT_EQ(after_seek[0], 3 * GST_SECOND);
+  EXPECT_EQ(after_seek[1], 3 * GST_SECOND);
+  expect_same(out[1], out[0], "depth across a flushing seek");
+}
+
 // pseudo3ddepthmux on CUDA memory: the depth goes to the frame's context
 // and the GPU stages after it give the CPU chain's output exactly, for a
 // depth picture of the frame's size and of another size, 8 and 16 bits.
