@@ -391,17 +391,18 @@ __device__ void render_eye(const RowJob<Keys> &j, int eye, int *row_holes) {
   fill_row<Keys, kFill>(j, eye);
 }
 
-// Renders both eyes of the row together (both shifts not 0, keys in shared
-// memory, one z-buffer an eye): a source pixel's depths, read and clamped
-// once, place it in both views (warp_source's arithmetic, so the same
-// targets), and a target resolves both eyes in one pass; the row takes
-// three barriers (four with BackgroundSmooth's clean bits) where the eyes
-// in turn take eight (ten). Every thread of the block calls it.
-template <class Keys, HoleFill kFill>
-__device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
-  if (threadIdx.x < 2) row_holes[threadIdx.x] = 0;
-  zero_keys<true>(j.keys[0], 2 * j.W);  // keys[1] follows keys[0]
-  __syncthreads();
+// Both eyes rendered together (both shifts not 0, keys in shared memory,
+// one z-buffer an eye): a source pixel's depths, read and clamped once,
+// place it in both views (warp_source's arithmetic, so the same targets),
+// and a target resolves both eyes in one pass. The z-buffers hold no
+// colour, only where each target's hit comes from (depth and u codes), so
+// they serve every row that reads the same cells: render_row_group() fills
+// them once for all of its rows.
+
+// Both eyes' z-buffers from the depth row j.depth_row (keys zeroed, behind
+// a barrier). Every thread of the block calls it; the caller syncs after.
+template <class Keys>
+__device__ void scatter_both_eyes(const RowJob<Keys> &j) {
   const float s0 = j.eyes.shift[0], s1 = j.eyes.shift[1];
   for (int x = threadIdx.x; x < j.W; x += blockDim.x) {
     const bool has_next = x + 1 < j.W;
@@ -410,8 +411,14 @@ __device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
     scatter_source<Keys>(j.keys[0], warp_place(x, d0, d1, has_next, s0, j.D, j.convergence), j.W);
     scatter_source<Keys>(j.keys[1], warp_place(x, d0, d1, has_next, s1, j.D, j.convergence), j.W);
   }
-  __syncthreads();
+}
 
+// Row j.y of both eyes from final z-buffers and the row's converted source
+// (both behind a barrier), row_holes zeroed: the colours, the holes and
+// their fills. Every thread of the block calls it; the row takes two
+// barriers (three with BackgroundSmooth's clean bits).
+template <class Keys, HoleFill kFill>
+__device__ void resolve_both_eyes(const RowJob<Keys> &j, int *row_holes) {
   int holes[2] = {0, 0};
   uint8_t *mask_rows[2] = {mask_row_of<Keys, kFill>(j, 0), mask_row_of<Keys, kFill>(j, 1)};
   const OutRow out_rows[2] = {OutRow(j.out, 0, j.y, j.words), OutRow(j.out, j.W, j.y, j.words)};
@@ -438,40 +445,96 @@ __device__ void render_both_eyes(const RowJob<Keys> &j, int *row_holes) {
     if (any[eye]) fill_row<Keys, kFill>(j, eye);
 }
 
-// One block = output row blockIdx.x, both eyes, so the source row is
+// The source row y converted into j.row, a pixel pair a thread: a 4:2:0
+// pair shares its chroma (load_rgba_pair_words, as the CPU's SourceRow).
+template <class Keys>
+__device__ void convert_source_row(const RowJob<Keys> &j, const FrameView &src, const YuvToRgb &m, int y) {
+  for (int x = 2 * threadIdx.x; x < j.W; x += 2 * blockDim.x)
+    load_rgba_pair_words(src, x, y, m, reinterpret_cast<uint32_t *>(j.row.plane[0]) + x);
+}
+
+// Rows y0 .. y0 + rows - 1, which all read the depth cells of row y0
+// (j.depth_row), both eyes at once: the z-buffers are cleared and filled
+// once (while the first source row converts), then each row is resolved
+// from them with its own source row. Every thread of the block calls it.
+// On a grid of 2 x 2 cells (4K) a row pair shares one scatter, on 4 x 4
+// cells (8K) four rows do; a row alone (full-size depth) takes three
+// barriers, four with BackgroundSmooth's clean bits.
+template <class Keys, HoleFill kFill>
+__device__ void render_row_group(RowJob<Keys> &j, const FrameView &src, const YuvToRgb &m, int y0, int rows,
+                                 int *row_holes) {
+  if (threadIdx.x < 2) row_holes[threadIdx.x] = 0;
+  zero_keys<true>(j.keys[0], 2 * j.W);  // keys[1] follows keys[0]
+  convert_source_row(j, src, m, y0);
+  __syncthreads();
+  scatter_both_eyes(j);
+  __syncthreads();
+  for (int r = 0;;) {
+    j.y = y0 + r;
+    resolve_both_eyes<Keys, kFill>(j, row_holes);
+    if (++r >= rows) break;
+    __syncthreads();  // this row's fills are done with the source row, its bits and row_holes
+    if (threadIdx.x < 2) row_holes[threadIdx.x] = 0;
+    convert_source_row(j, src, m, y0 + r);
+    __syncthreads();
+  }
+}
+
+// One block = output rows y0 .. y0 + group_rows - 1 (y0 = blockIdx.x *
+// group_rows, cut at the picture's end), both eyes, so each source row is
 // converted once. Keys: the key word (NarrowKeys where they fit,
 // common/warp.h). kSharedKeys: the z-buffer in shared memory, else in
 // global_keys (one W-key row per block). kBothEyes: both eyes at once, a
-// z-buffer each (render_both_eyes; shared keys only), else one after the
-// other through one z-buffer (render_eye). depth: the picture's depth on
-// any grid (p3d_defs.h DepthGrid; the filter's coarse cells are read in
-// place, one shift a read).
-// At most 512 threads, as many blocks per SM as it holds threads for
-// (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at most 32
-// registers a thread; 3 on the other Ampere to Blackwell parts, 40; 2 on
-// Turing); launch_rows asks for the largest shared-memory carveout. The
-// kernel is instruction bound (ncu, 4K: 75 % of issue slots, DRAM 19 %),
-// so every further resident row helps: the third took the 4K warp from
-// 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB of shared
-// memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register bound
-// (sm_90) only the both-eyes NeighborAverage kernel spills (12 bytes).
-// Both eyes at once (a second z-buffer, 15 KB at 4K, still four rows an
-// SM) took the warp from 0.0682 to 0.0667 ms at 1080p and from 0.1983 to
-// 0.1967 at 4K (H200, docs/benchmarks.md); from about 4600 pixels a row
-// on Hopper it would cost a resident row, and the eyes go in turn.
+// z-buffer each (render_row_group; shared keys only), else one after the
+// other through one z-buffer (render_eye; one row a block). depth: the
+// picture's depth on any grid (p3d_defs.h DepthGrid; the filter's coarse
+// cells are read in place, one shift a read); a block's rows all read the
+// same cells (group_rows divides 1 << depth.shift).
+// kBlock: one row a block (RowBlock::Row), or the rows of a group in a
+// block of a row's size and launch bounds (Group) or in one of half the
+// threads an SM holds (WideGroup).
+// A row's block: at most 512 threads, as many blocks per SM as it holds
+// threads for (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at
+// most 32 registers a thread; 3 on the other Ampere to Blackwell parts,
+// 40; 2 on Turing); launch_rows asks for the largest shared-memory
+// carveout. The kernel is instruction bound (ncu, 4K: 75 % of issue slots,
+// DRAM 19 %), so every further resident row helps: the third took the 4K
+// warp from 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB
+// of shared memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register
+// bound (sm_90) only the Group and WideGroup BackgroundSmooth kernels
+// spill (4 bytes). Both eyes at once (a second z-buffer, 15 KB at 4K,
+// still four rows an SM) took the warp from 0.0682 to 0.0667 ms at 1080p
+// and from 0.1983 to 0.1967 at 4K (H200, docs/benchmarks.md); from about
+// 4600 pixels a row on Hopper it would cost a resident row, and the eyes
+// go in turn.
+// A WideGroup block: half the threads an SM holds (1024 on Hopper), two an
+// SM, for rows whose both z-buffers would leave room for fewer row blocks
+// (8K: 92 KB of shared memory a block, two still fit an SM, where a row's
+// block of 512 threads would keep two, 1024 threads, resident). Where a
+// row's block keeps as many threads resident (4K), Group blocks do better:
+// 4K warp 0.168 ms against 0.178 for WideGroup, whose 1024 threads share
+// 3840 pixels unevenly (H200, docs/benchmarks.md).
+enum class RowBlock { Row, Group, WideGroup };
 constexpr int kRowThreadsMax = 512;
-template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes>
-__global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
+constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
+// At most 1 << kGroupShiftMax rows a group (4: the 8K grid's cells), so
+// that a frame still has enough blocks to spread over the GPU.
+constexpr int kGroupShiftMax = 2;
+template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes, RowBlock kBlock>
+__global__ void __launch_bounds__(kBlock == RowBlock::WideGroup ? kWideGroupThreads : kRowThreadsMax,
+                                  kBlock == RowBlock::WideGroup ? 2 : P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, DepthGrid<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
-                    unsigned long long *total, bool words) {
+                    unsigned long long *total, bool words, int group_rows) {
   chained_kernel_start();
   static_assert(kSharedKeys || !kBothEyes, "both eyes at once keep their keys in shared memory");
+  static_assert(kBothEyes || kBlock == RowBlock::Row, "row groups render both eyes at once");
   extern __shared__ __align__(16) unsigned long long smem[];  // 16: zero_keys() stores uint4
   __shared__ int row_holes[2];
   constexpr int kEyeArrays = kBothEyes ? 2 : 1;
+  const int y0 = blockIdx.x * group_rows;
   RowJob<Keys> j;
-  j.y = blockIdx.x;
+  j.y = y0;
   j.W = src.width;
   j.H = src.height;
   j.chunks = row_chunks(j.W);
@@ -479,10 +542,10 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
   j.eyes = eyes;
   j.D = D;
   j.convergence = convergence;
-  j.depth_row = depth.cell_row(j.y);
+  j.depth_row = depth.cell_row(y0);
   j.depth_shift = depth.shift;
   auto *shared_keys = reinterpret_cast<typename Keys::Word *>(smem);
-  j.keys[0] = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(j.y) * j.W;
+  j.keys[0] = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(y0) * j.W;
   uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? shared_keys + kEyeArrays * j.W : shared_keys);
   j.hole_bits[0] = reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W));
   j.clean_bits[0] = j.hole_bits[0] + kEyeArrays * j.chunks;
@@ -499,14 +562,11 @@ __global__ void __launch_bounds__(kRowThreadsMax, P3D_MAX_THREADS_PER_SM / kRowT
   j.row.plane[0] = rgba;
   j.row.stride[0] = 4 * j.W;
 
-  // The source row, a pixel pair a thread: a 4:2:0 pair shares its chroma
-  // (load_rgba_pair_words, as the CPU's SourceRow).
-  for (int x = 2 * threadIdx.x; x < j.W; x += 2 * blockDim.x)
-    load_rgba_pair_words(src, x, j.y, m, reinterpret_cast<uint32_t *>(rgba) + x);
-  __syncthreads();
-  if (kBothEyes) {
-    render_both_eyes<Keys, kFill>(j, row_holes);
+  if (kBothEyes) {  // a row's block has one row (a constant, so no loop is compiled in)
+    render_row_group<Keys, kFill>(j, src, m, y0, kBlock == RowBlock::Row ? 1 : min(group_rows, j.H - y0), row_holes);
   } else {
+    convert_source_row(j, src, m, y0);
+    __syncthreads();
     render_eye<Keys, kSharedKeys, kFill>(j, 0, &row_holes[0]);
     render_eye<Keys, kSharedKeys, kFill>(j, 1, &row_holes[0]);
   }
@@ -814,7 +874,7 @@ CudaStatus allow_shared_memory(const void *kernel, int smem_optin, std::vector<c
 // about 19000 pixels and more on Hopper).
 // NarrowSharedPerEye: NarrowKeys in shared memory, a z-buffer for each
 // eye, both eyes rendered at once (both warped, and the second z-buffer
-// costs no resident row: both_eyes_keep_rows).
+// costs no resident thread: choose_row_kernels).
 enum class KeyPlace { NarrowSharedPerEye, NarrowShared, WideShared, WideGlobal };
 
 struct RowLaunch {
@@ -835,74 +895,115 @@ struct RowLaunch {
   cudaStream_t stream;
   int smem_optin;
   std::vector<const void *> *attributes_set;
+  int group_rows;  // rows a block (NarrowSharedPerEye only; 1: a row's block)
+  bool wide_groups;  // groups in WideGroup blocks, of wide_group_threads
+  int wide_group_threads;
 };
 
-// The row kernel of a key word, key place, eye order and fill.
-template <class Keys, bool kSharedKeys, bool kBothEyes>
-auto row_kernel_for(HoleFill fill) -> decltype(&warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes>) {
+// The row kernel of a key word, key place, eye order, block kind and fill.
+template <class Keys, bool kSharedKeys, bool kBothEyes, RowBlock kBlock>
+auto row_kernel_for(HoleFill fill) -> decltype(&warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes, kBlock>) {
   switch (fill) {
     case HoleFill::Background:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::Background, kBothEyes>;
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::Background, kBothEyes, kBlock>;
     case HoleFill::NeighborAverage:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::NeighborAverage, kBothEyes>;
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::NeighborAverage, kBothEyes, kBlock>;
     case HoleFill::None:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes>;
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes, kBlock>;
     case HoleFill::BackgroundSmooth:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes>;
+      return warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes, kBlock>;
   }
   return nullptr;
 }
 
 int row_threads(int W) { return W > 1024 ? kRowThreadsMax : 256; }
 
-template <class Keys, bool kSharedKeys, bool kBothEyes>
+template <class Keys, bool kSharedKeys, bool kBothEyes, RowBlock kBlock>
 CudaStatus launch_rows(const RowLaunch &l) {
-  const auto row_kernel = row_kernel_for<Keys, kSharedKeys, kBothEyes>(l.fill);
+  const auto row_kernel = row_kernel_for<Keys, kSharedKeys, kBothEyes, kBlock>(l.fill);
   if (!row_kernel) return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(row_kernel), l.smem_optin, l.attributes_set));
   static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
-  P3D_CUDA_TRY(launch_chained(row_kernel, l.src.height, row_threads(l.src.width), l.smem, l.stream, l.src, l.m,
-                              l.depth, l.out, l.eyes, l.D, l.convergence,
-                              reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth, l.total,
-                              l.words));
+  const int rows = kBlock == RowBlock::Row ? 1 : l.group_rows;
+  const unsigned blocks = static_cast<unsigned>((l.src.height + rows - 1) / rows);
+  const int threads = kBlock == RowBlock::WideGroup ? l.wide_group_threads : row_threads(l.src.width);
+  P3D_CUDA_TRY(launch_chained(row_kernel, blocks, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes, l.D,
+                              l.convergence, reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth,
+                              l.total, l.words, rows));
   return {};
 }
 
-// The row kernel for the run's key place and fill.
+// The row kernel for the run's key place, row groups and fill.
 CudaStatus launch_row_kernel(const RowLaunch &l) {
   switch (l.keys) {
     case KeyPlace::NarrowSharedPerEye:
-      return launch_rows<NarrowKeys, true, true>(l);
+      if (l.group_rows == 1) return launch_rows<NarrowKeys, true, true, RowBlock::Row>(l);
+      return l.wide_groups ? launch_rows<NarrowKeys, true, true, RowBlock::WideGroup>(l)
+                           : launch_rows<NarrowKeys, true, true, RowBlock::Group>(l);
     case KeyPlace::NarrowShared:
-      return launch_rows<NarrowKeys, true, false>(l);
+      return launch_rows<NarrowKeys, true, false, RowBlock::Row>(l);
     case KeyPlace::WideShared:
-      return launch_rows<WideKeys, true, false>(l);
+      return launch_rows<WideKeys, true, false, RowBlock::Row>(l);
     case KeyPlace::WideGlobal:
-      return launch_rows<WideKeys, false, false>(l);
+      return launch_rows<WideKeys, false, false, RowBlock::Row>(l);
   }
   return CudaStatus{cudaErrorInvalidValue, "KeyPlace", __FILE__, __LINE__};
 }
 
-// Whether the row kernel that renders both eyes at once (a z-buffer an
-// eye) keeps as many rows of W pixels resident on an SM as the one that
-// renders them in turn: the second z-buffer costs 4 W bytes of shared
-// memory, which from about 4600 pixels (Hopper) leaves room for one row
-// fewer, and every resident row counts in this instruction-bound kernel.
-CudaStatus both_eyes_keep_rows(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
-                               bool *keep) {
-  *keep = false;
+// Threads an SM holds resident of a kernel with blocks of `threads` and
+// `smem` bytes of dynamic shared memory (attributes set beforehand).
+CudaStatus resident_threads(const void *kernel, int threads, size_t smem, int *resident) {
+  int blocks = 0;
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&blocks, kernel, threads, smem));
+  *resident = blocks * threads;
+  return {};
+}
+
+// Which row kernels serve rows of W pixels with both eyes warped and
+// NarrowKeys, by the threads each keeps resident on an SM (this kernel is
+// bound by instructions, so every resident thread counts):
+//  * both eyes at once where that holds as many threads as the eyes in
+//    turn: the second z-buffer costs 4 W bytes of shared memory, which
+//    from about 4600 pixels (Hopper) leaves room for one row fewer;
+//  * row groups, for depth on cells of 2 x 2 pixels and more: one scatter
+//    serves the group's rows (render_row_group), so a block of G rows
+//    does the scatter's work once where G rows' blocks did it G times.
+//    Group blocks where they hold as many threads as the row kernel
+//    chosen above, else WideGroup blocks where those do.
+CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
+                              RowKernelChoice *c) {
+  *c = RowKernelChoice{};
+  c->width = W;
+  c->fill = fill;
   const size_t smem_both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2);
   if (smem_both + 64 > static_cast<size_t>(smem_optin)) return {};
-  const auto in_turn = row_kernel_for<NarrowKeys, true, false>(fill);
-  const auto both = row_kernel_for<NarrowKeys, true, true>(fill);
-  if (!in_turn || !both) return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
-  int rows_in_turn = 0, rows_both = 0;
-  for (const void *k : {reinterpret_cast<const void *>(in_turn), reinterpret_cast<const void *>(both)})
+  const auto in_turn = row_kernel_for<NarrowKeys, true, false, RowBlock::Row>(fill);
+  const auto both = row_kernel_for<NarrowKeys, true, true, RowBlock::Row>(fill);
+  const auto group = row_kernel_for<NarrowKeys, true, true, RowBlock::Group>(fill);
+  const auto wide = row_kernel_for<NarrowKeys, true, true, RowBlock::WideGroup>(fill);
+  if (!in_turn || !both || !group || !wide)
+    return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
+  for (const void *k : {reinterpret_cast<const void *>(in_turn), reinterpret_cast<const void *>(both),
+                        reinterpret_cast<const void *>(group), reinterpret_cast<const void *>(wide)})
     P3D_CUDA_TRY_STATUS(allow_shared_memory(k, smem_optin, attributes_set));
-  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&rows_in_turn, in_turn, row_threads(W),
-                                                             row_smem_bytes(W, sizeof(NarrowKeys::Word), 1)));
-  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&rows_both, both, row_threads(W), smem_both));
-  *keep = rows_both >= rows_in_turn;
+  int in_turn_threads = 0, both_threads = 0, group_threads = 0, wide_threads = 0;
+  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(in_turn), row_threads(W),
+                                       row_smem_bytes(W, sizeof(NarrowKeys::Word), 1), &in_turn_threads));
+  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(both), row_threads(W), smem_both, &both_threads));
+  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(group), row_threads(W), smem_both, &group_threads));
+  // The WideGroup block's size is its launch bound on this device's
+  // architecture (kWideGroupThreads of the machine code it runs).
+  cudaFuncAttributes a{};
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&a, reinterpret_cast<const void *>(wide)));
+  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(wide), a.maxThreadsPerBlock, smem_both,
+                                       &wide_threads));
+  c->both_eyes = both_threads >= in_turn_threads;
+  const int row_best = c->both_eyes ? both_threads : in_turn_threads;
+  c->groups = group_threads > 0 && group_threads >= row_best;
+  if (!c->groups && wide_threads > 0 && wide_threads >= row_best) {
+    c->groups = c->wide_groups = true;
+    c->wide_group_threads = a.maxThreadsPerBlock;
+  }
   return {};
 }
 
@@ -1024,13 +1125,12 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     return CudaStatus{cudaErrorInvalidValue, "row_smem_bytes(W) <= cudaDevAttrMaxSharedMemoryPerBlockOptin", __FILE__,
                       __LINE__};
   bool per_eye = false;
+  int group_rows = 1;
   if (narrow && eyes.shift[0] != 0.f && eyes.shift[1] != 0.f) {
-    if (both_eyes_width_ != W || both_eyes_fill_ != p.fill) {
-      P3D_CUDA_TRY_STATUS(both_eyes_keep_rows(p.fill, W, smem_optin_, &attributes_set_, &both_eyes_));
-      both_eyes_width_ = W;
-      both_eyes_fill_ = p.fill;
-    }
-    per_eye = both_eyes_;
+    if (rows_.width != W || rows_.fill != p.fill)
+      P3D_CUDA_TRY_STATUS(choose_row_kernels(p.fill, W, smem_optin_, &attributes_set_, &rows_));
+    if (rows_.groups && depth.shift > 0) group_rows = 1 << (depth.shift < kGroupShiftMax ? depth.shift : kGroupShiftMax);
+    per_eye = rows_.both_eyes || group_rows > 1;
   }
   const KeyPlace keys = per_eye  ? KeyPlace::NarrowSharedPerEye
                         : narrow ? KeyPlace::NarrowShared
@@ -1078,7 +1178,7 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   const bool words = rows_aligned(out, 0, 4);
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, smem_optin_,
-                         &attributes_set_};
+                         &attributes_set_, group_rows, rows_.wide_groups, rows_.wide_group_threads};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
   if (smooth)

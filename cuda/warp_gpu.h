@@ -18,6 +18,13 @@
 // z-buffer costs no resident row (rows up to about 4600 pixels on Hopper),
 // the block renders them together: each source pixel's depths are read
 // once and placed in both z-buffers, and each target resolves both eyes.
+// Row groups: where both eyes are warped with 32-bit keys and the depth is
+// on cells of 2 x 2 pixels or more (the filter's grid at 4K and 8K), the
+// rows of a cell row hold the same z-buffers (the keys hold where a hit
+// comes from, not its colour), so one block renders up to 4 such rows
+// from one scatter, each with its own source row (4K warp 0.196 -> 0.168
+// ms, 8K 0.783 -> 0.593 on an H200; docs/benchmarks.md). The output is
+// the same as row by row.
 //  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the
@@ -55,6 +62,20 @@ constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
 
 // The BackgroundSmooth sums kernel's block size last chosen, for a kernel
 // and its shared memory (cuda/warp.cu, smooth_tile_threads).
+// The row kernels render() chose for rows of `width` pixels and `fill`
+// with both eyes warped and 32-bit keys (cuda/warp.cu,
+// choose_row_kernels): both eyes at once, and row groups where the depth
+// is on cells of 2 x 2 pixels or more, in blocks of a row's size or in
+// wide blocks of wide_group_threads.
+struct RowKernelChoice {
+  int width = -1;
+  HoleFill fill = HoleFill::None;
+  bool both_eyes = false;
+  bool groups = false;
+  bool wide_groups = false;
+  int wide_group_threads = 0;
+};
+
 struct SmoothSumsLaunch {
   const void *kernel = nullptr;
   size_t smem = 0;
@@ -89,12 +110,9 @@ class WarpRendererGpu {
   // The kernels whose shared-memory attributes this renderer has set (once
   // per kernel, to the device's most, not every frame).
   std::vector<const void *> attributes_set_;
-  // Whether rows of both_eyes_width_ pixels with fill both_eyes_fill_ are
-  // rendered both eyes at once (cuda/warp.cu, both_eyes_keep_rows), asked
-  // once per width and fill.
-  int both_eyes_width_ = -1;
-  HoleFill both_eyes_fill_ = HoleFill::None;
-  bool both_eyes_ = false;
+  // The row kernels for the last width and fill, asked once per width and
+  // fill.
+  RowKernelChoice rows_;
   SmoothSumsLaunch sums_launch_;
 };
 

@@ -169,6 +169,27 @@ TEST_F(GpuWarp, DepthOnCellGrids) {
       }
 }
 
+// Rows that share their depth cells share one scatter (cuda/warp.cu,
+// render_row_group): in blocks of a row's size at the widths above, and
+// in wide blocks where a row's block with both z-buffers would keep fewer
+// threads resident (6000 pixels on Hopper: two wide blocks an SM against
+// three of a row's size). 67 rows leave a last group short at every cell
+// size; both eyes are warped (the only case with groups), every fill.
+TEST_F(GpuWarp, RowGroupsInWideRows) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  const int w = 6000, h = 67;
+  HostFrame src(PixelFormat::NV12, w, h, 2);
+  src.fill_random(rng());
+  for (const int shift : {1, 2, 3}) {
+    SCOPED_TRACE(::testing::Message() << "cells of " << (1 << shift));
+    const cv::Mat depth = cell_constant(random_depth(w, h, DepthKind::Smooth, rng()), shift);
+    for (HoleFill f : kAllFills)
+      expect_same(warp_params(2.f, 0.5f, StereoView::Both, f), src, depth, PixelFormat::BGRx, YuvToRgb(), shift);
+  }
+}
+
 // A depth grid whose cells do not fit its picture is refused.
 TEST_F(GpuWarp, DepthGridThatDoesNotFitIsRefused) {
   const test::DeviceFrame src(PixelFormat::NV12, 64, 32), out(PixelFormat::RGBA, 128, 32);
