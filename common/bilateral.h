@@ -48,7 +48,7 @@
 //            (sum + n / 2) / n over its n pixels; bilateral_cell_luma());
 //   depth':  the depth of the cell's first pixel, depth(sX, sY): exact for
 //            the estimator's piecewise-constant map when s divides its block
-//            (bilateral_auto_scale() is half the automatic block size);
+//            (bilateral_auto_scale() does at 4K and 8K);
 //   filter:  either mode above on (guide', depth') with radius ceil(r / s)
 //            and sigma_space / s (bilateral_coarse_params()): the same reach
 //            in the picture;
@@ -78,11 +78,18 @@ enum class BilateralMode : int { Exact = 0, Separable = 1 };
 constexpr BilateralMode kDefaultFilterMode = BilateralMode::Separable;
 
 constexpr int kMaxBilateralScale = 8;
-// scale 0 (automatic): one grid step per kAutoFilterRowsPerStep rows of the
-// picture's shorter side, so 1 up to 2159 rows, 2 at 4K, 4 at 8K. That is
-// half depth_estimate.h's automatic block (one per 540 rows), so a cell
-// never straddles two of the estimator's blocks where both are automatic.
-constexpr int kAutoFilterRowsPerStep = 1080;
+// scale 0 (automatic): step 1 (every pixel) below kAutoFilterGridRows rows
+// of the picture's shorter side, kAutoFilterStep from there: cells of 4 x 4
+// pixels at 4K and at 8K. At 4K that is depth_estimate.h's automatic block
+// (one per 540 rows), at 8K half of it, so there a cell never straddles
+// two of the estimator's blocks where both are automatic. Until 2026-11-26
+// the step was one per 1080 rows (2 at 4K); step 4 at 4K took the 4K
+// filter from 0.035 to 0.014 ms and the chain from 0.297 to 0.280 ms on an
+// H200 (the warp's row groups then share one scatter between 4 rows), and
+// on Aloe enlarged to 4K it measured +0.11 dB, +0.003 SSIM, rho -0.002
+// against step 2 (docs/quality.md, docs/benchmarks.md).
+constexpr int kAutoFilterGridRows = 2160;
+constexpr int kAutoFilterStep = 4;
 
 struct BilateralParams {
   int radius = 5;             // 0..kMaxBilateralRadius, in pixels of the picture
@@ -95,7 +102,7 @@ struct BilateralParams {
 // The grid step the filter takes at a picture size (scale 0) on a frame of
 // width x height.
 P3D_HD int bilateral_auto_scale(int width, int height) {
-  return clamp_value((width < height ? width : height) / kAutoFilterRowsPerStep, 1, kMaxBilateralScale);
+  return (width < height ? width : height) < kAutoFilterGridRows ? 1 : kAutoFilterStep;
 }
 
 // pseudo3dfilter's defaults: BilateralParams() in kDefaultFilterMode at the
@@ -132,8 +139,8 @@ P3D_HD int bilateral_effective_scale(const BilateralParams &sanitised, int width
 
 // The grid (p3d_defs.h DepthGrid) that holds the filter's output with one
 // value a cell: log2 s where the step s is a power of two above 1 (the
-// automatic 2 and 4 at 4K and 8K; not 3 at 3240 rows), else 0, the
-// full-size map.
+// automatic 4 from 2160 rows up; not a step of 3), else 0, the full-size
+// map.
 P3D_HD int bilateral_grid_shift(const BilateralParams &sanitised, int width, int height) {
   const int s = step_shift(bilateral_effective_scale(sanitised, width, height));
   return s > 0 ? s : 0;

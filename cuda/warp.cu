@@ -517,8 +517,10 @@ __device__ void render_row_group(RowJob<Keys> &j, const FrameView &src, const Yu
 enum class RowBlock { Row, Group, WideGroup };
 constexpr int kRowThreadsMax = 512;
 constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
-// At most 1 << kGroupShiftMax rows a group (4: the 8K grid's cells), so
-// that a frame still has enough blocks to spread over the GPU.
+// At most 1 << kGroupShiftMax rows a group (4: the 4K and 8K grids'
+// cells). Even where that leaves few blocks for the GPU's slots (4K: 540
+// Group blocks for 528 on an H200) the longer groups win: 4K warp 0.1635
+// ms with 4 rows a group against 0.171 with 2 (docs/benchmarks.md).
 constexpr int kGroupShiftMax = 2;
 template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes, RowBlock kBlock>
 __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup ? kWideGroupThreads : kRowThreadsMax,

@@ -19,12 +19,12 @@
 // the block renders them together: each source pixel's depths are read
 // once and placed in both z-buffers, and each target resolves both eyes.
 // Row groups: where both eyes are warped with 32-bit keys and the depth is
-// on cells of 2 x 2 pixels or more (the filter's grid at 4K and 8K), the
-// rows of a cell row hold the same z-buffers (the keys hold where a hit
-// comes from, not its colour), so one block renders up to 4 such rows
-// from one scatter, each with its own source row (4K warp 0.196 -> 0.168
-// ms, 8K 0.783 -> 0.593 on an H200; docs/benchmarks.md). The output is
-// the same as row by row.
+// on cells of 2 x 2 pixels or more (the filter's 4 x 4 grid at 4K and
+// 8K), the rows of a cell row hold the same z-buffers (the keys hold where
+// a hit comes from, not its colour), so one block renders up to 4 such
+// rows from one scatter, each with its own source row (on 4 x 4 cells, 4K
+// warp 0.198 -> 0.164 ms, 8K 0.783 -> 0.593, on an H200;
+// docs/benchmarks.md). The output is the same as row by row.
 //  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the

@@ -110,7 +110,7 @@ void print_usage(std::ostream &os) {
         "  --radius N              bilateral radius (default 5)\n"
         "  --filter-mode M         separable (default, as pseudo3dfilter) or exact\n"
         "  --filter-scale N        the filter's grid step: 0 automatic (default, as pseudo3dfilter:\n"
-        "                          2 at 4K, 4 at 8K), 1 every pixel, up to 8\n"
+        "                          4 from 2160 rows up), 1 every pixel, up to 8\n"
         "  --max-disparity P       percent of width (default 3)\n"
         "  --fill F                background-smooth (default), background, neighbor-average, none\n"
         "  --depth-handoff H       GPU depth between the stages: grid (default, as the elements on\n"

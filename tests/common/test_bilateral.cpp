@@ -484,16 +484,18 @@ cv::Mat coarse_definition(const BilateralParams &p, int s, const HostFrame &guid
 TEST(BilateralScale, AutomaticStepSanitiseAndCoarseParameters) {
   EXPECT_EQ(bilateral_auto_scale(1920, 1080), 1);
   EXPECT_EQ(bilateral_auto_scale(2560, 1440), 1);
-  EXPECT_EQ(bilateral_auto_scale(3840, 2160), 2);
-  EXPECT_EQ(bilateral_auto_scale(4096, 2160), 2);
-  EXPECT_EQ(bilateral_auto_scale(2160, 3840), 2);  // portrait: the shorter side
+  EXPECT_EQ(bilateral_auto_scale(3840, 2159), 1);
+  EXPECT_EQ(bilateral_auto_scale(3840, 2160), 4);
+  EXPECT_EQ(bilateral_auto_scale(4096, 2160), 4);
+  EXPECT_EQ(bilateral_auto_scale(2160, 3840), 4);  // portrait: the shorter side
   EXPECT_EQ(bilateral_auto_scale(7680, 4320), 4);
-  EXPECT_EQ(bilateral_auto_scale(8192, 8192), 7);
+  EXPECT_EQ(bilateral_auto_scale(8192, 8192), 4);
   EXPECT_EQ(bilateral_auto_scale(1, 1), 1);
-  // Half the estimator's automatic block wherever that block is even.
-  for (const cv::Size sz : {cv::Size(3840, 2160), cv::Size(7680, 4320), cv::Size(5760, 3240)}) {
+  // A divisor of the estimator's automatic block at 4K and 8K, so that no
+  // cell straddles two blocks: the block itself at 4K, half of it at 8K.
+  for (const cv::Size sz : {cv::Size(3840, 2160), cv::Size(7680, 4320)}) {
     DepthParams dp;
-    EXPECT_EQ(effective_block_size(dp, sz.width, sz.height), 2 * bilateral_auto_scale(sz.width, sz.height)) << sz;
+    EXPECT_EQ(effective_block_size(dp, sz.width, sz.height) % bilateral_auto_scale(sz.width, sz.height), 0) << sz;
   }
   EXPECT_EQ(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, -3)).scale, 1);
   EXPECT_EQ(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, 99)).scale, kMaxBilateralScale);
@@ -503,7 +505,7 @@ TEST(BilateralScale, AutomaticStepSanitiseAndCoarseParameters) {
   // Radius 0 is the identity at every step; the automatic step follows the size.
   EXPECT_EQ(bilateral_effective_scale(bilateral_sanitize(scaled(0, 3.f, 12.f, BilateralMode::Exact, 4)), 99, 99), 1);
   EXPECT_EQ(bilateral_effective_scale(bilateral_sanitize(scaled(5, 3.f, 12.f, BilateralMode::Exact, 0)), 3840, 2160),
-            2);
+            4);
   const BilateralParams c = bilateral_coarse_params(bilateral_sanitize(scaled(5, 3.f, 12.f, kDefaultFilterMode, 2)), 2);
   EXPECT_EQ(c.radius, 3);
   EXPECT_EQ(c.sigma_space, 1.5f);
@@ -536,9 +538,9 @@ TEST(BilateralScale, IsTheFilterOnTheCellsSpreadOverThem) {
         }
 }
 
-// Scale 0 at 4K is step 2; below 2160 rows it is the full-resolution filter
+// Scale 0 at 4K is step 4; below 2160 rows it is the full-resolution filter
 // itself, so the defaults of every picture up to 1080p did not change.
-TEST(BilateralScale, AutomaticIsStepTwoAt4KAndFullResolutionBelow) {
+TEST(BilateralScale, AutomaticIsStepFourAt4KAndFullResolutionBelow) {
   {
     HostFrame guide(PixelFormat::NV12, 1920, 1080, 0);
     guide.fill_random(310);
@@ -550,7 +552,8 @@ TEST(BilateralScale, AutomaticIsStepTwoAt4KAndFullResolutionBelow) {
   guide.fill_random(312);
   const cv::Mat depth = random_depth(3840, 2160, 313);
   const cv::Mat automatic = filter(default_filter_params(), guide, depth);
-  EXPECT_TRUE(bit_equal(automatic, filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 2), guide, depth)));
+  EXPECT_TRUE(bit_equal(automatic, filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 4), guide, depth)));
+  EXPECT_FALSE(bit_equal(automatic, filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 2), guide, depth)));
   EXPECT_FALSE(bit_equal(automatic, filter(scaled(5, 3.f, 12.f, kDefaultFilterMode, 1), guide, depth)));
 }
 

@@ -78,7 +78,7 @@ TEST(DepthGrid, StagesHandOnAtTheirPowerOfTwoSteps) {
   EXPECT_EQ(block_grid_shift(d, 3840, 2160), 6);
   const BilateralParams f = bilateral_sanitize(default_filter_params());
   EXPECT_EQ(bilateral_grid_shift(f, 1920, 1080), 0);  // step 1: full-size
-  EXPECT_EQ(bilateral_grid_shift(f, 3840, 2160), 1);
+  EXPECT_EQ(bilateral_grid_shift(f, 3840, 2160), 2);  // step 4
   EXPECT_EQ(bilateral_grid_shift(f, 7680, 4320), 2);
   BilateralParams three = f;
   three.scale = 3;

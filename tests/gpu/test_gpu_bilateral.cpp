@@ -361,7 +361,7 @@ TEST(GpuBilateral, CoarseGridUnalignedGuideRows) {
       }
 }
 
-// The defaults at 4K and 8K (the automatic step: 2 and 4) on a real picture
+// The defaults at 4K and 8K (the automatic step 4) on a real picture
 // guiding the estimator-like blocky depth, and the exact mode at step 2.
 TEST(GpuBilateral, CoarseGridAutomaticAtUhdAnd8K) {
   large_frame(3840, 2160, default_filter_params());

@@ -1,8 +1,8 @@
 // The cross-bilateral filter on a coarser grid (BilateralParams::scale,
 // common/bilateral.h) against every pixel's filter, where it matters: at 4K
-// and 8K, whose automatic steps are 2 and 4. No stereo pair with ground
+// and 8K, whose automatic step is 4. No stereo pair with ground
 // truth that large ships with the test data, so Aloe stands in for them
-// enlarged 2x (2564 x 2220, automatic step 2, the estimator's automatic
+// enlarged 2x (2564 x 2220, automatic step 4, the estimator's automatic
 // block 4 as at 4K) and 4x (5128 x 4440, step 4, block 8 as at 8K): both
 // views bicubic, the ground-truth depth nearest, the disparity the same
 // share of the width. As shipped (1282 x 1110) the automatic step is 1; the

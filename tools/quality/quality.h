@@ -133,7 +133,7 @@ void measure_depth_rank(Writer &w, const Aloe &full, const Aloe &half, int runs,
 // W x H map) that the depth ranks are taken over.
 std::vector<int> rank_sample(const cv::Mat &gt);
 // The filter's grid step (BilateralParams::scale) on Aloe as shipped and
-// enlarged 2x and 4x (where the automatic step is 1, 2 and 4): view
+// enlarged 2x and 4x (where the automatic step is 1, 4 and 4): view
 // synthesis, depth rank and filter time against every pixel's filter.
 void measure_filter_scale(Writer &w, const Aloe &a, int runs);
 void measure_flicker(Writer &w, const std::string &path, int frames, BilateralMode filter_mode);
