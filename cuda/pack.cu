@@ -60,8 +60,22 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
 // kVec pixels a thread: each eye's kVec input pixels come in one 16-byte
 // load (the launcher checks that the rows are 16-byte aligned and the view
 // width is a multiple of kVec, so no thread has a ragged end), then
-// pack_pixel_for's own anaglyph() per pixel, read from the registers by
-// pixel_at() as from the frame.
+// pack_pixel_for's own anaglyph() per pixel on the words as load_rgba()
+// reads them and store_rgba() writes them. The format's byte order and
+// alpha are template parameters (kBgr, kAlpha: one kernel a packed
+// format), so a pixel costs no format test: the kernel was bound by
+// instructions rather than by memory (about 370 PTX instructions a pixel
+// with the format read at run time through pixel_at() and store_rgba() on
+// registers; docs/benchmarks.md).
+template <bool kBgr, bool kAlpha>
+__device__ Rgba view_word_rgba(uint32_t w) {
+  Rgba c = word_rgba(kBgr ? swap_rb_word(w) : w);  // load_rgba()'s channels
+  if (!kAlpha) c.a = 255;
+  return c;
+}
+__device__ uint32_t word_at(const uint4 &v, int i) { return i == 0 ? v.x : i == 1 ? v.y : i == 2 ? v.z : v.w; }
+
+template <bool kBgr, bool kAlpha>
 __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   chained_kernel_start();
   const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
@@ -72,20 +86,15 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   uint4 eye[2];
   for (int e = 0; e < 2; ++e)
     eye[e] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + pack_detail::view_slot(kp.p, e) * w));
-  FrameView view[2] = {kp.in, kp.in};
-  for (int e = 0; e < 2; ++e) {
-    view[e].plane[0] = reinterpret_cast<uint8_t *>(&eye[e]);
-    view[e].stride[0] = 4 * kVec;
-  }
-  uint4 packed;
-  FrameView reg = kp.out;
-  reg.plane[0] = reinterpret_cast<uint8_t *>(&packed);
-  reg.stride[0] = 4 * kVec;
+  uint32_t out[kVec];
 #pragma unroll
-  for (int i = 0; i < kVec; ++i)
-    store_rgba(reg, i, 0,
-               pack_detail::anaglyph(kp.am, pack_detail::pixel_at(view[0], i, 0), pack_detail::pixel_at(view[1], i, 0)));
-  *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
+  for (int i = 0; i < kVec; ++i) {
+    const uint32_t c = rgba_word(pack_detail::anaglyph(kp.am, view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i)),
+                                                       view_word_rgba<kBgr, kAlpha>(word_at(eye[1], i))));
+    out[i] = kBgr ? swap_rb_word(c) : c;  // store_rgba()'s bytes
+  }
+  *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) =
+      make_uint4(out[0], out[1], out[2], out[3]);
 }
 
 // 4:2:0 output: one thread per 2x2 block (its four pixels, one chroma pair).
@@ -116,7 +125,10 @@ CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t s
   const dim3 block(kBlockX, kBlockY);
   if (I == StereoInput::SideBySide && anaglyph_pair_vec(kp.p, kp.in, kp.out)) {
     const dim3 grid((kp.out.width / kVec + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
-    P3D_CUDA_TRY(launch_chained(pack_anaglyph_pair_vec, grid, block, 0, stream, kp));
+    const bool bgr = is_bgr_order(kp.out.format), alpha = has_alpha(kp.out.format);
+    const auto kernel = bgr ? (alpha ? pack_anaglyph_pair_vec<true, true> : pack_anaglyph_pair_vec<true, false>)
+                            : (alpha ? pack_anaglyph_pair_vec<false, true> : pack_anaglyph_pair_vec<false, false>);
+    P3D_CUDA_TRY(launch_chained(kernel, grid, block, 0, stream, kp));
   } else if (!is_packed_rgb(kp.out.format)) {
     const int bw = (kp.out.width + 1) / 2, bh = (kp.out.height + 1) / 2;
     const dim3 grid((bw + kBlockX - 1) / kBlockX, (bh + kBlockY - 1) / kBlockY);
