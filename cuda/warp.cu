@@ -480,6 +480,91 @@ __device__ void render_row_group(RowJob<Keys> &j, const FrameView &src, const Yu
   }
 }
 
+// Output pixel (col, y) from a word: OutRow::store's bytes, with the
+// row's address taken per store (a RowsTogether thread stores to several
+// rows, and an OutRow for each would not fit its registers).
+template <class Keys>
+__device__ void store_word(const RowJob<Keys> &j, int col, int y, uint32_t w) {
+  if (!j.words) {
+    store_rgba(j.out, col, y, word_rgba(w));
+    return;
+  }
+  reinterpret_cast<uint32_t *>(j.out.plane[0] + static_cast<size_t>(y) * j.out.stride[0])[col] =
+      is_bgr_order(j.out.format) ? swap_rb_word(w) : w;
+}
+
+// The same rows resolved side by side (RowBlock::RowsTogether): every
+// row's source converted at once into a buffer of its own (j.row holds
+// row 0's, each next row's follows, W words apart), so that a target's key
+// is read and decoded once for all the rows, its hole bit taken once (the
+// rows' holes are the same: their z-buffers are), and the rows take the
+// barriers of one. The fills then run row by row, as render_row_group's.
+template <class Keys, HoleFill kFill>
+__device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, const YuvToRgb &m, int y0, int rows,
+                                     int *row_holes) {
+  uint32_t *rows0 = reinterpret_cast<uint32_t *>(j.row.plane[0]);
+  if (threadIdx.x < 2) row_holes[threadIdx.x] = 0;
+  zero_keys<true>(j.keys[0], 2 * j.W);  // keys[1] follows keys[0]
+  for (int r = 0; r < rows; ++r) {
+    j.row.plane[0] = reinterpret_cast<uint8_t *>(rows0 + static_cast<size_t>(r) * j.W);
+    convert_source_row(j, src, m, y0 + r);
+  }
+  __syncthreads();
+  scatter_both_eyes(j);
+  __syncthreads();
+
+  int holes[2] = {0, 0};
+  const int lane = threadIdx.x & 31;
+  for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
+    const int X = base + lane;
+    const bool in = X < j.W;
+#pragma unroll
+    for (int eye = 0; eye < 2; ++eye) {
+      const typename Keys::Word key = in ? j.keys[eye][X] : 1u;  // past the row: not a hole
+      if (in) {
+        if (key != 0) {
+          const unsigned u = Keys::u(key, X);
+          for (int r = 0; r < rows; ++r)
+            store_word(j, eye * j.W + X, y0 + r, sample_word(rows0 + static_cast<size_t>(r) * j.W, j.W, u));
+        } else {
+          ++holes[eye];
+          if (kFill == HoleFill::None)
+            for (int r = 0; r < rows; ++r) store_word(j, eye * j.W + X, y0 + r, rgba_word(kHoleColour));
+        }
+        if (kFill == HoleFill::NeighborAverage)
+          for (int r = 0; r < rows; ++r) j.mask[(static_cast<size_t>(eye) * j.H + y0 + r) * j.W + X] = key == 0 ? 1 : 0;
+      }
+      if (kFillBits<kFill>) {
+        const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
+        if (lane == 0) j.hole_bits[eye][base >> 5] = chunk_holes;
+      }
+    }
+  }
+  for (int eye = 0; eye < 2; ++eye)
+    if (holes[eye]) atomicAdd(row_holes + eye, holes[eye]);
+  __syncthreads();  // also publishes the rows' colours to the fills below
+  const bool any[2] = {row_holes[0] != 0, row_holes[1] != 0};  // block-uniform
+  if (threadIdx.x == 0 && (any[0] || any[1]))
+    atomicAdd(j.total, static_cast<unsigned long long>(rows) * (static_cast<unsigned long long>(row_holes[0]) +
+                                                               static_cast<unsigned long long>(row_holes[1])));
+  if (kFill == HoleFill::BackgroundSmooth) {
+    for (int r = 0; r < rows; ++r) {
+      j.y = y0 + r;
+      for (int eye = 0; eye < 2; ++eye) smooth_chunk_flags(j, eye);
+    }
+    for (int eye = 0; eye < 2; ++eye)
+      if (any[eye]) smooth_clean_bits(j, eye);
+    if (!any[0] && !any[1]) return;
+    __syncthreads();
+  }
+  for (int r = 0; r < rows; ++r) {
+    j.y = y0 + r;
+    j.row.plane[0] = reinterpret_cast<uint8_t *>(rows0 + static_cast<size_t>(r) * j.W);
+    for (int eye = 0; eye < 2; ++eye)
+      if (any[eye]) fill_row<Keys, kFill>(j, eye);
+  }
+}
+
 // One block = output rows y0 .. y0 + group_rows - 1 (y0 = blockIdx.x *
 // group_rows, cut at the picture's end), both eyes, so each source row is
 // converted once. Keys: the key word (NarrowKeys where they fit,
@@ -492,7 +577,8 @@ __device__ void render_row_group(RowJob<Keys> &j, const FrameView &src, const Yu
 // same cells (group_rows divides 1 << depth.shift).
 // kBlock: one row a block (RowBlock::Row), or the rows of a group in a
 // block of a row's size and launch bounds (Group) or in one of half the
-// threads an SM holds (WideGroup).
+// threads an SM holds, one row after another (WideGroup) or side by side
+// with a source row buffer each (RowsTogether: render_rows_together).
 // A row's block: at most 512 threads, as many blocks per SM as it holds
 // threads for (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at
 // most 32 registers a thread; 3 on the other Ampere to Blackwell parts,
@@ -511,10 +597,12 @@ __device__ void render_row_group(RowJob<Keys> &j, const FrameView &src, const Yu
 // SM, for rows whose both z-buffers would leave room for fewer row blocks
 // (8K: 92 KB of shared memory a block, two still fit an SM, where a row's
 // block of 512 threads would keep two, 1024 threads, resident). Where a
-// row's block keeps as many threads resident (4K), Group blocks do better:
-// 4K warp 0.168 ms against 0.178 for WideGroup, whose 1024 threads share
-// 3840 pixels unevenly (H200, docs/benchmarks.md).
-enum class RowBlock { Row, Group, WideGroup };
+// row's block keeps as many threads resident (4K), Group blocks did
+// better: 4K warp 0.168 ms against 0.178 for WideGroup, whose 1024 threads
+// share 3840 pixels unevenly, one row at a time (H200,
+// docs/benchmarks.md). A RowsTogether block has WideGroup's size and
+// bounds, but its threads resolve all of the group's rows in one pass.
+enum class RowBlock { Row, Group, WideGroup, RowsTogether };
 constexpr int kRowThreadsMax = 512;
 constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
 // At most 1 << kGroupShiftMax rows a group (4: the 4K and 8K grids'
@@ -523,8 +611,11 @@ constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
 // ms with 4 rows a group against 0.171 with 2 (docs/benchmarks.md).
 constexpr int kGroupShiftMax = 2;
 template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes, RowBlock kBlock>
-__global__ void __launch_bounds__(kBlock == RowBlock::WideGroup ? kWideGroupThreads : kRowThreadsMax,
-                                  kBlock == RowBlock::WideGroup ? 2 : P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
+__global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether ? kWideGroupThreads
+                                                                                                  : kRowThreadsMax,
+                                  kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether
+                                      ? 2
+                                      : P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, DepthGrid<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
                     unsigned long long *total, bool words, int group_rows) {
@@ -549,7 +640,8 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup ? kWideGroupThre
   auto *shared_keys = reinterpret_cast<typename Keys::Word *>(smem);
   j.keys[0] = kSharedKeys ? shared_keys : global_keys + static_cast<size_t>(y0) * j.W;
   uint8_t *rgba = reinterpret_cast<uint8_t *>(kSharedKeys ? shared_keys + kEyeArrays * j.W : shared_keys);
-  j.hole_bits[0] = reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W));
+  const int source_rows = kBlock == RowBlock::RowsTogether ? group_rows : 1;  // source row buffers
+  j.hole_bits[0] = reinterpret_cast<unsigned *>(rgba + 4 * static_cast<size_t>(j.W) * source_rows);
   j.clean_bits[0] = j.hole_bits[0] + kEyeArrays * j.chunks;
   j.keys[1] = j.keys[0] + (kBothEyes ? j.W : 0);
   j.hole_bits[1] = j.hole_bits[0] + (kBothEyes ? j.chunks : 0);
@@ -564,7 +656,9 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup ? kWideGroupThre
   j.row.plane[0] = rgba;
   j.row.stride[0] = 4 * j.W;
 
-  if (kBothEyes) {  // a row's block has one row (a constant, so no loop is compiled in)
+  if (kBlock == RowBlock::RowsTogether) {
+    render_rows_together<Keys, kFill>(j, src, m, y0, min(group_rows, j.H - y0), row_holes);
+  } else if (kBothEyes) {  // a row's block has one row (a constant, so no loop is compiled in)
     render_row_group<Keys, kFill>(j, src, m, y0, kBlock == RowBlock::Row ? 1 : min(group_rows, j.H - y0), row_holes);
   } else {
     convert_source_row(j, src, m, y0);
@@ -899,6 +993,7 @@ struct RowLaunch {
   std::vector<const void *> *attributes_set;
   int group_rows;  // rows a block (NarrowSharedPerEye only; 1: a row's block)
   bool wide_groups;  // groups in WideGroup blocks, of wide_group_threads
+  bool rows_together;  // groups in RowsTogether blocks, of wide_group_threads
   int wide_group_threads;
 };
 
@@ -928,7 +1023,8 @@ CudaStatus launch_rows(const RowLaunch &l) {
   static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
   const int rows = kBlock == RowBlock::Row ? 1 : l.group_rows;
   const unsigned blocks = static_cast<unsigned>((l.src.height + rows - 1) / rows);
-  const int threads = kBlock == RowBlock::WideGroup ? l.wide_group_threads : row_threads(l.src.width);
+  const int threads = kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether ? l.wide_group_threads
+                                                                                        : row_threads(l.src.width);
   P3D_CUDA_TRY(launch_chained(row_kernel, blocks, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes, l.D,
                               l.convergence, reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth,
                               l.total, l.words, rows));
@@ -940,6 +1036,7 @@ CudaStatus launch_row_kernel(const RowLaunch &l) {
   switch (l.keys) {
     case KeyPlace::NarrowSharedPerEye:
       if (l.group_rows == 1) return launch_rows<NarrowKeys, true, true, RowBlock::Row>(l);
+      if (l.rows_together) return launch_rows<NarrowKeys, true, true, RowBlock::RowsTogether>(l);
       return l.wide_groups ? launch_rows<NarrowKeys, true, true, RowBlock::WideGroup>(l)
                            : launch_rows<NarrowKeys, true, true, RowBlock::Group>(l);
     case KeyPlace::NarrowShared:
@@ -950,6 +1047,12 @@ CudaStatus launch_row_kernel(const RowLaunch &l) {
       return launch_rows<WideKeys, false, false, RowBlock::Row>(l);
   }
   return CudaStatus{cudaErrorInvalidValue, "KeyPlace", __FILE__, __LINE__};
+}
+
+// Shared memory of a RowsTogether block of `rows` rows: a row's with both
+// z-buffers, and a source row more for each further row.
+size_t together_smem_bytes(int W, int rows) {
+  return row_smem_bytes(W, sizeof(NarrowKeys::Word), 2) + 4 * static_cast<size_t>(W) * (rows - 1);
 }
 
 // Threads an SM holds resident of a kernel with blocks of `threads` and
@@ -970,8 +1073,12 @@ CudaStatus resident_threads(const void *kernel, int threads, size_t smem, int *r
 //  * row groups, for depth on cells of 2 x 2 pixels and more: one scatter
 //    serves the group's rows (render_row_group), so a block of G rows
 //    does the scatter's work once where G rows' blocks did it G times.
-//    Group blocks where they hold as many threads as the row kernel
-//    chosen above, else WideGroup blocks where those do.
+//    RowsTogether blocks where they hold as many threads as the row
+//    kernel chosen above (a source row each for up to 4 rows: 92 KB a
+//    block at 4K), else Group blocks where those do, else WideGroup
+//    blocks. At 4K, all three holding 2048 threads an SM on an H200, the
+//    warp took 0.1593 ms in RowsTogether blocks, 0.1641 in Group blocks
+//    and 0.17 in WideGroup ones (docs/benchmarks.md).
 CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                               RowKernelChoice *c) {
   *c = RowKernelChoice{};
@@ -983,10 +1090,12 @@ CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<
   const auto both = row_kernel_for<NarrowKeys, true, true, RowBlock::Row>(fill);
   const auto group = row_kernel_for<NarrowKeys, true, true, RowBlock::Group>(fill);
   const auto wide = row_kernel_for<NarrowKeys, true, true, RowBlock::WideGroup>(fill);
-  if (!in_turn || !both || !group || !wide)
+  const auto together = row_kernel_for<NarrowKeys, true, true, RowBlock::RowsTogether>(fill);
+  if (!in_turn || !both || !group || !wide || !together)
     return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
   for (const void *k : {reinterpret_cast<const void *>(in_turn), reinterpret_cast<const void *>(both),
-                        reinterpret_cast<const void *>(group), reinterpret_cast<const void *>(wide)})
+                        reinterpret_cast<const void *>(group), reinterpret_cast<const void *>(wide),
+                        reinterpret_cast<const void *>(together)})
     P3D_CUDA_TRY_STATUS(allow_shared_memory(k, smem_optin, attributes_set));
   int in_turn_threads = 0, both_threads = 0, group_threads = 0, wide_threads = 0;
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(in_turn), row_threads(W),
@@ -999,13 +1108,20 @@ CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<
   P3D_CUDA_TRY(cudaFuncGetAttributes(&a, reinterpret_cast<const void *>(wide)));
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(wide), a.maxThreadsPerBlock, smem_both,
                                        &wide_threads));
+  int together_threads = 0;
+  const size_t smem_together = together_smem_bytes(W, 1 << kGroupShiftMax);
+  if (smem_together + 64 <= static_cast<size_t>(smem_optin))
+    P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(together), a.maxThreadsPerBlock, smem_together,
+                                         &together_threads));
   c->both_eyes = both_threads >= in_turn_threads;
   const int row_best = c->both_eyes ? both_threads : in_turn_threads;
-  c->groups = group_threads > 0 && group_threads >= row_best;
-  if (!c->groups && wide_threads > 0 && wide_threads >= row_best) {
-    c->groups = c->wide_groups = true;
-    c->wide_group_threads = a.maxThreadsPerBlock;
+  c->wide_group_threads = a.maxThreadsPerBlock;
+  if (together_threads > 0 && together_threads >= row_best) {
+    c->groups = c->rows_together = true;
+    return {};
   }
+  c->groups = group_threads > 0 && group_threads >= row_best;
+  if (!c->groups && wide_threads > 0 && wide_threads >= row_best) c->groups = c->wide_groups = true;
   return {};
 }
 
@@ -1138,8 +1254,11 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
                         : narrow ? KeyPlace::NarrowShared
                         : wide_shared ? KeyPlace::WideShared
                                       : KeyPlace::WideGlobal;
-  const size_t smem = row_smem_bytes(W, narrow ? sizeof(NarrowKeys::Word) : wide_shared ? sizeof(WideKeys::Word) : 0,
-                                     per_eye ? 2 : 1);
+  const bool rows_together = group_rows > 1 && rows_.rows_together;
+  const size_t smem = rows_together ? together_smem_bytes(W, group_rows)
+                                    : row_smem_bytes(W, narrow ? sizeof(NarrowKeys::Word)
+                                                               : wide_shared ? sizeof(WideKeys::Word) : 0,
+                                                     per_eye ? 2 : 1);
   if (keys == KeyPlace::WideGlobal)
     P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(WideKeys::Word)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
@@ -1180,7 +1299,7 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   const bool words = rows_aligned(out, 0, 4);
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, smem_optin_,
-                         &attributes_set_, group_rows, rows_.wide_groups, rows_.wide_group_threads};
+                         &attributes_set_, group_rows, rows_.wide_groups, rows_together, rows_.wide_group_threads};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
   if (smooth)

@@ -24,7 +24,9 @@
 // a hit comes from, not its colour), so one block renders up to 4 such
 // rows from one scatter, each with its own source row (on 4 x 4 cells, 4K
 // warp 0.198 -> 0.164 ms, 8K 0.783 -> 0.593, on an H200;
-// docs/benchmarks.md). The output is the same as row by row.
+// docs/benchmarks.md); where shared memory holds a source row for each of
+// them (4K), it converts them all first and resolves them in one pass
+// (4K warp 0.164 -> 0.159). The output is the same as row by row.
 //  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the
@@ -66,13 +68,14 @@ constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
 // with both eyes warped and 32-bit keys (cuda/warp.cu,
 // choose_row_kernels): both eyes at once, and row groups where the depth
 // is on cells of 2 x 2 pixels or more, in blocks of a row's size or in
-// wide blocks of wide_group_threads.
+// wide blocks of wide_group_threads, row by row or all rows together.
 struct RowKernelChoice {
   int width = -1;
   HoleFill fill = HoleFill::None;
   bool both_eyes = false;
   bool groups = false;
   bool wide_groups = false;
+  bool rows_together = false;
   int wide_group_threads = 0;
 };
 
