@@ -914,10 +914,10 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
 // 7 us (docs/benchmarks.md). (A grid of only as many blocks as the GPU
 // holds measured slower: 4K warp 0.2172 -> 0.2266 ms, 8K 0.844 -> 0.876 on
 // an H100, chained or not.)
-// A plain launch, with no chained_kernel_start(): see launch_smooth().
 template <bool kNarrow, bool kStaged>
 __global__ void __launch_bounds__(kSmoothTileThreadsMax)
     smooth_tile_kernel(FrameView out, int W, int H, int2 radius, SmoothScratch sc) {
+  chained_kernel_start();
   extern __shared__ unsigned char smem_bytes[];
   const unsigned count = *sc.tile_count;
   for (unsigned i = blockIdx.x; i < count; i += gridDim.x) {  // block-uniform
@@ -1194,13 +1194,14 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
                                   : (plan.staged ? smooth_tile_kernel<false, true> : smooth_tile_kernel<false, false>);
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), smem_optin, attributes_set));
   P3D_CUDA_TRY_STATUS(smooth_tile_threads(reinterpret_cast<const void *>(kernel), plan.smem, threads_cache));
-  // A plain launch, not launch_chained(): most of the grid's blocks return
-  // at once (tiles without holes), and the chained start's two
-  // instructions in each of them cost more than the overlap gains (4K warp
-  // 0.2225 -> 0.2330 ms chained, on an H100; cuda/chained_launch.cuh).
+  // Chained (cuda/chained_launch.cuh): its blocks start while the row
+  // kernel's last ones run. With a block for every tile (32400 at 4K) that
+  // had cost more than it gained (4K warp 0.2225 -> 0.2330 ms on an H100);
+  // with a block for every kSmoothTilesPerBlock tiles it gains: warp
+  // 1080p 0.0667 -> 0.0656 ms, 4K 0.1589 -> 0.1578, 8K alike (H200,
+  // docs/benchmarks.md).
   const unsigned blocks = static_cast<unsigned>((plan.tiles() + kSmoothTilesPerBlock - 1) / kSmoothTilesPerBlock);
-  kernel<<<blocks, threads_cache->threads, plan.smem, stream>>>(out, W, H, plan.radius, sc);
-  P3D_CUDA_TRY_LAUNCH(smooth_tile_kernel);
+  P3D_CUDA_TRY(launch_chained(kernel, blocks, threads_cache->threads, plan.smem, stream, out, W, H, plan.radius, sc));
   return {};
 }
 
