@@ -587,8 +587,8 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 // DRAM 19 %), so every further resident row helps: the third took the 4K
 // warp from 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB
 // of shared memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register
-// bound (sm_90) only the Group and WideGroup BackgroundSmooth kernels
-// spill (4 bytes). Both eyes at once (a second z-buffer, 15 KB at 4K,
+// bound (sm_90) only the row groups' BackgroundSmooth kernels spill (4
+// bytes, RowsTogether's 8) and RowsTogether's None kernel (4). Both eyes at once (a second z-buffer, 15 KB at 4K,
 // still four rows an SM) took the warp from 0.0682 to 0.0667 ms at 1080p
 // and from 0.1983 to 0.1967 at 4K (H200, docs/benchmarks.md); from about
 // 4600 pixels a row on Hopper it would cost a resident row, and the eyes
