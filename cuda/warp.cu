@@ -457,9 +457,9 @@ __device__ void convert_source_row(const RowJob<Keys> &j, const FrameView &src, 
 // (j.depth_row), both eyes at once: the z-buffers are cleared and filled
 // once (while the first source row converts), then each row is resolved
 // from them with its own source row. Every thread of the block calls it.
-// On a grid of 2 x 2 cells (4K) a row pair shares one scatter, on 4 x 4
-// cells (8K) four rows do; a row alone (full-size depth) takes three
-// barriers, four with BackgroundSmooth's clean bits.
+// On a grid of 2 x 2 cells a row pair shares one scatter, on 4 x 4 cells
+// (the automatic grid at 4K and 8K) four rows do; a row alone (full-size
+// depth) takes three barriers, four with BackgroundSmooth's clean bits.
 template <class Keys, HoleFill kFill>
 __device__ void render_row_group(RowJob<Keys> &j, const FrameView &src, const YuvToRgb &m, int y0, int rows,
                                  int *row_holes) {
@@ -1080,12 +1080,15 @@ CudaStatus resident_threads(const void *kernel, int threads, size_t smem, int *r
 //    warp took 0.1593 ms in RowsTogether blocks, 0.1641 in Group blocks
 //    and 0.17 in WideGroup ones (docs/benchmarks.md).
 CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
-                              RowKernelChoice *c) {
-  *c = RowKernelChoice{};
-  c->width = W;
-  c->fill = fill;
+                              RowKernelChoice *choice) {
+  RowKernelChoice c;  // *choice is replaced only once every query succeeded
+  c.width = W;
+  c.fill = fill;
   const size_t smem_both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2);
-  if (smem_both + 64 > static_cast<size_t>(smem_optin)) return {};
+  if (smem_both + 64 > static_cast<size_t>(smem_optin)) {
+    *choice = c;
+    return {};
+  }
   const auto in_turn = row_kernel_for<NarrowKeys, true, false, RowBlock::Row>(fill);
   const auto both = row_kernel_for<NarrowKeys, true, true, RowBlock::Row>(fill);
   const auto group = row_kernel_for<NarrowKeys, true, true, RowBlock::Group>(fill);
@@ -1097,31 +1100,34 @@ CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<
                         reinterpret_cast<const void *>(group), reinterpret_cast<const void *>(wide),
                         reinterpret_cast<const void *>(together)})
     P3D_CUDA_TRY_STATUS(allow_shared_memory(k, smem_optin, attributes_set));
-  int in_turn_threads = 0, both_threads = 0, group_threads = 0, wide_threads = 0;
+  int in_turn_threads = 0, both_threads = 0, group_threads = 0, wide_threads = 0, together_threads = 0;
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(in_turn), row_threads(W),
                                        row_smem_bytes(W, sizeof(NarrowKeys::Word), 1), &in_turn_threads));
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(both), row_threads(W), smem_both, &both_threads));
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(group), row_threads(W), smem_both, &group_threads));
-  // The WideGroup block's size is its launch bound on this device's
+  // A wide block's size is its kernel's launch bound on this device's
   // architecture (kWideGroupThreads of the machine code it runs).
-  cudaFuncAttributes a{};
-  P3D_CUDA_TRY(cudaFuncGetAttributes(&a, reinterpret_cast<const void *>(wide)));
-  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(wide), a.maxThreadsPerBlock, smem_both,
+  cudaFuncAttributes wide_attr{}, together_attr{};
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&wide_attr, reinterpret_cast<const void *>(wide)));
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&together_attr, reinterpret_cast<const void *>(together)));
+  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(wide), wide_attr.maxThreadsPerBlock, smem_both,
                                        &wide_threads));
-  int together_threads = 0;
   const size_t smem_together = together_smem_bytes(W, 1 << kGroupShiftMax);
   if (smem_together + 64 <= static_cast<size_t>(smem_optin))
-    P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(together), a.maxThreadsPerBlock, smem_together,
-                                         &together_threads));
-  c->both_eyes = both_threads >= in_turn_threads;
-  const int row_best = c->both_eyes ? both_threads : in_turn_threads;
-  c->wide_group_threads = a.maxThreadsPerBlock;
+    P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(together), together_attr.maxThreadsPerBlock,
+                                         smem_together, &together_threads));
+  c.both_eyes = both_threads >= in_turn_threads;
+  const int row_best = c.both_eyes ? both_threads : in_turn_threads;
   if (together_threads > 0 && together_threads >= row_best) {
-    c->groups = c->rows_together = true;
-    return {};
+    c.groups = c.rows_together = true;
+    c.wide_group_threads = together_attr.maxThreadsPerBlock;
+  } else if (group_threads > 0 && group_threads >= row_best) {
+    c.groups = true;
+  } else if (wide_threads > 0 && wide_threads >= row_best) {
+    c.groups = c.wide_groups = true;
+    c.wide_group_threads = wide_attr.maxThreadsPerBlock;
   }
-  c->groups = group_threads > 0 && group_threads >= row_best;
-  if (!c->groups && wide_threads > 0 && wide_threads >= row_best) c->groups = c->wide_groups = true;
+  *choice = c;
   return {};
 }
 

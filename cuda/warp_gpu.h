@@ -62,8 +62,6 @@ constexpr int kWarpFillBatch = 8;
 // byte per 32-pixel chunk of a row and eye (has it a hole).
 constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
 
-// The BackgroundSmooth sums kernel's block size last chosen, for a kernel
-// and its shared memory (cuda/warp.cu, smooth_tile_threads).
 // The row kernels render() chose for rows of `width` pixels and `fill`
 // with both eyes warped and 32-bit keys (cuda/warp.cu,
 // choose_row_kernels): both eyes at once, and row groups where the depth
@@ -76,9 +74,11 @@ struct RowKernelChoice {
   bool groups = false;
   bool wide_groups = false;
   bool rows_together = false;
-  int wide_group_threads = 0;
+  int wide_group_threads = 0;  // a WideGroup or RowsTogether block's size
 };
 
+// The BackgroundSmooth sums kernel's block size last chosen, for a kernel
+// and its shared memory (cuda/warp.cu, smooth_tile_threads).
 struct SmoothSumsLaunch {
   const void *kernel = nullptr;
   size_t smem = 0;

@@ -170,10 +170,14 @@ TEST_F(GpuWarp, DepthOnCellGrids) {
 }
 
 // Rows that share their depth cells share one scatter (cuda/warp.cu,
-// render_row_group): in blocks of a row's size at the widths above, and
-// in wide blocks where a row's block with both z-buffers would keep fewer
-// threads resident (6000 pixels on Hopper: two wide blocks an SM against
-// three of a row's size). 67 rows leave a last group short at every cell
+// choose_row_kernels): at the widths above, on Hopper, in RowsTogether
+// blocks (a source row buffer for each row); here, 6000 pixels, in
+// WideGroup blocks (rows one after another), where neither a RowsTogether
+// block nor a row's block with both z-buffers keeps as many threads
+// resident (on Hopper: two WideGroup blocks an SM against three of a
+// row's size). Which kernel a width gets depends on the GPU's shared
+// memory; the 4K chain tests (test_gpu_extremes.cpp) run 3840-pixel rows
+// on the automatic grid. 67 rows leave a last group short at every cell
 // size; both eyes are warped (the only case with groups), every fill.
 TEST_F(GpuWarp, RowGroupsInWideRows) {
   const uint32_t seed = fresh_seed();
@@ -245,23 +249,26 @@ TEST_F(GpuWarp, UnalignedOutputRows) {
   const int w = 45, h = 9;
   HostFrame src(PixelFormat::NV12, w, h);
   src.fill_random(rng());
-  const cv::Mat depth = random_depth(w, h, DepthKind::Binary, rng());
   const test::DeviceFrame dsrc = test::DeviceFrame::upload(src);
-  const test::DeviceDepth ddepth = test::DeviceDepth::upload(depth);
   const size_t tight = 4 * static_cast<size_t>(2 * w);
   const size_t layouts[][2] = {{tight, 0}, {tight + 4, 4}, {tight, 1}, {tight + 1, 0}, {tight + 6, 3}};
+  // Full-size depth (a row a block) and cells of 4 rows (row groups, whose
+  // blocks store to several rows).
+  for (const int shift : {0, 2})
   for (PixelFormat f : {PixelFormat::RGBA, PixelFormat::BGRx})
     for (HoleFill fill : kAllFills)
       for (const auto &l : layouts) {
+        const cv::Mat depth = cell_constant(random_depth(w, h, DepthKind::Binary, rng()), shift);
+        const test::DeviceDepth ddepth = test::DeviceDepth::upload_grid(depth, shift);
         const WarpParams p = warp_params(20.f, 0.5f, StereoView::Both, fill);
         SCOPED_TRACE(describe(p, src.format(), f, w, h) + " stride " + std::to_string(l[0]) + " offset " +
-                     std::to_string(l[1]));
+                     std::to_string(l[1]) + " depth shift " + std::to_string(shift));
         HostFrame cpu(f, 2 * w, h);
         const long long cpu_holes = warp_render_cpu(p, src.view(), YuvToRgb(), depth_view_of(depth), cpu.view());
         ASSERT_GT(cpu_holes, 0);
         test::DeviceOutput out(f, 2 * w, h, l[0], l[1], 0x5A);
         long long gpu_holes = -7;
-        test::check_cuda(renderer_.render(p, dsrc.view(), YuvToRgb(), as_const(ddepth.view()), out.view(), stream_,
+        test::check_cuda(renderer_.render(p, dsrc.view(), YuvToRgb(), as_const(ddepth.grid()), out.view(), stream_,
                                           &gpu_holes));
         ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
         EXPECT_EQ(gpu_holes, cpu_holes);
