@@ -218,6 +218,17 @@ std::string message_text(GstMessage *msg) {
   return text;
 }
 
+std::string first_bus_error(GstElement *element) {
+  GstBus *bus = gst_element_get_bus(element);
+  std::string text;
+  if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
+    text = message_text(m);
+    gst_message_unref(m);
+  }
+  gst_object_unref(bus);
+  return text;
+}
+
 std::string current_caps(GstPad *pad) {
   GstCaps *caps = gst_pad_get_current_caps(pad);
   if (!caps) return "";

@@ -65,6 +65,10 @@ class BusMessages {
 // "message (debug)" of an error or warning message.
 std::string message_text(GstMessage *msg);
 
+// message_text() of the first error on the element's bus, taken off it;
+// empty when there is none.
+std::string first_bus_error(GstElement *element);
+
 // The caps on the pad (empty string if none).
 std::string current_caps(GstPad *pad);
 

@@ -41,16 +41,7 @@ std::map<std::string, int> net_objects(GstTracer *tracer) {
 }
 
 // The first error on the pipeline's bus, if any.
-std::string bus_error(GstElement *pipeline) {
-  GstBus *bus = gst_element_get_bus(pipeline);
-  std::string text;
-  if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
-    text = p3d::test::message_text(m);
-    gst_message_unref(m);
-  }
-  gst_object_unref(bus);
-  return text;
-}
+std::string bus_error(GstElement *pipeline) { return p3d::test::first_bus_error(pipeline); }
 
 void cycle(GstElement *pipeline) {
   ASSERT_NE(gst_element_set_state(pipeline, GST_STATE_PLAYING), GST_STATE_CHANGE_FAILURE) << bus_error(pipeline);

@@ -49,12 +49,7 @@ void collect(const std::string &launch, Collected *c, int timeout_s = 60, size_t
     if (!s) break;
     c->samples.push_back(s);
   }
-  GstBus *bus = gst_element_get_bus(p);
-  if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
-    c->error = message_text(m);
-    gst_message_unref(m);
-  }
-  gst_object_unref(bus);
+  c->error = first_bus_error(p);
   gst_element_set_state(p, GST_STATE_NULL);
   gst_object_unref(sink);
   gst_object_unref(p);

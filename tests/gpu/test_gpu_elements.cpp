@@ -404,12 +404,8 @@ std::vector<cv::Mat> play_and_pull(const std::string &launch) {
   }
   gst_element_set_state(p, GST_STATE_PLAYING);
   std::vector<cv::Mat> frames = pull_all(p);
-  GstBus *bus = gst_element_get_bus(p);
-  if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
-    ADD_FAILURE() << launch << ": " << message_text(m);
-    gst_message_unref(m);
-  }
-  gst_object_unref(bus);
+  const std::string error = first_bus_error(p);
+  if (!error.empty()) ADD_FAILURE() << launch << ": " << error;
   gst_element_set_state(p, GST_STATE_NULL);
   gst_object_unref(p);
   return frames;
@@ -480,12 +476,8 @@ TEST(GpuChainGrids, FlushingSeekMatchesTheCpuChain) {
                                         (GstSeekFlags)(GST_SEEK_FLAG_FLUSH | GST_SEEK_FLAG_ACCURATE), 3 * GST_SECOND));
     ASSERT_TRUE(pull(&after_seek[gpu])) << launch;
     ASSERT_TRUE(pull(nullptr)) << launch;
-    GstBus *bus = gst_element_get_bus(pipe);
-    if (GstMessage *m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
-      ADD_FAILURE() << launch << ": " << message_text(m);
-      gst_message_unref(m);
-    }
-    gst_object_unref(bus);
+    const std::string error = first_bus_error(pipe);
+    if (!error.empty()) ADD_FAILURE() << launch << ": " << error;
     gst_element_set_state(pipe, GST_STATE_NULL);
     gst_object_unref(sink);
     gst_object_unref(pipe);
