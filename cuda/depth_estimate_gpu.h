@@ -3,7 +3,9 @@
 // reuse/smooth/cut decision is taken on the device, so no host sync).
 //
 // One estimate() queues, on the given stream and without host sync:
-//   memset    the fixed-point |difference| sum in the device state
+//   memset    the fixed-point |difference| sum in the device state, only
+//             where the last frame's depth kernel did not clear it (it
+//             clears the next frame's, which takes the other of two states)
 //   features  block sums in integers -> means (step 1), and each block's
 //             |feature - reference| added to the device sum (step 5); a
 //             4:2:0 frame with 4-byte aligned rows is read four columns a
@@ -62,10 +64,14 @@ class DepthEstimatorGpu {
   // features_/ref_features_/smoothed_features_: 3 floats a block; labels_: int a block (the
   // union-find forest, then the labels); region_sums_: uint64 a block;
   // region_counts_, region_max_: uint32 a block; block_depth_: float a block, the output
-  // of the last frame; state_: DepthDeviceState (depth_estimate.cu).
+  // of the last frame; state_: two DepthDeviceStates (depth_estimate.cu).
   DeviceBuffer features_, ref_features_, smoothed_features_, labels_, region_sums_, region_counts_, region_max_, block_depth_, state_;
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   bool have_state_ = false;
+  // state_ holds two DepthDeviceStates, the last frame's at state_slot_;
+  // next_state_zeroed_: the last frame's depth kernel cleared the other.
+  int state_slot_ = 0;
+  bool next_state_zeroed_ = false;
 };
 
 // depth(x, y) = depth_from_grey(grey, x, y, m) for every pixel (device memory).
