@@ -574,7 +574,10 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 // other through one z-buffer (render_eye; one row a block). depth: the
 // picture's depth on any grid (p3d_defs.h DepthGrid; the filter's coarse
 // cells are read in place, one shift a read); a block's rows all read the
-// same cells (group_rows divides 1 << depth.shift).
+// same cells (group_rows divides 1 << depth.shift). The first group_blocks
+// blocks take group_rows rows each from the top, every later one a single
+// row, or in RowsTogether kernels one eye of one row (group_tail_y0: the
+// rows that would leave a last wave of groups mostly idle).
 // kBlock: one row a block (RowBlock::Row), or the rows of a group in a
 // block of a row's size and launch bounds (Group) or in one of half the
 // threads an SM holds, one row after another (WideGroup) or side by side
@@ -587,8 +590,8 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 // DRAM 19 %), so every further resident row helps: the third took the 4K
 // warp from 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB
 // of shared memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register
-// bound (sm_90) only the row groups' BackgroundSmooth kernels spill (4
-// bytes, RowsTogether's 8) and RowsTogether's None kernel (4). Both eyes at once (a second z-buffer, 15 KB at 4K,
+// bound (sm_90) only the Group and WideGroup kernels with BackgroundSmooth
+// spill (ptxas: 4 bytes). Both eyes at once (a second z-buffer, 15 KB at 4K,
 // still four rows an SM) took the warp from 0.0682 to 0.0667 ms at 1080p
 // and from 0.1983 to 0.1967 at 4K (H200, docs/benchmarks.md); from about
 // 4600 pixels a row on Hopper it would cost a resident row, and the eyes
@@ -618,14 +621,23 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
                                       : P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, DepthGrid<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
-                    unsigned long long *total, bool words, int group_rows) {
+                    unsigned long long *total, bool words, int group_rows, int group_blocks) {
   chained_kernel_start();
   static_assert(kSharedKeys || !kBothEyes, "both eyes at once keep their keys in shared memory");
   static_assert(kBothEyes || kBlock == RowBlock::Row, "row groups render both eyes at once");
   extern __shared__ __align__(16) unsigned long long smem[];  // 16: zero_keys() stores uint4
   __shared__ int row_holes[2];
   constexpr int kEyeArrays = kBothEyes ? 2 : 1;
-  const int y0 = blockIdx.x * group_rows;
+  // group_blocks blocks of group_rows rows, then the tail (group_tail_y0):
+  // a block for each eye of every later row in RowsTogether kernels
+  // (kEyeTail), a block a row in the others.
+  constexpr bool kEyeTail = kBlock == RowBlock::RowsTogether;
+  const int b = static_cast<int>(blockIdx.x);
+  const bool in_tail = kBlock != RowBlock::Row && b >= group_blocks;
+  const int y0 = kBlock == RowBlock::Row ? b
+                 : in_tail               ? group_blocks * group_rows + ((b - group_blocks) >> (kEyeTail ? 1 : 0))
+                                         : b * group_rows;
+  const int block_rows = min(kBlock == RowBlock::Row || in_tail ? 1 : group_rows, src.height - y0);
   RowJob<Keys> j;
   j.y = y0;
   j.W = src.width;
@@ -656,10 +668,17 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
   j.row.plane[0] = rgba;
   j.row.stride[0] = 4 * j.W;
 
-  if (kBlock == RowBlock::RowsTogether) {
-    render_rows_together<Keys, kFill>(j, src, m, y0, min(group_rows, j.H - y0), row_holes);
+  if (kEyeTail && in_tail) {  // one eye of one row
+    convert_source_row(j, src, m, y0);
+    __syncthreads();
+    if ((b - group_blocks) & 1)  // constant eyes: j's arrays stay in registers
+      render_eye<Keys, kSharedKeys, kFill>(j, 1, &row_holes[0]);
+    else
+      render_eye<Keys, kSharedKeys, kFill>(j, 0, &row_holes[0]);
+  } else if (kBlock == RowBlock::RowsTogether) {
+    render_rows_together<Keys, kFill>(j, src, m, y0, block_rows, row_holes);
   } else if (kBothEyes) {  // a row's block has one row (a constant, so no loop is compiled in)
-    render_row_group<Keys, kFill>(j, src, m, y0, kBlock == RowBlock::Row ? 1 : min(group_rows, j.H - y0), row_holes);
+    render_row_group<Keys, kFill>(j, src, m, y0, kBlock == RowBlock::Row ? 1 : block_rows, row_holes);
   } else {
     convert_source_row(j, src, m, y0);
     __syncthreads();
@@ -914,8 +933,14 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
 // 7 us (docs/benchmarks.md). (A grid of only as many blocks as the GPU
 // holds measured slower: 4K warp 0.2172 -> 0.2266 ms, 8K 0.844 -> 0.876 on
 // an H100, chained or not.)
-template <bool kNarrow, bool kStaged>
-__global__ void __launch_bounds__(kSmoothTileThreadsMax)
+// kTight: blocks of kSmoothTileThreads, as many as an SM holds threads for
+// (at most 32 registers a thread on Hopper; ptxas: no spills in the
+// staged narrow kernel, 12 to 24 bytes in the others), else
+// kSmoothTileThreadsMax with no register bound; smooth_tile_threads()
+// takes the one that keeps more threads resident.
+template <bool kNarrow, bool kStaged, bool kTight>
+__global__ void __launch_bounds__(kTight ? kSmoothTileThreads : kSmoothTileThreadsMax,
+                                  kTight ? P3D_MAX_THREADS_PER_SM / kSmoothTileThreads : 1)
     smooth_tile_kernel(FrameView out, int W, int H, int2 radius, SmoothScratch sc) {
   chained_kernel_start();
   extern __shared__ unsigned char smem_bytes[];
@@ -992,6 +1017,7 @@ struct RowLaunch {
   int smem_optin;
   std::vector<const void *> *attributes_set;
   int group_rows;  // rows a block (NarrowSharedPerEye only; 1: a row's block)
+  int tail_y0;     // row groups: from this row on, a block a row or eye (group_tail_y0)
   bool wide_groups;  // groups in WideGroup blocks, of wide_group_threads
   bool rows_together;  // groups in RowsTogether blocks, of wide_group_threads
   int wide_group_threads;
@@ -1022,12 +1048,15 @@ CudaStatus launch_rows(const RowLaunch &l) {
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(row_kernel), l.smem_optin, l.attributes_set));
   static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
   const int rows = kBlock == RowBlock::Row ? 1 : l.group_rows;
-  const unsigned blocks = static_cast<unsigned>((l.src.height + rows - 1) / rows);
+  const int tail_y0 = kBlock == RowBlock::Row ? l.src.height : l.tail_y0;
+  const int group_blocks = tail_y0 / rows;
+  const int tail_blocks_a_row = kBlock == RowBlock::RowsTogether ? 2 : 1;  // warp_row_kernel's kEyeTail
+  const unsigned blocks = static_cast<unsigned>(group_blocks + tail_blocks_a_row * max(0, l.src.height - tail_y0));
   const int threads = kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether ? l.wide_group_threads
                                                                                         : row_threads(l.src.width);
   P3D_CUDA_TRY(launch_chained(row_kernel, blocks, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes, l.D,
                               l.convergence, reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth,
-                              l.total, l.words, rows));
+                              l.total, l.words, rows, group_blocks));
   return {};
 }
 
@@ -1116,16 +1145,22 @@ CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<
   if (smem_together + 64 <= static_cast<size_t>(smem_optin))
     P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(together), together_attr.maxThreadsPerBlock,
                                          smem_together, &together_threads));
+  int dev = 0, sms = 0;
+  P3D_CUDA_TRY(cudaGetDevice(&dev));
+  P3D_CUDA_TRY(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev));
   c.both_eyes = both_threads >= in_turn_threads;
   const int row_best = c.both_eyes ? both_threads : in_turn_threads;
   if (together_threads > 0 && together_threads >= row_best) {
     c.groups = c.rows_together = true;
     c.wide_group_threads = together_attr.maxThreadsPerBlock;
+    c.group_slots = sms * (together_threads / together_attr.maxThreadsPerBlock);
   } else if (group_threads > 0 && group_threads >= row_best) {
     c.groups = true;
+    c.group_slots = sms * (group_threads / row_threads(W));
   } else if (wide_threads > 0 && wide_threads >= row_best) {
     c.groups = c.wide_groups = true;
     c.wide_group_threads = wide_attr.maxThreadsPerBlock;
+    c.group_slots = sms * (wide_threads / wide_attr.maxThreadsPerBlock);
   }
   *choice = c;
   return {};
@@ -1177,15 +1212,26 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 // 4K (6 tiles an SM with 256, 3 with 512) 0.1963 -> 0.2050; 1080p, whose
 // few tiles all fit either way, 0.0668 -> 0.0660 with 512 forced, but its
 // tiles are bound by registers as at 4K, so the rule keeps 256 there
-// (docs/benchmarks.md).
-CudaStatus smooth_tile_threads(const void *kernel, size_t smem, SmoothSumsLaunch *cache) {
-  if (cache->kernel == kernel && cache->smem == smem) return {};
-  int tiles = 0, tiles_max = 0;
-  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles, kernel, kSmoothTileThreads, smem));
-  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles_max, kernel, kSmoothTileThreadsMax, smem));
-  cache->kernel = kernel;
+// (docs/benchmarks.md). Each of these kernels has a twin bound to
+// kSmoothTileThreads threads and as many blocks as an SM holds threads
+// for (32 registers a thread on Hopper, so 8 tiles an SM at 4K instead of
+// 6); the twin runs where it keeps more threads resident, which it does
+// where registers, not shared memory, bound the tiles: 4K and 1080p, not
+// 8K. A 4K frame lists about a thousand tiles, which 8 tiles an SM take
+// in one wave: 4K warp 0.1606 -> 0.1579 ms; 1080p, whose few hundred
+// tiles fit either way, 0.0663 -> 0.0668 (H100, docs/benchmarks.md).
+CudaStatus smooth_tile_threads(const void *loose, const void *tight, size_t smem, SmoothSumsLaunch *cache) {
+  if (cache->kernel == loose && cache->smem == smem) return {};
+  int tiles = 0, tiles_max = 0, tiles_tight = 0;
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles, loose, kSmoothTileThreads, smem));
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles_max, loose, kSmoothTileThreadsMax, smem));
+  P3D_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&tiles_tight, tight, kSmoothTileThreads, smem));
+  const int threads = tiles_max >= tiles ? kSmoothTileThreadsMax : kSmoothTileThreads;
+  const bool use_tight = tiles_tight * kSmoothTileThreads > (tiles_max >= tiles ? tiles_max : tiles) * threads;
+  cache->kernel = loose;
   cache->smem = smem;
-  cache->threads = tiles_max >= tiles ? kSmoothTileThreadsMax : kSmoothTileThreads;
+  cache->launch = use_tight ? tight : loose;
+  cache->threads = use_tight ? kSmoothTileThreads : threads;
   return {};
 }
 
@@ -1196,10 +1242,16 @@ CudaStatus smooth_tile_threads(const void *kernel, size_t smem, SmoothSumsLaunch
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
                          cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
                          SmoothSumsLaunch *threads_cache) {
-  const auto kernel = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true> : smooth_tile_kernel<true, false>)
-                                  : (plan.staged ? smooth_tile_kernel<false, true> : smooth_tile_kernel<false, false>);
-  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(kernel), smem_optin, attributes_set));
-  P3D_CUDA_TRY_STATUS(smooth_tile_threads(reinterpret_cast<const void *>(kernel), plan.smem, threads_cache));
+  using Kernel = decltype(&smooth_tile_kernel<true, true, false>);
+  const Kernel loose = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true, false> : smooth_tile_kernel<true, false, false>)
+                                   : (plan.staged ? smooth_tile_kernel<false, true, false> : smooth_tile_kernel<false, false, false>);
+  const Kernel tight = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true, true> : smooth_tile_kernel<true, false, true>)
+                                   : (plan.staged ? smooth_tile_kernel<false, true, true> : smooth_tile_kernel<false, false, true>);
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(loose), smem_optin, attributes_set));
+  P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(tight), smem_optin, attributes_set));
+  P3D_CUDA_TRY_STATUS(smooth_tile_threads(reinterpret_cast<const void *>(loose), reinterpret_cast<const void *>(tight),
+                                          plan.smem, threads_cache));
+  const Kernel kernel = reinterpret_cast<Kernel>(const_cast<void *>(threads_cache->launch));
   // Chained (cuda/chained_launch.cuh): its blocks start while the row
   // kernel's last ones run. With a block for every tile (32400 at 4K) that
   // had cost more than it gained (4K warp 0.2225 -> 0.2330 ms on an H100);
@@ -1209,6 +1261,22 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
   const unsigned blocks = static_cast<unsigned>((plan.tiles() + kSmoothTilesPerBlock - 1) / kSmoothTilesPerBlock);
   P3D_CUDA_TRY(launch_chained(kernel, blocks, threads_cache->threads, plan.smem, stream, out, W, H, plan.radius, sc));
   return {};
+}
+
+// Where row groups give way to blocks of one eye of one row: after the
+// last group that a whole wave of `slots` blocks (as many as the device
+// holds resident) takes. Blocks start in index order, so the groups go
+// first; the rows left over, too few groups to fill a wave, then take a
+// block an eye, which spreads them over more SMs in shorter blocks. A frame with
+// fewer groups than slots, or a whole number of waves, has no tail: the
+// height rounded up to whole groups.
+// At 4K 540 groups of 4 rows met 264 RowsTogether slots on an H100: 12
+// groups ran alone after two full waves; 8K's 1080 WideGroup blocks left
+// 24 (the 8K warp took 0.517 ms at 4224 rows, 0.594 at 4320).
+int group_tail_y0(int H, int group_rows, int slots) {
+  const int groups = (H + group_rows - 1) / group_rows;
+  if (group_rows <= 1 || slots <= 0 || groups <= slots || groups % slots == 0) return groups * group_rows;
+  return (groups / slots) * slots * group_rows;
 }
 
 CudaStatus invalid_frames() {
@@ -1306,7 +1374,8 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
   const bool words = rows_aligned(out, 0, 4);
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, smem_optin_,
-                         &attributes_set_, group_rows, rows_.wide_groups, rows_together, rows_.wide_group_threads};
+                         &attributes_set_, group_rows, group_tail_y0(H, group_rows, rows_.group_slots),
+                         rows_.wide_groups, rows_together, rows_.wide_group_threads};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
   if (smooth)

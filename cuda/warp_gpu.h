@@ -26,7 +26,13 @@
 // warp 0.198 -> 0.164 ms, 8K 0.783 -> 0.593, on an H200;
 // docs/benchmarks.md); where shared memory holds a source row for each of
 // them (4K), it converts them all first and resolves them in one pass
-// (4K warp 0.164 -> 0.159). The output is the same as row by row.
+// (4K warp 0.164 -> 0.159). The output is the same as row by row. The
+// groups past the last whole wave of them (as many blocks as the device
+// holds resident: 12 of 4K's 540 groups, 24 of 8K's 1080 on an H100)
+// ran alone on a few SMs while the rest idled; their rows now take a
+// block each (4K warp 0.158 -> 0.145 ms, 8K 0.608 -> 0.576 on an H100),
+// and in RowsTogether blocks (4K) a block an eye (4K chain 0.265 ->
+// 0.261 ms; docs/benchmarks.md).
 //  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the
@@ -75,13 +81,15 @@ struct RowKernelChoice {
   bool wide_groups = false;
   bool rows_together = false;
   int wide_group_threads = 0;  // a WideGroup or RowsTogether block's size
+  int group_slots = 0;         // the group blocks the device holds resident (waves)
 };
 
 // The BackgroundSmooth sums kernel's block size last chosen, for a kernel
 // and its shared memory (cuda/warp.cu, smooth_tile_threads).
 struct SmoothSumsLaunch {
-  const void *kernel = nullptr;
+  const void *kernel = nullptr;  // the kernel with no register bound, for the frame's plan
   size_t smem = 0;
+  const void *launch = nullptr;  // the kernel launched: it, or its register-bound twin
   int threads = 0;
 };
 

@@ -118,6 +118,22 @@ class GpuWarpTest : public ::testing::Test {
     EXPECT_EQ(first_difference(cpu, dout.download()), "");
   }
 
+  // A random NV12 frame of w x h on depth cells of 2, 4 and 8 rows, both
+  // eyes warped (the only case with row groups), every fill.
+  void expect_row_groups(int w, int h, float max_disparity, PixelFormat out_format) {
+    const uint32_t seed = fresh_seed();
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
+    std::mt19937 rng(seed);
+    HostFrame src(PixelFormat::NV12, w, h, 2);
+    src.fill_random(rng());
+    for (const int shift : {1, 2, 3}) {
+      SCOPED_TRACE(::testing::Message() << "cells of " << (1 << shift));
+      const cv::Mat depth = cell_constant(random_depth(w, h, DepthKind::Smooth, rng()), shift);
+      for (HoleFill f : kAllFills)
+        expect_same(warp_params(max_disparity, 0.5f, StereoView::Both, f), src, depth, out_format, YuvToRgb(), shift);
+    }
+  }
+
   WarpRendererGpu renderer_;
   cudaStream_t stream_ = nullptr;
 };
@@ -179,19 +195,19 @@ TEST_F(GpuWarp, DepthOnCellGrids) {
 // memory; the 4K chain tests (test_gpu_extremes.cpp) run 3840-pixel rows
 // on the automatic grid. 67 rows leave a last group short at every cell
 // size; both eyes are warped (the only case with groups), every fill.
-TEST_F(GpuWarp, RowGroupsInWideRows) {
-  const uint32_t seed = fresh_seed();
-  SCOPED_TRACE(::testing::Message() << "seed " << seed);
-  std::mt19937 rng(seed);
-  const int w = 6000, h = 67;
-  HostFrame src(PixelFormat::NV12, w, h, 2);
-  src.fill_random(rng());
-  for (const int shift : {1, 2, 3}) {
-    SCOPED_TRACE(::testing::Message() << "cells of " << (1 << shift));
-    const cv::Mat depth = cell_constant(random_depth(w, h, DepthKind::Smooth, rng()), shift);
-    for (HoleFill f : kAllFills)
-      expect_same(warp_params(2.f, 0.5f, StereoView::Both, f), src, depth, PixelFormat::BGRx, YuvToRgb(), shift);
-  }
+TEST_F(GpuWarp, RowGroupsInWideRows) { expect_row_groups(6000, 67, 2.f, PixelFormat::BGRx); }
+
+// More row groups than the GPU holds blocks of at once, not a whole number
+// of waves of them (cuda/warp.cu, group_tail_y0): the groups that fill
+// whole waves go first, the rows after them a block each (at this width,
+// RowsTogether blocks on Hopper, a block for each eye of each row). 1363
+// rows are 341 groups of 4 (the last of 3 rows), more than the 264
+// resident blocks of an H100 or H200 at this width and not a multiple of
+// them, so the tail starts inside the frame and ends at a short group's
+// rows; cells of 2 and 8 rows give other splits. The 8K chain tests
+// (test_gpu_extremes.cpp) meet the tail of WideGroup blocks.
+TEST_F(GpuWarp, RowGroupsThenSingleRowsPastTheLastWholeWave) {
+  expect_row_groups(400, 1363, 6.f, PixelFormat::RGBA);
 }
 
 // A depth grid whose cells do not fit its picture is refused.
