@@ -566,7 +566,8 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 }
 
 // One block = output rows y0 .. y0 + group_rows - 1 (y0 = blockIdx.x *
-// group_rows, cut at the picture's end), both eyes, so each source row is
+// group_rows, cut at the picture's end; past the tail's first row, one
+// row or one eye of one row, below), both eyes, so each source row is
 // converted once. Keys: the key word (NarrowKeys where they fit,
 // common/warp.h). kSharedKeys: the z-buffer in shared memory, else in
 // global_keys (one W-key row per block). kBothEyes: both eyes at once, a
@@ -591,7 +592,7 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 // warp from 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB
 // of shared memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register
 // bound (sm_90) only the Group and WideGroup kernels with BackgroundSmooth
-// spill (ptxas: 4 bytes). Both eyes at once (a second z-buffer, 15 KB at 4K,
+// (ptxas: 4 bytes) and RowsTogether with NeighborAverage (44) spill. Both eyes at once (a second z-buffer, 15 KB at 4K,
 // still four rows an SM) took the warp from 0.0682 to 0.0667 ms at 1080p
 // and from 0.1983 to 0.1967 at 4K (H200, docs/benchmarks.md); from about
 // 4600 pixels a row on Hopper it would cost a resident row, and the eyes
@@ -671,6 +672,10 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
   if (kEyeTail && in_tail) {  // one eye of one row
     convert_source_row(j, src, m, y0);
     __syncthreads();
+    // Eye 1 takes eye 0's z-buffer, which is 16-byte aligned for
+    // zero_keys' stores (keys[1] is W words further: not aligned where W
+    // is not a multiple of 4); the block renders no other eye.
+    j.keys[1] = j.keys[0];
     if ((b - group_blocks) & 1)  // constant eyes: j's arrays stay in registers
       render_eye<Keys, kSharedKeys, kFill>(j, 1, &row_holes[0]);
     else
@@ -1263,11 +1268,12 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
   return {};
 }
 
-// Where row groups give way to blocks of one eye of one row: after the
-// last group that a whole wave of `slots` blocks (as many as the device
-// holds resident) takes. Blocks start in index order, so the groups go
-// first; the rows left over, too few groups to fill a wave, then take a
-// block an eye, which spreads them over more SMs in shorter blocks. A frame with
+// Where row groups give way to blocks of one row (of one eye of one row in
+// RowsTogether kernels): after the last group that a whole wave of `slots`
+// blocks (as many as the device holds resident) takes. Blocks start in
+// index order, so the groups go first; the rows left over, too few groups
+// to fill a wave, then take a block a row or eye, which spreads them over
+// more SMs in shorter blocks. A frame with
 // fewer groups than slots, or a whole number of waves, has no tail: the
 // height rounded up to whole groups.
 // At 4K 540 groups of 4 rows met 264 RowsTogether slots on an H100: 12
