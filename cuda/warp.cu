@@ -607,6 +607,10 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 // docs/benchmarks.md). A RowsTogether block has WideGroup's size and
 // bounds, but its threads resolve all of the group's rows in one pass.
 enum class RowBlock { Row, Group, WideGroup, RowsTogether };
+// Blocks a row of the tail (group_tail_y0) takes: one an eye in
+// RowsTogether kernels, where the shorter blocks paid (4K), one a row in
+// the others, where the eyes' path made the groups' code spill more.
+__host__ __device__ constexpr int tail_blocks_a_row(RowBlock b) { return b == RowBlock::RowsTogether ? 2 : 1; }
 constexpr int kRowThreadsMax = 512;
 constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
 // At most 1 << kGroupShiftMax rows a group (4: the 4K and 8K grids'
@@ -632,7 +636,7 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
   // group_blocks blocks of group_rows rows, then the tail (group_tail_y0):
   // a block for each eye of every later row in RowsTogether kernels
   // (kEyeTail), a block a row in the others.
-  constexpr bool kEyeTail = kBlock == RowBlock::RowsTogether;
+  constexpr bool kEyeTail = tail_blocks_a_row(kBlock) == 2;
   const int b = static_cast<int>(blockIdx.x);
   const bool in_tail = kBlock != RowBlock::Row && b >= group_blocks;
   const int y0 = kBlock == RowBlock::Row ? b
@@ -1055,8 +1059,8 @@ CudaStatus launch_rows(const RowLaunch &l) {
   const int rows = kBlock == RowBlock::Row ? 1 : l.group_rows;
   const int tail_y0 = kBlock == RowBlock::Row ? l.src.height : l.tail_y0;
   const int group_blocks = tail_y0 / rows;
-  const int tail_blocks_a_row = kBlock == RowBlock::RowsTogether ? 2 : 1;  // warp_row_kernel's kEyeTail
-  const unsigned blocks = static_cast<unsigned>(group_blocks + tail_blocks_a_row * max(0, l.src.height - tail_y0));
+  const unsigned blocks =
+      static_cast<unsigned>(group_blocks + tail_blocks_a_row(kBlock) * max(0, l.src.height - tail_y0));
   const int threads = kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether ? l.wide_group_threads
                                                                                         : row_threads(l.src.width);
   P3D_CUDA_TRY(launch_chained(row_kernel, blocks, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes, l.D,
@@ -1240,6 +1244,14 @@ CudaStatus smooth_tile_threads(const void *loose, const void *tight, size_t smem
   return {};
 }
 
+// The sums kernel of a plan's V width and staging, with or without the
+// register bound (kTight).
+template <bool kTight>
+auto smooth_kernel_for(const SmoothPlan &plan) -> decltype(&smooth_tile_kernel<true, true, kTight>) {
+  return plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true, kTight> : smooth_tile_kernel<true, false, kTight>)
+                     : (plan.staged ? smooth_tile_kernel<false, true, kTight> : smooth_tile_kernel<false, false, kTight>);
+}
+
 // BackgroundSmooth sums, after the row kernel wrote the states and anchors
 // and listed the tiles with holes: one smooth_tile_kernel, a block for every
 // kSmoothTilesPerBlock tiles the list may hold (the host does not read the
@@ -1248,10 +1260,7 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
                          cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
                          SmoothSumsLaunch *threads_cache) {
   using Kernel = decltype(&smooth_tile_kernel<true, true, false>);
-  const Kernel loose = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true, false> : smooth_tile_kernel<true, false, false>)
-                                   : (plan.staged ? smooth_tile_kernel<false, true, false> : smooth_tile_kernel<false, false, false>);
-  const Kernel tight = plan.narrow ? (plan.staged ? smooth_tile_kernel<true, true, true> : smooth_tile_kernel<true, false, true>)
-                                   : (plan.staged ? smooth_tile_kernel<false, true, true> : smooth_tile_kernel<false, false, true>);
+  const Kernel loose = smooth_kernel_for<false>(plan), tight = smooth_kernel_for<true>(plan);
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(loose), smem_optin, attributes_set));
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(tight), smem_optin, attributes_set));
   P3D_CUDA_TRY_STATUS(smooth_tile_threads(reinterpret_cast<const void *>(loose), reinterpret_cast<const void *>(tight),
@@ -1273,9 +1282,9 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
 // blocks (as many as the device holds resident) takes. Blocks start in
 // index order, so the groups go first; the rows left over, too few groups
 // to fill a wave, then take a block a row or eye, which spreads them over
-// more SMs in shorter blocks. A frame with
-// fewer groups than slots, or a whole number of waves, has no tail: the
-// height rounded up to whole groups.
+// more SMs in shorter blocks. A frame with fewer groups than slots, or a
+// whole number of waves, has no tail: the height rounded up to whole
+// groups.
 // At 4K 540 groups of 4 rows met 264 RowsTogether slots on an H100: 12
 // groups ran alone after two full waves; 8K's 1080 WideGroup blocks left
 // 24 (the 8K warp took 0.517 ms at 4224 rows, 0.594 at 4320).
