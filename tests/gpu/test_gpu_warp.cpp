@@ -12,6 +12,8 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -211,6 +213,56 @@ TEST_F(GpuWarp, RowGroupsInWideRows) { expect_row_groups(6000, 67, 2.f, PixelFor
 TEST_F(GpuWarp, RowGroupsThenSingleRowsPastTheLastWholeWave) {
   expect_row_groups(400, 1363, 6.f, PixelFormat::RGBA);
   expect_row_groups(402, 1363, 6.f, PixelFormat::RGBA);
+}
+
+// Frames queued back to back with no host sync between them, as the
+// elements queue them: every frame's kernels are chained to the last
+// frame's (cuda/chained_launch.cuh), and BackgroundSmooth's tile marks,
+// list and counts are cleared every frame by a kernel of their own
+// (cuda/warp.cu), so a frame that read the last one's counters or tiles
+// would show as a wrong frame here. Noise depth lists every tile, smooth
+// depth a few; sizes alternate (buffers reused), on cells of 4 rows (row
+// groups and their one-row tail) and full-size depth; each output is its
+// own frame, checked against the CPU once all are queued.
+TEST_F(GpuWarp, BackgroundSmoothFramesQueuedBackToBack) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  struct Frame {
+    HostFrame src;
+    cv::Mat depth;
+    int shift;
+  };
+  std::vector<Frame> frames;
+  const int sizes[][2] = {{1283, 1091}, {640, 360}};
+  for (int k = 0; k < 8; ++k) {
+    const int w = sizes[k % 2][0], h = sizes[k % 2][1], shift = k % 4 < 2 ? 2 : 0;
+    HostFrame src(PixelFormat::NV12, w, h, 2);
+    src.fill_random(rng());
+    const DepthKind kind = k % 3 == 0 ? DepthKind::Noise : DepthKind::Smooth;
+    frames.push_back(Frame{std::move(src), cell_constant(random_depth(w, h, kind, rng()), shift), shift});
+  }
+  const WarpParams p = warp_params(4.f, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth);
+  std::vector<test::DeviceFrame> srcs, outs;
+  std::vector<test::DeviceDepth> depths;
+  for (const Frame &f : frames) {
+    srcs.push_back(test::DeviceFrame::upload(f.src));
+    depths.push_back(test::DeviceDepth::upload_grid(f.depth, f.shift));
+    outs.emplace_back(PixelFormat::RGBA, 2 * f.src.width(), f.src.height());
+  }
+  ASSERT_EQ(cudaSuccess, cudaDeviceSynchronize());
+  for (size_t k = 0; k < frames.size(); ++k)
+    test::check_cuda(
+        renderer_.render(p, srcs[k].view(), YuvToRgb(), as_const(depths[k].grid()), outs[k].view(), stream_));
+  ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
+  for (size_t k = 0; k < frames.size(); ++k) {
+    SCOPED_TRACE(::testing::Message() << "frame " << k);
+    const Frame &f = frames[k];
+    HostFrame cpu(PixelFormat::RGBA, 2 * f.src.width(), f.src.height(), 12);
+    cpu.fill(kCpuPoison);
+    ASSERT_GE(warp_render_cpu(p, f.src.view(), YuvToRgb(), depth_view_of(f.depth), cpu.view()), 0);
+    EXPECT_EQ(first_difference(cpu, outs[k].download()), "");
+  }
 }
 
 // A depth grid whose cells do not fit its picture is refused.
