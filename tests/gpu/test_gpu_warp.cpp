@@ -217,10 +217,10 @@ TEST_F(GpuWarp, RowGroupsThenSingleRowsPastTheLastWholeWave) {
 
 // Frames queued back to back with no host sync between them, as the
 // elements queue them: every frame's kernels are chained to the last
-// frame's (cuda/chained_launch.cuh), and BackgroundSmooth's tile marks,
-// list and counts are cleared every frame by a kernel of their own
-// (cuda/warp.cu), so a frame that read the last one's counters or tiles
-// would show as a wrong frame here. Noise depth lists every tile, smooth
+// frame's (cuda/chained_launch.cuh), and BackgroundSmooth's tile marks
+// and count are cleared every frame by a kernel of their own (the list is
+// read up to the count; cuda/warp.cu), so a frame that read the last
+// one's counters or tiles would show as a wrong frame here. Noise depth lists every tile, smooth
 // depth a few; sizes alternate (buffers reused), on cells of 4 rows (row
 // groups and their one-row tail) and full-size depth; each output is its
 // own frame, checked against the CPU once all are queued.
