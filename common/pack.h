@@ -49,7 +49,8 @@
 //   Checkerboard      W  x H   (X + Y) even from L, odd from R
 //   Left / Right      W  x H   one view
 //   Anaglyph          W  x H   per pixel: out = Ml * L + Mr * R (3x3 matrices
-//                              on 0..255 R'G'B', then to_u8), alpha from L.
+//                              on 0..255 R'G'B', in 16.16 fixed point, rounded
+//                              and clipped to 0..255; below), alpha from L.
 // An output in the input's own arrangement and eye order is the input itself
 // (pack_is_identity(): the element passes such buffers through).
 //
@@ -73,8 +74,14 @@
 //   single-channel filter gets luma: green-magenta the left, amber-blue the
 //   right eye); Gray: both eyes as luma.
 // Color/HalfColor/Gray are matrices too (luma rows: rgb_luma's BT.601
-// weights), so every anaglyph takes the one path out = Ml * L + Mr * R,
-// evaluated as (Ml row . L) + (Mr row . R), each dot left to right.
+// weights), so every anaglyph takes the one path out = Ml * L + Mr * R: in
+// 16.16 fixed point, each coefficient round(65536 m), each channel's sum
+// of products plus 2^15 shifted down 16 bits and clipped (anaglyph_mix_word;
+// within one code of the float mix, equal to it but where the float sum
+// lies within about 2^-16 of a half: the integers cost a pixel 18
+// multiply-adds where floats took about 60 instructions, and the GPU's
+// fused anaglyph is bound by its instructions); DuboisLinear in float:
+// (Ml row . L) + (Mr row . R) on linear values, each dot left to right.
 // Anaglyphs keep colour detail only in full-resolution chroma: encode them
 // as RGB or 4:4:4 (4:2:0 smears the red channel over two pixels).
 #pragma once
@@ -119,6 +126,8 @@ struct PackParams {
 };
 
 // Row-major 3x3 matrices: out.r = m[0]*c.r + m[1]*c.g + m[2]*c.b, ...
+// left_q / right_q: the same in 16.16 fixed point, round(65536 m), which
+// every method but DuboisLinear mixes with (anaglyph_mix_word).
 // With linear_light the views are mixed in linear light (DuboisLinear):
 // to_linear[v] is the linear value of sRGB code v, and the output code is
 // the number of midpoints[k] = (to_linear[k] + to_linear[k + 1]) / 2,
@@ -126,6 +135,8 @@ struct PackParams {
 struct AnaglyphMatrices {
   float left[9];
   float right[9];
+  int32_t left_q[9];
+  int32_t right_q[9];
   bool linear_light;
   float to_linear[256];
   float midpoints[255];
@@ -291,15 +302,33 @@ P3D_HD uint8_t linear_to_code(const AnaglyphMatrices &am, float v) {
   return static_cast<uint8_t>(lo);
 }
 
-// The mix on gamma-encoded R'G'B' (every method but DuboisLinear).
+// The mix on gamma-encoded R'G'B' (every method but DuboisLinear), on the
+// pixels' words (rgba_word order; the alpha is l's) with the matrices in
+// 16.16 fixed point (AnaglyphMatrices::left_q, right_q): per channel the
+// sum of the six products plus 2^15, shifted down 16 bits (rounded to the
+// nearest, halves up) and clipped to 0..255. Integer arithmetic, so the
+// CPU and every GPU kernel agree without care for operation order; a pixel
+// is 18 multiply-adds where the float mix took about 60 instructions,
+// which counted in the warp's fused anaglyph (cuda/warp.cu), a kernel
+// bound by its instructions. |q| < 2^17 and 6 * 255 * 2^17 < 2^31: no
+// overflow. Against the float mix it differs by at most one code, where
+// the float sum lies within about 2^-16 of a half (tests/common/test_pack.cpp).
+P3D_HD uint32_t anaglyph_mix_word(const int32_t *left, const int32_t *right, uint32_t l, uint32_t r) {
+  const int lr = static_cast<int>(l & 0xffu), lg = static_cast<int>((l >> 8) & 0xffu),
+            lb = static_cast<int>((l >> 16) & 0xffu);
+  const int rr = static_cast<int>(r & 0xffu), rg = static_cast<int>((r >> 8) & 0xffu),
+            rb = static_cast<int>((r >> 16) & 0xffu);
+  uint32_t out = l & 0xff000000u;
+  for (int k = 0; k < 3; ++k) {
+    const int v = (left[3 * k] * lr + left[3 * k + 1] * lg + left[3 * k + 2] * lb + right[3 * k] * rr +
+                   right[3 * k + 1] * rg + right[3 * k + 2] * rb + 32768) >>
+                  16;
+    out |= static_cast<uint32_t>(v < 0 ? 0 : (v > 255 ? 255 : v)) << (8 * k);
+  }
+  return out;
+}
 P3D_HD Rgba anaglyph_gamma(const AnaglyphMatrices &am, Rgba l, Rgba r) {
-  Rgba o;
-  o.a = l.a;
-  const float lr = l.r, lg = l.g, lb = l.b, rr = r.r, rg = r.g, rb = r.b;
-  o.r = to_u8(mat_row(am.left, 0, lr, lg, lb) + mat_row(am.right, 0, rr, rg, rb));
-  o.g = to_u8(mat_row(am.left, 1, lr, lg, lb) + mat_row(am.right, 1, rr, rg, rb));
-  o.b = to_u8(mat_row(am.left, 2, lr, lg, lb) + mat_row(am.right, 2, rr, rg, rb));
-  return o;
+  return word_rgba(anaglyph_mix_word(am.left_q, am.right_q, rgba_word(l), rgba_word(r)));
 }
 
 P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {

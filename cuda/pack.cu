@@ -60,7 +60,8 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
 // kVec pixels a thread: each eye's kVec input pixels come in one 16-byte
 // load (the launcher checks that the rows are 16-byte aligned and the view
 // width is a multiple of kVec, so no thread has a ragged end), then
-// pack_pixel_for's own anaglyph() per pixel on the words as load_rgba()
+// anaglyph() per pixel (anaglyph_mix_word for the gamma mixes) on the
+// words as load_rgba()
 // reads them and store_rgba() writes them. The format's byte order and
 // alpha are template parameters (kBgr, kAlpha: one kernel a packed
 // format), so a pixel costs no format test: the kernel was bound by
@@ -94,8 +95,15 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   uint32_t out[kVec];
 #pragma unroll
   for (int i = 0; i < kVec; ++i) {
-    const uint32_t c = rgba_word(pack_detail::anaglyph(kp.am, view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i)),
-                                                       view_word_rgba<kBgr, kAlpha>(word_at(eye[1], i))));
+    uint32_t c;
+    if (kp.am.linear_light) {
+      c = rgba_word(pack_detail::anaglyph(kp.am, view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i)),
+                                          view_word_rgba<kBgr, kAlpha>(word_at(eye[1], i))));
+    } else {  // anaglyph()'s gamma mix on the words as load_rgba() reads them
+      c = pack_detail::anaglyph_mix_word(kp.am.left_q, kp.am.right_q,
+                                         rgba_word(view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i))),
+                                         rgba_word(view_word_rgba<kBgr, kAlpha>(word_at(eye[1], i))));
+    }
     out[i] = kBgr ? swap_rb_word(c) : c;  // store_rgba()'s bytes
   }
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) =
