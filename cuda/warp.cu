@@ -8,6 +8,7 @@
 // the Background fill follow each other behind __syncthreads, and nothing
 // but the depth row, the source row and the output row touches DRAM.
 #include "chained_launch.cuh"
+#include "pack_gpu.h"
 #include "warp_gpu.h"
 
 #include <utility>
@@ -16,6 +17,20 @@
 #include "launch_bounds.cuh"
 
 namespace p3d {
+
+// The anaglyph output of a fused render (WarpRendererGpu::render_packed,
+// below): `out` W x H, packed RGB in the pair's format with 4-byte aligned
+// rows; the gamma mix's fixed-point matrices (anaglyph_mix_word,
+// common/pack.h), kernel parameters so that the mix reads them as constant
+// operands; `swap`: the
+// right eye is shown as the left (PackParams::swap_eyes). out.plane[0]
+// null: not fused.
+struct FusedAnaglyph {
+  FrameView out;
+  int32_t left[9], right[9];  // AnaglyphMatrices::left_q, right_q
+  bool swap;
+};
+
 namespace {
 
 constexpr unsigned kFullMask = 0xffffffffu;
@@ -133,6 +148,31 @@ __device__ void background_fill_row(const FrameView &out, const Rgba *src_row, i
     const int pick = background_source(X, xl, key_depth_at<Keys>(keys, xl), xr, key_depth_at<Keys>(keys, xr));
     store_rgba(out, col0 + X, y, pick >= 0 ? rendered_colour(out, src_row, W, Keys::u(keys[pick], pick)) : kFillBlack);
   }
+}
+
+// ---- Pack fused into the warp (WarpRendererGpu::render_packed) -------------
+// An anaglyph pixel needs both eyes' colours at one target, which the
+// RowsTogether kernel holds at once: where neither eye has a hole there it
+// writes the anaglyph pixel itself, and the pair (render_packed's scratch)
+// gets only the colours next to holes. The sums kernel then fills the
+// holes in the pair, and a last kernel (fused_anaglyph_patch_kernel) mixes
+// the pixels where either eye had a hole, and the tail rows, whose blocks
+// render one eye each. The 4K pair (66 MB) is then neither written whole
+// nor read back by a pack kernel.
+
+// The anaglyph of the pair's words w0 (left eye) and w1 (rgba_word order)
+// as pack's anaglyph() mixes them after load_rgba() reads them back from a
+// pair of `pair_alpha` (alpha 255 in the formats without one), as a word.
+__device__ uint32_t fused_anaglyph_word(const FusedAnaglyph &f, uint32_t w0, uint32_t w1, bool pair_alpha) {
+  const uint32_t l = f.swap ? w1 : w0, r = f.swap ? w0 : w1;
+  return pack_detail::anaglyph_mix_word(f.left, f.right, pair_alpha ? l : l | 0xff000000u, r);
+}
+
+// Pixel (col, y) of a frame with 4-byte aligned rows from a word in
+// rgba_word order: store_rgba()'s bytes in one store.
+__device__ void store_aligned_word(const FrameView &out, int col, int y, uint32_t w) {
+  reinterpret_cast<uint32_t *>(out.plane[0] + static_cast<size_t>(y) * out.stride[0])[col] =
+      is_bgr_order(out.format) ? swap_rb_word(w) : w;
 }
 
 // BackgroundSmooth's scratch (both eyes, W x H each) and its tiles. The
@@ -489,8 +529,28 @@ __device__ void store_word(const RowJob<Keys> &j, int col, int y, uint32_t w) {
     store_rgba(j.out, col, y, word_rgba(w));
     return;
   }
-  reinterpret_cast<uint32_t *>(j.out.plane[0] + static_cast<size_t>(y) * j.out.stride[0])[col] =
-      is_bgr_order(j.out.format) ? swap_rb_word(w) : w;
+  store_aligned_word(j.out, col, y, w);
+}
+
+// Target X of both eyes in the rows of a RowsTogether block with the pack
+// fused (keys k0, k1; 0 is a hole): the anaglyph pixel where neither eye
+// has a hole, else each covered eye's colour into the pair, for the sums
+// kernel's fill and the patch kernel's mix.
+template <class Keys>
+__device__ void resolve_fused_target(const RowJob<Keys> &j, const FusedAnaglyph &f, const uint32_t *rows0, int y0,
+                                     int rows, int X, typename Keys::Word k0, typename Keys::Word k1) {
+  const unsigned u0 = Keys::u(k0, X), u1 = Keys::u(k1, X);
+  const bool pair_alpha = has_alpha(j.out.format);
+  for (int r = 0; r < rows; ++r) {
+    const uint32_t *row = rows0 + static_cast<size_t>(r) * j.W;
+    if (k0 != 0 && k1 != 0) {
+      store_aligned_word(f.out, X, y0 + r,
+                         fused_anaglyph_word(f, sample_word(row, j.W, u0), sample_word(row, j.W, u1), pair_alpha));
+      continue;
+    }
+    if (k0 != 0) store_word(j, X, y0 + r, sample_word(row, j.W, u0));
+    if (k1 != 0) store_word(j, j.W + X, y0 + r, sample_word(row, j.W, u1));
+  }
 }
 
 // The same rows resolved side by side (RowBlock::RowsTogether): every
@@ -499,9 +559,11 @@ __device__ void store_word(const RowJob<Keys> &j, int col, int y, uint32_t w) {
 // is read and decoded once for all the rows, its hole bit taken once (the
 // rows' holes are the same: their z-buffers are), and the rows take the
 // barriers of one. The fills then run row by row, as render_row_group's.
-template <class Keys, HoleFill kFill>
+// kFused: the pack fused (resolve_fused_target; BackgroundSmooth only).
+template <class Keys, HoleFill kFill, bool kFused>
 __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, const YuvToRgb &m, int y0, int rows,
-                                     int *row_holes) {
+                                     int *row_holes, const FusedAnaglyph &fused) {
+  static_assert(!kFused || kFill == HoleFill::BackgroundSmooth, "the fused pack's holes are filled by the sums kernel");
   uint32_t *rows0 = reinterpret_cast<uint32_t *>(j.row.plane[0]);
   if (threadIdx.x < 2) row_holes[threadIdx.x] = 0;
   zero_keys<true>(j.keys[0], 2 * j.W);  // keys[1] follows keys[0]
@@ -518,25 +580,40 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
   for (int base = threadIdx.x - lane; base < j.W; base += blockDim.x) {
     const int X = base + lane;
     const bool in = X < j.W;
-#pragma unroll
-    for (int eye = 0; eye < 2; ++eye) {
-      const typename Keys::Word key = in ? j.keys[eye][X] : 1u;  // past the row: not a hole
+    if (kFused) {
+      const typename Keys::Word k0 = in ? j.keys[0][X] : 1u, k1 = in ? j.keys[1][X] : 1u;  // past the row: no hole
       if (in) {
-        if (key != 0) {
-          const unsigned u = Keys::u(key, X);
-          for (int r = 0; r < rows; ++r)
-            store_word(j, eye * j.W + X, y0 + r, sample_word(rows0 + static_cast<size_t>(r) * j.W, j.W, u));
-        } else {
-          ++holes[eye];
-          if (kFill == HoleFill::None)
-            for (int r = 0; r < rows; ++r) store_word(j, eye * j.W + X, y0 + r, rgba_word(kHoleColour));
-        }
-        if (kFill == HoleFill::NeighborAverage)
-          for (int r = 0; r < rows; ++r) j.mask[(static_cast<size_t>(eye) * j.H + y0 + r) * j.W + X] = key == 0 ? 1 : 0;
+        holes[0] += k0 == 0;
+        holes[1] += k1 == 0;
+        resolve_fused_target(j, fused, rows0, y0, rows, X, k0, k1);
       }
-      if (kFillBits<kFill>) {
-        const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
-        if (lane == 0) j.hole_bits[eye][base >> 5] = chunk_holes;
+      const unsigned chunk_holes0 = __ballot_sync(kFullMask, k0 == 0), chunk_holes1 = __ballot_sync(kFullMask, k1 == 0);
+      if (lane == 0) {
+        j.hole_bits[0][base >> 5] = chunk_holes0;
+        j.hole_bits[1][base >> 5] = chunk_holes1;
+      }
+    } else {
+#pragma unroll
+      for (int eye = 0; eye < 2; ++eye) {
+        const typename Keys::Word key = in ? j.keys[eye][X] : 1u;  // past the row: not a hole
+        if (in) {
+          if (key != 0) {
+            const unsigned u = Keys::u(key, X);
+            for (int r = 0; r < rows; ++r)
+              store_word(j, eye * j.W + X, y0 + r, sample_word(rows0 + static_cast<size_t>(r) * j.W, j.W, u));
+          } else {
+            ++holes[eye];
+            if (kFill == HoleFill::None)
+              for (int r = 0; r < rows; ++r) store_word(j, eye * j.W + X, y0 + r, rgba_word(kHoleColour));
+          }
+          if (kFill == HoleFill::NeighborAverage)
+            for (int r = 0; r < rows; ++r)
+              j.mask[(static_cast<size_t>(eye) * j.H + y0 + r) * j.W + X] = key == 0 ? 1 : 0;
+        }
+        if (kFillBits<kFill>) {
+          const unsigned chunk_holes = __ballot_sync(kFullMask, key == 0);
+          if (lane == 0) j.hole_bits[eye][base >> 5] = chunk_holes;
+        }
       }
     }
   }
@@ -618,7 +695,7 @@ constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
 // Group blocks for 528 on an H200) the longer groups win: 4K warp 0.1635
 // ms with 4 rows a group against 0.171 with 2 (docs/benchmarks.md).
 constexpr int kGroupShiftMax = 2;
-template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes, RowBlock kBlock>
+template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes, RowBlock kBlock, bool kFused>
 __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether ? kWideGroupThreads
                                                                                                   : kRowThreadsMax,
                                   kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether
@@ -626,9 +703,10 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
                                       : P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, DepthGrid<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
-                    unsigned long long *total, bool words, int group_rows, int group_blocks) {
+                    unsigned long long *total, bool words, int group_rows, int group_blocks, FusedAnaglyph fused) {
   chained_kernel_start();
   static_assert(kSharedKeys || !kBothEyes, "both eyes at once keep their keys in shared memory");
+  static_assert(!kFused || kBlock == RowBlock::RowsTogether, "the pack is fused in RowsTogether blocks");
   static_assert(kBothEyes || kBlock == RowBlock::Row, "row groups render both eyes at once");
   extern __shared__ __align__(16) unsigned long long smem[];  // 16: zero_keys() stores uint4
   __shared__ int row_holes[2];
@@ -685,7 +763,7 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
     else
       render_eye<Keys, kSharedKeys, kFill>(j, 0, &row_holes[0]);
   } else if (kBlock == RowBlock::RowsTogether) {
-    render_rows_together<Keys, kFill>(j, src, m, y0, block_rows, row_holes);
+    render_rows_together<Keys, kFill, kFused>(j, src, m, y0, block_rows, row_holes, fused);
   } else if (kBothEyes) {  // a row's block has one row (a constant, so no loop is compiled in)
     render_row_group<Keys, kFill>(j, src, m, y0, kBlock == RowBlock::Row ? 1 : block_rows, row_holes);
   } else {
@@ -963,6 +1041,81 @@ __global__ void __launch_bounds__(kTight ? kSmoothTileThreads : kSmoothTileThrea
   }
 }
 
+// The fused anaglyph's pixels that the row kernel left in the pair (pair:
+// render_packed's scratch, 2W x H, both eyes' colours final): the holes of
+// the listed tiles, either eye's (the sums kernel has filled them, and the
+// other eye's colour is in the pair, written by the row kernel or filled
+// too), then every pixel of the rows from tail_y0 on, whose blocks render
+// one eye each. A pixel that both eyes' tiles (or a tile and its tail row)
+// hold is written twice with the same bytes.
+// Its time is load latency (the tile count, the list, the states, the
+// pair): the work is kPatchPerThread pixels of one row an item (a quarter
+// of a tile's row, or of a tail row), every item of the frame shared out
+// over one wave of resident threads, each issuing the loads of all its
+// pixels before it uses any: 7-8 us at 4K on an H100 (Nsight Compute),
+// where a block a listed tile plus a block a tail row took 14 us, and two
+// waves of blocks a tile or a quarter of a tail row 10 (docs/benchmarks.md).
+constexpr int kPatchThreads = 256, kPatchPerThread = 4;
+static_assert(kSmoothTileW % kPatchPerThread == 0, "a tile row is whole items");
+
+__device__ uint32_t pair_word(const FrameView &pair, int col, int y) {
+  const uint32_t w = reinterpret_cast<const uint32_t *>(pair.plane[0] + static_cast<size_t>(y) * pair.stride[0])[col];
+  return is_bgr_order(pair.format) ? swap_rb_word(w) : w;  // store_rgba()'s bytes back in rgba_word order
+}
+
+__global__ void fused_anaglyph_patch_kernel(FrameView pair, FusedAnaglyph f, SmoothScratch sc, int tail_y0) {
+  chained_kernel_start();
+  const int W = pair.width / 2, H = pair.height, chunks = row_chunks(W);
+  constexpr int kItemsARow = kSmoothTileW / kPatchPerThread;
+  // 32-bit counts (a 64-bit division cost more than the rest of an item):
+  // at most 2 x 256 x 8192 tile rows of 8 items (all listed at 8K), and
+  // 8192 rows of 2048.
+  const unsigned per_tile = static_cast<unsigned>(sc.tile_rows) * kItemsARow;
+  const unsigned tile_items = *sc.tile_count * per_tile;
+  const unsigned tail_row_items = static_cast<unsigned>(W + kPatchPerThread - 1) / kPatchPerThread;
+  const unsigned items = tile_items + static_cast<unsigned>(H - tail_y0) * tail_row_items;
+  const bool pair_alpha = has_alpha(pair.format);
+  for (unsigned item = blockIdx.x * blockDim.x + threadIdx.x; item < items; item += gridDim.x * blockDim.x) {
+    int x0, y;
+    bool mix[kPatchPerThread];
+    if (item < tile_items) {
+      const int k = static_cast<int>(item % per_tile);
+      const unsigned t = sc.tile_list[item / per_tile];
+      const int tx = static_cast<int>(t % sc.tiles_x), rest = static_cast<int>(t / sc.tiles_x);
+      const int ty = rest % sc.tiles_y, eye = rest / sc.tiles_y;
+      y = ty * sc.tile_rows + k / kItemsARow;
+      x0 = tx * kSmoothTileW + (k % kItemsARow) * kPatchPerThread;
+      // The row kernel writes states only in chunks with holes; the others
+      // hold a past frame's (initialised) bytes, loaded with the flag and
+      // dropped.
+      const bool in_rows = y < H;
+      const size_t row = (static_cast<size_t>(eye) * H + (in_rows ? y : 0)) * W;
+      const bool flag = in_rows && sc.chunk_holes[(static_cast<size_t>(eye) * H + (in_rows ? y : 0)) * chunks + tx];
+      uint8_t state[kPatchPerThread];
+#pragma unroll
+      for (int i = 0; i < kPatchPerThread; ++i) state[i] = x0 + i < W ? sc.state[row + x0 + i] : 0;
+#pragma unroll
+      for (int i = 0; i < kPatchPerThread; ++i) mix[i] = flag && (state[i] & kStateHole);
+    } else {
+      const unsigned k = item - tile_items;
+      y = tail_y0 + static_cast<int>(k / tail_row_items);
+      x0 = static_cast<int>(k % tail_row_items) * kPatchPerThread;
+#pragma unroll
+      for (int i = 0; i < kPatchPerThread; ++i) mix[i] = x0 + i < W;
+    }
+    uint32_t w[kPatchPerThread][2];
+#pragma unroll
+    for (int i = 0; i < kPatchPerThread; ++i)
+      if (mix[i]) {
+        w[i][0] = pair_word(pair, x0 + i, y);
+        w[i][1] = pair_word(pair, W + x0 + i, y);
+      }
+#pragma unroll
+    for (int i = 0; i < kPatchPerThread; ++i)
+      if (mix[i]) store_aligned_word(f.out, x0 + i, y, fused_anaglyph_word(f, w[i][0], w[i][1], pair_alpha));
+  }
+}
+
 __global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *mask) {
   chained_kernel_start();
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
@@ -1030,29 +1183,38 @@ struct RowLaunch {
   bool wide_groups;  // groups in WideGroup blocks, of wide_group_threads
   bool rows_together;  // groups in RowsTogether blocks, of wide_group_threads
   int wide_group_threads;
+  FusedAnaglyph fused;  // out.plane[0] null: not fused
 };
 
-// The row kernel of a key word, key place, eye order, block kind and fill.
-template <class Keys, bool kSharedKeys, bool kBothEyes, RowBlock kBlock>
-auto row_kernel_for(HoleFill fill) -> decltype(&warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes, kBlock>) {
-  switch (fill) {
-    case HoleFill::Background:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::Background, kBothEyes, kBlock>;
-    case HoleFill::NeighborAverage:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::NeighborAverage, kBothEyes, kBlock>;
-    case HoleFill::None:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes, kBlock>;
-    case HoleFill::BackgroundSmooth:
-      return warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes, kBlock>;
+// The row kernel of a key word, key place, eye order, block kind and fill;
+// kFused: with the pack fused (BackgroundSmooth only, else null).
+template <class Keys, bool kSharedKeys, bool kBothEyes, RowBlock kBlock, bool kFused = false>
+auto row_kernel_for(HoleFill fill)
+    -> decltype(&warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes, kBlock, kFused>) {
+  if constexpr (kFused) {
+    return fill == HoleFill::BackgroundSmooth
+               ? warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes, kBlock, true>
+               : nullptr;
+  } else {
+    switch (fill) {
+      case HoleFill::Background:
+        return warp_row_kernel<Keys, kSharedKeys, HoleFill::Background, kBothEyes, kBlock, false>;
+      case HoleFill::NeighborAverage:
+        return warp_row_kernel<Keys, kSharedKeys, HoleFill::NeighborAverage, kBothEyes, kBlock, false>;
+      case HoleFill::None:
+        return warp_row_kernel<Keys, kSharedKeys, HoleFill::None, kBothEyes, kBlock, false>;
+      case HoleFill::BackgroundSmooth:
+        return warp_row_kernel<Keys, kSharedKeys, HoleFill::BackgroundSmooth, kBothEyes, kBlock, false>;
+    }
+    return nullptr;
   }
-  return nullptr;
 }
 
 int row_threads(int W) { return W > 1024 ? kRowThreadsMax : 256; }
 
-template <class Keys, bool kSharedKeys, bool kBothEyes, RowBlock kBlock>
+template <class Keys, bool kSharedKeys, bool kBothEyes, RowBlock kBlock, bool kFused = false>
 CudaStatus launch_rows(const RowLaunch &l) {
-  const auto row_kernel = row_kernel_for<Keys, kSharedKeys, kBothEyes, kBlock>(l.fill);
+  const auto row_kernel = row_kernel_for<Keys, kSharedKeys, kBothEyes, kBlock, kFused>(l.fill);
   if (!row_kernel) return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
   P3D_CUDA_TRY_STATUS(allow_shared_memory(reinterpret_cast<const void *>(row_kernel), l.smem_optin, l.attributes_set));
   static_assert(kSharedKeys || sizeof(typename Keys::Word) == sizeof(*l.global_keys), "global keys are wide");
@@ -1065,7 +1227,7 @@ CudaStatus launch_rows(const RowLaunch &l) {
                                                                                         : row_threads(l.src.width);
   P3D_CUDA_TRY(launch_chained(row_kernel, blocks, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes, l.D,
                               l.convergence, reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth,
-                              l.total, l.words, rows, group_blocks));
+                              l.total, l.words, rows, group_blocks, l.fused));
   return {};
 }
 
@@ -1074,7 +1236,9 @@ CudaStatus launch_row_kernel(const RowLaunch &l) {
   switch (l.keys) {
     case KeyPlace::NarrowSharedPerEye:
       if (l.group_rows == 1) return launch_rows<NarrowKeys, true, true, RowBlock::Row>(l);
-      if (l.rows_together) return launch_rows<NarrowKeys, true, true, RowBlock::RowsTogether>(l);
+      if (l.rows_together)
+        return l.fused.out.plane[0] ? launch_rows<NarrowKeys, true, true, RowBlock::RowsTogether, true>(l)
+                                    : launch_rows<NarrowKeys, true, true, RowBlock::RowsTogether>(l);
       return l.wide_groups ? launch_rows<NarrowKeys, true, true, RowBlock::WideGroup>(l)
                            : launch_rows<NarrowKeys, true, true, RowBlock::Group>(l);
     case KeyPlace::NarrowShared:
@@ -1309,6 +1473,55 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
 CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                                    DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
                                    long long *holes_out) {
+  return render_pair(params, src, m, depth, out, nullptr, stream, holes_out, nullptr);
+}
+
+CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src,
+                                          const YuvToRgb &m, DepthGrid<const float> depth, const FrameView &out,
+                                          cudaStream_t stream, bool *fused_out) {
+  if (fused_out) *fused_out = false;
+  PackParams pp = pack;
+  pp.input = StereoInput::SideBySide;
+  pp.input_right_first = false;
+  // The pair in the output's packed format (pack's input and output share
+  // one), or RGBA for a 4:2:0 output.
+  const PixelFormat pair_format = is_packed_rgb(out.format) ? out.format : PixelFormat::RGBA;
+  if (pack_is_identity(pp) && out.format == pair_format) return render(params, src, m, depth, out, stream);
+  if (src.width <= 0 || src.height <= 0 || src.width > kMaxFrameSide || src.height > kMaxFrameSide)
+    return invalid_frames();
+  const int W = src.width, H = src.height;
+  P3D_CUDA_TRY_STATUS(pair_.ensure(8 * static_cast<size_t>(W) * H));
+  FrameView pair{};
+  pair.format = pair_format;
+  pair.width = 2 * W;
+  pair.height = H;
+  pair.plane[0] = pair_.as<uint8_t>();
+  pair.stride[0] = 8 * W;
+  if (!pack_args_valid(pp, pair, out))
+    return CudaStatus{cudaErrorInvalidValue, "render_packed: pack_args_valid(pack, pair, out)", __FILE__, __LINE__};
+  const AnaglyphMatrices am = anaglyph_matrices(pp.glasses, pp.method);
+  FusedAnaglyph fused{};
+  const bool fusable = pp.layout == PackLayout::Anaglyph && !am.linear_light && out.format == pair_format &&
+                       rows_aligned(out, 0, 4);
+  if (fusable) {
+    fused.out = out;
+    for (int k = 0; k < 9; ++k) {
+      fused.left[k] = am.left_q[k];
+      fused.right[k] = am.right_q[k];
+    }
+    fused.swap = pp.swap_eyes;
+  }
+  bool used = false;
+  P3D_CUDA_TRY_STATUS(render_pair(params, src, m, depth, pair, fusable ? &fused : nullptr, stream, nullptr, &used));
+  if (fused_out) *fused_out = used;
+  if (used) return {};
+  return pack_gpu(pp, pair, out, stream);
+}
+
+CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                                        DepthGrid<const float> depth, const FrameView &out,
+                                        const FusedAnaglyph *fused_request, cudaStream_t stream, long long *holes_out,
+                                        bool *fused_used) {
   if (!warp_frames_fit(src, depth, out)) return invalid_frames();
   const WarpParams p = warp_sanitize(params);
   const int W = src.width, H = src.height;
@@ -1387,14 +1600,33 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
     sc.tiles_y = plan.tiles_y;
   }
   const bool words = rows_aligned(out, 0, 4);
+  // The pack fused where the rows are resolved together (both eyes of a
+  // target at hand) and the sums kernel fills the holes.
+  const bool fuse = fused_request && rows_together && smooth && words;
+  const int tail_y0 = group_tail_y0(H, group_rows, rows_.group_slots);
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, smem, stream, smem_optin_,
-                         &attributes_set_, group_rows, group_tail_y0(H, group_rows, rows_.group_slots),
-                         rows_.wide_groups, rows_together, rows_.wide_group_threads};
+                         &attributes_set_, group_rows, tail_y0, rows_.wide_groups, rows_together,
+                         rows_.wide_group_threads, fuse ? *fused_request : FusedAnaglyph{}};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
   if (smooth)
     P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_, &sums_launch_));
+  if (fuse) {  // one wave of resident blocks, or fewer if the frame could not fill them
+    if (resident_patch_blocks_ < 0) {
+      int dev = 0, sms = 0, threads = 0;
+      P3D_CUDA_TRY(cudaGetDevice(&dev));
+      P3D_CUDA_TRY(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev));
+      P3D_CUDA_TRY(cudaDeviceGetAttribute(&threads, cudaDevAttrMaxThreadsPerMultiProcessor, dev));
+      resident_patch_blocks_ = max(1, sms * (threads / kPatchThreads));
+    }
+    const size_t most = (plan.tiles() * plan.tile_rows * kSmoothTileW + static_cast<size_t>(max(0, H - tail_y0)) * W) /
+                            kPatchPerThread / kPatchThreads + 1;
+    const unsigned blocks = static_cast<unsigned>(min(most, static_cast<size_t>(resident_patch_blocks_)));
+    P3D_CUDA_TRY(launch_chained(fused_anaglyph_patch_kernel, blocks, kPatchThreads, 0, stream, out, *fused_request,
+                                sc, min(tail_y0, H)));
+  }
+  if (fused_used) *fused_used = fuse;
 
   if (holes_out) {
     unsigned long long h = 0;

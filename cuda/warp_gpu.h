@@ -56,6 +56,7 @@
 
 #include <vector>
 
+#include "../common/pack.h"
 #include "../common/warp.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
@@ -93,6 +94,8 @@ struct SmoothSumsLaunch {
   int threads = 0;
 };
 
+struct FusedAnaglyph;  // cuda/warp.cu
+
 class WarpRendererGpu {
  public:
   // src, depth, out: device memory (out is packed RGB, 2W x H). If
@@ -106,8 +109,28 @@ class WarpRendererGpu {
   // coarse cells, read in place; the result is the full-size map's.
   CudaStatus render(const WarpParams &params, const FrameView &src, const YuvToRgb &m, DepthGrid<const float> depth,
                     const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr);
+  // Renders the pair and packs it in one: the function of warp_render_cpu()
+  // then pack_cpu() of its 2W x H pair (pack.input is taken as the pair's
+  // side-by-side, left first). out: pack_size()'s size, packed RGB or
+  // NV12/I420 (pack_args_valid() for that pair). A side-by-side output is
+  // rendered into out directly. An anaglyph on gamma values (every method
+  // but dubois-linear) into packed RGB with 4-byte aligned rows, with
+  // BackgroundSmooth where the rows are resolved together (both eyes
+  // warped, depth on cells of 4 x 4 pixels, RowsTogether blocks: 4K on
+  // Hopper), is fused: the row kernel writes the anaglyph pixels where
+  // neither eye has a hole, and only the pixels next to holes go through
+  // the pair (4K: 0.158 ms against 0.141 for render() and 0.038 for
+  // pack_gpu() on an H100, docs/benchmarks.md).
+  // Anything else renders into a scratch pair, then pack_gpu(). *fused_out
+  // (if not null) says which ran. No host sync (but fill=NeighborAverage's).
+  CudaStatus render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src, const YuvToRgb &m,
+                           DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
+                           bool *fused_out = nullptr);
 
  private:
+  CudaStatus render_pair(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                         DepthGrid<const float> depth, const FrameView &out, const FusedAnaglyph *fused,
+                         cudaStream_t stream, long long *holes_out, bool *fused_used);
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
 
   // keys_: H x W 64-bit keys (a row per block, both eyes in turn), only for
@@ -116,8 +139,10 @@ class WarpRendererGpu {
   // count and marks (zeroed every frame). scratch_: the two NeighborAverage
   // hole masks (2 eyes x H x W bytes each). smooth_: the BackgroundSmooth
   // planes (anchors, states, chunk flags; 2 eyes) and its tile list.
-  DeviceBuffer keys_, counters_, scratch_, smooth_;
+  // pair_: render_packed's stereo pair (2W x H, 4 bytes a pixel).
+  DeviceBuffer keys_, counters_, scratch_, smooth_, pair_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
+  int resident_patch_blocks_ = -1;  // the fused anaglyph's patch kernel: one wave of its blocks, read once
   // The kernels whose shared-memory attributes this renderer has set (once
   // per kernel, to the device's most, not every frame).
   std::vector<const void *> attributes_set_;

@@ -201,11 +201,13 @@ struct SizeBench {
     if (stage == "filter") return filter.run(p.filter, f, as_const(depth[k].view), out_filtered.view, s);
     if (stage == "warp") return renderer.render(p.warp, f, p.yuv, as_const(filtered[k].view), out_stereo.view, s);
     if (stage == "pack") return pack_gpu(p.pack, stereo[k].view, out_packed.view, s);
-    // chain
+    if (stage == "warp-pack")
+      return renderer.render_packed(p.warp, p.pack, f, p.yuv, as_const(filtered[k].view), out_packed.view, s);
+    // chain: the warp and the pack as pseudo3dwarp runs them with a layout
+    // (render_packed: fused where it can be, else the pair, then pack_gpu)
     P3D_CUDA_TRY_STATUS(estimator.estimate(p.depth, f, out_depth.view, s));
     P3D_CUDA_TRY_STATUS(filter.run(p.filter, f, as_const(out_depth.view), out_filtered.view, s));
-    P3D_CUDA_TRY_STATUS(renderer.render(p.warp, f, p.yuv, as_const(out_filtered.view), out_stereo.view, s));
-    return pack_gpu(p.pack, out_stereo.view, out_packed.view, s);
+    return renderer.render_packed(p.warp, p.pack, f, p.yuv, as_const(out_filtered.view), out_packed.view, s);
   }
 };
 

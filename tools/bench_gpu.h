@@ -34,7 +34,7 @@ struct StageParams {
 // colour-conversion cost on its own; "chain" is depth, filter, warp and pack
 // back to back.
 inline const std::vector<std::string> &stage_names() {
-  static const std::vector<std::string> names = {"convert", "depth", "filter", "warp", "pack", "chain"};
+  static const std::vector<std::string> names = {"convert", "depth", "filter", "warp", "pack", "warp-pack", "chain"};
   return names;
 }
 

@@ -1,7 +1,7 @@
-// pseudo3d-bench: times every stage (convert, depth, filter, warp, pack) and
-// the whole chain on the CPU and, when built with CUDA, on the GPU, plus a
-// device-to-device copy that gives the card's achievable bandwidth. Writes
-// one JSON line per measurement and prints a short table.
+// pseudo3d-bench: times every stage (convert, depth, filter, warp, pack,
+// warp-pack) and the whole chain on the CPU and, when built with CUDA, on
+// the GPU, plus a device-to-device copy that gives the card's achievable
+// bandwidth. Writes one JSON line per measurement and prints a short table.
 //
 // Byte counts are the minimum a stage must move: every input read once,
 // every output written once (W x H frame, F = the input frame's bytes,
@@ -11,7 +11,10 @@
 //   filter   4WH/s^2 + luma + 4WH    (depth at the grid step s and guide read, depth written)
 //   warp     F + 4WH + 8WH           (frame and depth read, 2W x H pair written)
 //   pack     8WH + packed output     (pair read, layout's output written)
-//   chain    depth + filter + warp + pack
+//   warp-pack F + 4WH + packed output (the warp writing the layout's output
+//            itself, as pseudo3dwarp with a layout does: on the GPU fused
+//            where WarpRendererGpu::render_packed can, else the pair then pack)
+//   chain    depth + filter + warp-pack
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -302,9 +305,10 @@ double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageP
   }
   if (stage == "warp") return frame + filtered_map + 8 * wh;
   if (stage == "pack") return 8 * wh + packed;
+  if (stage == "warp-pack") return frame + filtered_map + packed;  // no pair between them
   if (stage == "chain") {
     double sum = 0;
-    for (const char *st : {"depth", "filter", "warp", "pack"}) sum += stage_bytes(st, f, s, p, gpu);
+    for (const char *st : {"depth", "filter", "warp-pack"}) sum += stage_bytes(st, f, s, p, gpu);
     return sum;
   }
   return 0;
@@ -446,6 +450,9 @@ struct CpuSizeBench {
       warp(p, f, filtered[k], out_stereo.view());
     } else if (stage == "pack") {
       pack_cpu(p.pack, stereo[k].view(), out_packed.view());
+    } else if (stage == "warp-pack") {
+      warp(p, f, filtered[k], out_stereo.view());
+      pack_cpu(p.pack, out_stereo.view(), out_packed.view());
     } else {  // chain
       estimator.estimate(p.depth, f, depth_view_of(out_depth));
       bilateral_filter_cpu(p.filter, f, depth_view_of(std::as_const(out_depth)), depth_view_of(out_filtered));

@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "gpu_util.h"
+#include "pack.h"
 #include "test_data.h"
 #include "warp.h"
 #include "warp_gpu.h"
@@ -32,6 +33,9 @@ using test::kAllViews;
 using test::kAllFormats;
 using test::kPackedFormats;
 using test::cell_constant;
+using test::kAllGlasses;
+using test::kAllLayouts;
+using test::kAllMethods;
 
 constexpr uint8_t kCpuPoison = 0x5A;  // DeviceFrame poisons with 0xA5: unwritten bytes differ
 
@@ -90,6 +94,51 @@ std::string first_difference(const HostFrame &want, const HostFrame &got) {
   return std::to_string(differing) + " bytes differ, " + first.str();
 }
 
+// The same for frames of any format: every luma and chroma sample of a
+// 4:2:0 frame, the pixels of a packed one.
+std::string frame_difference(const HostFrame &want, const HostFrame &got) {
+  if (is_packed_rgb(want.format())) return first_difference(want, got);
+  const FrameView a = want.view(), b = got.view();
+  long long differing = 0;
+  std::ostringstream first;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      int ua = 0, va = 0, ub = 0, vb = 0;
+      load_chroma(a, x, y, &ua, &va);
+      load_chroma(b, x, y, &ub, &vb);
+      const bool same = load_luma(a, x, y) == load_luma(b, x, y) && ua == ub && va == vb;
+      if (!same && differing++ == 0) first << "first at pixel (" << x << "," << y << ")";
+    }
+  if (differing == 0) return "";
+  return std::to_string(differing) + " pixels differ, " + first.str();
+}
+
+std::string describe(const PackParams &p, PixelFormat out) {
+  std::ostringstream s;
+  s << "layout " << int(p.layout) << " glasses " << int(p.glasses) << " method " << int(p.method) << " swap "
+    << p.swap_eyes << " into " << test::format_name(out);
+  return s.str();
+}
+
+PackParams pack_params(PackLayout layout, AnaglyphGlasses glasses, AnaglyphMethod method, bool swap) {
+  PackParams p;
+  p.layout = layout;
+  p.glasses = glasses;
+  p.method = method;
+  p.swap_eyes = swap;
+  return p;
+}
+
+// Whether this GPU resolves the rows of a group together where the tests
+// below expect it (Hopper: RowsTogether blocks at their widths), so that
+// render_packed fuses the anaglyph there.
+bool fuses_on_this_gpu() {
+  int dev = 0, major = 0;
+  cudaGetDevice(&dev);
+  cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, dev);
+  return major == 9;
+}
+
 class GpuWarpTest : public ::testing::Test {
  public:
   void SetUp() override { test::check_cuda(CudaStatus{cudaStreamCreate(&stream_), "cudaStreamCreate", __FILE__, __LINE__}); }
@@ -118,6 +167,32 @@ class GpuWarpTest : public ::testing::Test {
     ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
     EXPECT_EQ(gpu_holes, cpu_holes);
     EXPECT_EQ(first_difference(cpu, dout.download()), "");
+  }
+
+  // render_packed against warp_render_cpu, then pack_cpu of its pair (in
+  // the output's packed format, RGBA for 4:2:0), every visible byte.
+  // Returns whether the GPU fused the pack into the warp.
+  bool expect_packed_same(const WarpParams &w, const PackParams &pp, const HostFrame &src, const cv::Mat &depth,
+                          int depth_shift, PixelFormat out_format) {
+    const int sw = src.width(), sh = src.height();
+    SCOPED_TRACE(describe(w, src.format(), out_format, sw, sh) + " " + describe(pp, out_format));
+    int pw = 0, ph = 0;
+    pack_size(pp.layout, sw, sh, &pw, &ph);
+    HostFrame pair(is_packed_rgb(out_format) ? out_format : PixelFormat::RGBA, 2 * sw, sh, 4);
+    HostFrame cpu(out_format, pw, ph, 12);
+    cpu.fill(kCpuPoison);
+    EXPECT_GE(warp_render_cpu(w, src.view(), YuvToRgb(), depth_view_of(depth), pair.view()), 0);
+    pack_cpu(pp, pair.view(), cpu.view());
+
+    const test::DeviceFrame dsrc = test::DeviceFrame::upload(src);
+    const test::DeviceDepth ddepth = test::DeviceDepth::upload_grid(depth, depth_shift);
+    const test::DeviceFrame dout(out_format, pw, ph);  // poisoned
+    bool fused = false;
+    test::check_cuda(
+        renderer_.render_packed(w, pp, dsrc.view(), YuvToRgb(), as_const(ddepth.grid()), dout.view(), stream_, &fused));
+    EXPECT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
+    EXPECT_EQ(frame_difference(cpu, dout.download()), "");
+    return fused;
   }
 
   // A random NV12 frame of w x h on depth cells of 2, 4 and 8 rows, both
@@ -262,6 +337,153 @@ TEST_F(GpuWarp, BackgroundSmoothFramesQueuedBackToBack) {
     cpu.fill(kCpuPoison);
     ASSERT_GE(warp_render_cpu(p, f.src.view(), YuvToRgb(), depth_view_of(f.depth), cpu.view()), 0);
     EXPECT_EQ(first_difference(cpu, outs[k].download()), "");
+  }
+}
+
+// The pack fused into the warp (render_packed): an anaglyph on gamma
+// values with BackgroundSmooth, where the rows of a group are resolved
+// together. The row kernel writes the anaglyph where neither eye has a
+// hole, the rest goes through the pair: the sums kernel's fill, then a
+// kernel that mixes the holes of the listed tiles and the tail rows (whose
+// blocks render one eye each). Every method but dubois-linear, all glasses,
+// either eye first, three output formats; groups of 2 and 4 rows; smooth
+// depth (a few tiles listed) and noise (every tile); 1363 rows leave a
+// tail past the last whole wave (RowGroupsThenSingleRowsPastTheLastWholeWave),
+// at a width that is a multiple of 4 and one that is not; and the Aloe
+// image with its true depth on cells of 4. Each is byte for byte
+// warp_render_cpu then pack_cpu, and on Hopper each ran fused.
+TEST_F(GpuWarp, PackFusedIntoTheWarp) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  const bool hopper = fuses_on_this_gpu();
+  const PixelFormat formats[] = {PixelFormat::RGBA, PixelFormat::BGRx, PixelFormat::BGRA};
+  const WarpParams w = warp_params(6.f, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth);
+  {
+    HostFrame src(PixelFormat::NV12, 400, 1363, 2);
+    src.fill_random(rng());
+    const cv::Mat depth = cell_constant(random_depth(400, 1363, DepthKind::Smooth, rng()), 2);
+    int k = 0;
+    for (AnaglyphGlasses g : kAllGlasses)
+      for (AnaglyphMethod m : kAllMethods) {
+        if (m == AnaglyphMethod::DuboisLinear) continue;
+        const bool fused = expect_packed_same(w, pack_params(PackLayout::Anaglyph, g, m, k % 2 == 1), src, depth, 2,
+                                              formats[k % 3]);
+        if (hopper) {
+          EXPECT_TRUE(fused);
+        }
+        ++k;
+      }
+  }
+  const int sizes[][2] = {{402, 1363}, {1283, 531}};
+  for (const auto &size : sizes)
+    for (const int shift : {1, 2})
+      for (DepthKind kind : {DepthKind::Smooth, DepthKind::Noise}) {
+        SCOPED_TRACE(::testing::Message() << "cells of " << (1 << shift) << " " << kind_name(kind));
+        HostFrame src(PixelFormat::BGRx, size[0], size[1], 3);
+        src.fill_random(rng());
+        const cv::Mat depth = cell_constant(random_depth(size[0], size[1], kind, rng()), shift);
+        const PackParams pp = pack_params(PackLayout::Anaglyph, AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois,
+                                          shift == 1);
+        const bool fused = expect_packed_same(w, pp, src, depth, shift, formats[shift]);
+        if (hopper) {
+          EXPECT_TRUE(fused);
+        }
+      }
+  const cv::Mat bgr = test::load_data_image("aloeL.jpg"), gt = test::load_data_image("aloeGT.png");
+  ASSERT_FALSE(bgr.empty());
+  ASSERT_FALSE(gt.empty());
+  cv::Mat gt1 = gt, depth;
+  if (gt.channels() > 1) cv::extractChannel(gt, gt1, 0);
+  gt1.convertTo(depth, CV_32FC1, 1.0 / 255);
+  const HostFrame aloe = HostFrame::from_bgr(bgr, PixelFormat::NV12);
+  const bool fused = expect_packed_same(warp_params(5.f, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth),
+                                        PackParams(), aloe, cell_constant(depth, 2), 2, PixelFormat::RGBA);
+  if (hopper) {
+    EXPECT_TRUE(fused);
+  }
+}
+
+// What render_packed does not fuse renders the pair into its scratch, then
+// packs it: every other layout, dubois-linear, 4:2:0 outputs, the other
+// fills, one eye warped, full-size depth (no row groups), and a
+// side-by-side output (rendered in place). Each is byte for byte
+// warp_render_cpu then pack_cpu, and none ran fused.
+TEST_F(GpuWarp, PackedOutputsThatAreNotFused) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  HostFrame src(PixelFormat::NV12, 258, 131, 2);
+  src.fill_random(rng());
+  const cv::Mat depth = cell_constant(random_depth(258, 131, DepthKind::Smooth, rng()), 2);
+  const WarpParams smooth = warp_params(8.f, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth);
+  for (PackLayout l : kAllLayouts) {
+    if (l == PackLayout::Anaglyph) continue;
+    for (const bool swap : {false, true})
+      EXPECT_FALSE(expect_packed_same(smooth, pack_params(l, AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois, swap),
+                                      src, depth, 2, PixelFormat::RGBx));
+  }
+  const PackParams anaglyph;
+  EXPECT_FALSE(expect_packed_same(
+      smooth, pack_params(PackLayout::Anaglyph, AnaglyphGlasses::AmberBlue, AnaglyphMethod::DuboisLinear, false), src,
+      depth, 2, PixelFormat::RGBA));
+  for (PixelFormat yuv : {PixelFormat::NV12, PixelFormat::I420}) {
+    EXPECT_FALSE(expect_packed_same(smooth, anaglyph, src, depth, 2, yuv));
+    EXPECT_FALSE(expect_packed_same(
+        smooth, pack_params(PackLayout::SideBySideHalf, AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois, false), src,
+        depth, 2, yuv));
+  }
+  for (HoleFill f : kAllFills) {
+    if (f == HoleFill::BackgroundSmooth) continue;
+    EXPECT_FALSE(expect_packed_same(warp_params(8.f, 0.5f, StereoView::Both, f), anaglyph, src, depth, 2,
+                                    PixelFormat::BGRA));
+  }
+  EXPECT_FALSE(expect_packed_same(warp_params(8.f, 0.5f, StereoView::Right, HoleFill::BackgroundSmooth), anaglyph,
+                                  src, depth, 2, PixelFormat::RGBA));
+  EXPECT_FALSE(expect_packed_same(smooth, anaglyph, src, depth, 0, PixelFormat::RGBA));
+}
+
+// Fused and unfused frames queued back to back with no host sync, sizes
+// alternating (the pair scratch reused, its contents from the last frame):
+// each output checked against the CPU once all are queued.
+TEST_F(GpuWarp, PackedFramesQueuedBackToBack) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  const int sizes[][2] = {{1283, 1091}, {640, 360}};
+  const WarpParams w = warp_params(4.f, 0.5f, StereoView::Both, HoleFill::BackgroundSmooth);
+  std::vector<HostFrame> srcs, cpus;
+  std::vector<cv::Mat> depths;
+  std::vector<PackParams> packs;
+  std::vector<test::DeviceFrame> dsrcs, douts;
+  std::vector<test::DeviceDepth> ddepths;
+  for (int k = 0; k < 6; ++k) {
+    const int sw = sizes[k % 2][0], sh = sizes[k % 2][1];
+    srcs.emplace_back(PixelFormat::NV12, sw, sh, 2);
+    srcs.back().fill_random(rng());
+    depths.push_back(cell_constant(random_depth(sw, sh, k % 3 == 0 ? DepthKind::Noise : DepthKind::Smooth, rng()), 2));
+    packs.push_back(pack_params(k % 4 == 3 ? PackLayout::TopBottomHalf : PackLayout::Anaglyph,
+                                AnaglyphGlasses::RedCyan, AnaglyphMethod::Dubois, k % 2 == 0));
+    int pw = 0, ph = 0;
+    pack_size(packs.back().layout, sw, sh, &pw, &ph);
+    HostFrame pair(PixelFormat::RGBA, 2 * sw, sh);
+    ASSERT_GE(warp_render_cpu(w, srcs.back().view(), YuvToRgb(), depth_view_of(std::as_const(depths.back())),
+                              pair.view()),
+              0);
+    cpus.emplace_back(PixelFormat::RGBA, pw, ph);
+    pack_cpu(packs.back(), pair.view(), cpus.back().view());
+    dsrcs.push_back(test::DeviceFrame::upload(srcs.back()));
+    ddepths.push_back(test::DeviceDepth::upload_grid(depths.back(), 2));
+    douts.emplace_back(PixelFormat::RGBA, pw, ph);
+  }
+  ASSERT_EQ(cudaSuccess, cudaDeviceSynchronize());
+  for (size_t k = 0; k < srcs.size(); ++k)
+    test::check_cuda(renderer_.render_packed(w, packs[k], dsrcs[k].view(), YuvToRgb(), as_const(ddepths[k].grid()),
+                                             douts[k].view(), stream_));
+  ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
+  for (size_t k = 0; k < srcs.size(); ++k) {
+    SCOPED_TRACE(::testing::Message() << "frame " << k);
+    EXPECT_EQ(first_difference(cpus[k], douts[k].download()), "");
   }
 }
 
