@@ -115,10 +115,7 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
 static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
   GST_OBJECT_LOCK(self);
-  if (frozen)
-    self->state->method.begin_negotiation();
-  else
-    self->state->method.end_negotiation();
+  self->state->method.freeze(frozen);
   GST_OBJECT_UNLOCK(self);
 }
 

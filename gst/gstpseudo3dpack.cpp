@@ -130,20 +130,6 @@ static GstStructure *transformed(const GstStructure *in, SizeWay way, p3d::Stere
   return gst_pseudo3d_sizes_back(in, wn, wd, hn, hd, way == SizeWay::BackRounded);
 }
 
-// Whether a caps structure's format (a name or a list) names NV12 or I420.
-static bool names_yuv420(const GstStructure *s) {
-  const GValue *v = gst_structure_get_value(s, "format");
-  if (!v) return false;
-  auto is_yuv = [](const GValue *f) {
-    const char *name = G_VALUE_HOLDS_STRING(f) ? g_value_get_string(f) : nullptr;
-    return name && (g_str_equal(name, "NV12") || g_str_equal(name, "I420"));
-  };
-  if (!GST_VALUE_HOLDS_LIST(v)) return is_yuv(v);
-  for (guint i = 0; i < gst_value_list_get_size(v); ++i)
-    if (is_yuv(gst_value_list_get_value(v, i))) return true;
-  return false;
-}
-
 static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   GST_OBJECT_LOCK(self);
@@ -161,27 +147,10 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
       input = p3d::StereoInput::SideBySide;
     GstStructure *s = transformed(in, SizeWay::ToSrc, input, g);
     p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
-    // The input's own format first (kept unless downstream asks otherwise),
-    // then 4:2:0 for encoders, in a colorimetry stated rather than left to
-    // GStreamer's size-based default (BT.2020 from 2160 rows up, which the
-    // R'G'B' views, decoded from BT.709/601 video, are not); chroma-site
-    // jpeg: each chroma sample is the mean of its 2x2 block.
-    GstStructure *yuv = gst_structure_copy(s);
-    gst_pseudo3d_set_formats(yuv, P3D_YUV420_FORMATS);
-    GValue list = G_VALUE_INIT, item = G_VALUE_INIT;
-    gst_value_list_init(&list, 3);
-    g_value_init(&item, G_TYPE_STRING);
-    for (const char *c : {"bt709", "bt601", "bt2020"}) {
-      g_value_set_string(&item, c);
-      gst_value_list_append_value(&list, &item);
-    }
-    g_value_unset(&item);
-    gst_structure_take_value(yuv, "colorimetry", &list);
-    gst_structure_set(yuv, "chroma-site", G_TYPE_STRING, "jpeg", NULL);
-    return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), yuv);
+    return p3d::gst::packed_output_caps(s);  // the input's own format, then 4:2:0
   }
   // Towards the sink, 4:2:0 output comes from any packed RGB input.
-  const bool from_yuv = names_yuv420(in);
+  const bool from_yuv = p3d::gst::names_yuv420(in);
 
   // Towards the sink: the input sizes that give this output. A declared
   // layout says nothing about the input's caps. From-caps lists first a
@@ -265,10 +234,7 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
 static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   GST_OBJECT_LOCK(self);
-  if (frozen)
-    self->geometry->begin_negotiation();
-  else
-    self->geometry->end_negotiation();
+  self->geometry->freeze(frozen);
   GST_OBJECT_UNLOCK(self);
 }
 

@@ -5,23 +5,43 @@
  * Depth-image-based rendering: renders a left and a right view from each
  * frame and its depth map (attached by pseudo3ddepth or pseudo3dfilter) by
  * forward warping with depth ordering (the nearer surface wins, sub-pixel
- * accurate), then fills the disocclusion holes from the background side. The
- * output is one full-resolution side-by-side frame (2W x H,
- * multiview-mode=side-by-side) in a packed RGB format, ready for
- * pseudo3dpack.
+ * accurate), then fills the disocclusion holes from the background side.
+ *
+ * By default (layout=side-by-side) the output is the pair itself, one
+ * full-resolution side-by-side frame (2W x H, multiview-mode=side-by-side)
+ * in a packed RGB format, ready for pseudo3dpack. With another layout the
+ * element packs the pair itself, as pseudo3dpack would (the same layouts,
+ * glasses, anaglyph methods, swap-eyes, multiview signalling and NV12/I420
+ * output for encoders), and on the GPU an anaglyph is rendered in one pass
+ * with the views where it can be: the row kernel writes the anaglyph pixels
+ * itself, and the full pair never goes through memory (4K: 0.158 ms against
+ * 0.141 + 0.038 for pseudo3dwarp ! pseudo3dpack on an H100). pseudo3dconvert packs
+ * this way.
  *
  * Parallax of a pixel is max-disparity% x width x (depth - convergence):
  * depth above the convergence plane comes out of the screen.
  *
- * ## Example launch line
+ * Every property can be changed while playing; a layout or swap-eyes change
+ * that alters the output caps is renegotiated before the next frame.
+ *
+ * ## Example launch lines
  * |[
  * gst-launch-1.0 videotestsrc ! pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp max-disparity=4 convergence=0.4 ! pseudo3dpack layout=side-by-side-half ! videoconvert ! autovideosink
+ * gst-launch-1.0 videotestsrc ! pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp layout=anaglyph ! videoconvert ! autovideosink
  * ]|
  */
 #include "gstpseudo3dwarp.h"
 
+#include "gstpseudo3dpack.h"
+
+#include <vector>
+
 #include "depth_meta.h"
 #include "enums.h"
+#include "pack.h"
+#include "pspec_clone.h"
+#include "staged_geometry.h"
+#include "stereo_caps.h"
 #include "video_util.h"
 #include "warp.h"
 
@@ -32,10 +52,28 @@
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_warp_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_warp_debug
 
-enum { PROP_0, PROP_MAX_DISPARITY, PROP_CONVERGENCE, PROP_VIEW, PROP_FILL };
+enum {
+  PROP_0,
+  PROP_MAX_DISPARITY,
+  PROP_CONVERGENCE,
+  PROP_VIEW,
+  PROP_FILL,
+  PROP_LAYOUT,
+  PROP_GLASSES,
+  PROP_ANAGLYPH_METHOD,
+  PROP_SWAP_EYES,
+};
+
+// The properties that decide the output caps (see staged_geometry.h).
+struct WarpGeometry {
+  p3d::PackLayout layout = p3d::PackLayout::SideBySide;  // the pair itself
+  bool swap_eyes = false;
+  bool operator==(const WarpGeometry &o) const { return layout == o.layout && swap_eyes == o.swap_eyes; }
+};
 
 struct WarpState {
   p3d::WarpCpuScratch cpu;  // the CPU path's planes, reused frame to frame (streaming thread only)
+  std::vector<uint8_t> pair;  // the CPU path's pair before it is packed (any layout but the pair itself)
 #if HAVE_CUDA
   p3d::WarpRendererGpu gpu;
 #endif
@@ -43,7 +81,11 @@ struct WarpState {
 
 struct _GstPseudo3DWarp {
   GstPseudo3DBase parent;
+  /* object lock */
   p3d::WarpParams params;
+  p3d::PackParams pack;  // glasses and method are read per frame; layout and swap-eyes through geometry
+  p3d::gst::StagedGeometry<WarpGeometry> *geometry;
+  p3d::PackParams active;  // the geometry of the negotiated caps, with the output's 4:2:0 conversion
   WarpState *state;
 };
 
@@ -51,29 +93,113 @@ struct _GstPseudo3DWarp {
 G_DEFINE_TYPE(GstPseudo3DWarp, gst_pseudo3d_warp, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dwarp, "pseudo3dwarp", GST_RANK_NONE, GST_TYPE_PSEUDO3D_WARP);
 
-// Output: the two views side by side (2W x H), signalled as a full-size,
-// left-first side-by-side pair; the pixel aspect ratio is the input's.
-static GstCaps *transform_geometry(GstPseudo3DBase *, GstPadDirection from, const GstStructure *in) {
-  GstStructure *s = gst_structure_copy(in);
+// Output size over input size per axis: the views have the input's size.
+static void layout_ratio(p3d::PackLayout layout, gint *wn, gint *hn) {
+  *wn = layout == p3d::PackLayout::SideBySide ? 2 : 1;
+  *hn = layout == p3d::PackLayout::TopBottom ? 2 : 1;
+}
+
+// Output: the layout's frame of the two views (the pair side by side, 2W x
+// H, by default), signalled as pseudo3dpack signals it, in a packed RGB
+// format or, for encoders, NV12/I420; the pixel aspect ratio is the
+// input's. Towards the sink: the input sizes that give it, in any format.
+static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
+  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
+  GST_OBJECT_LOCK(self);
+  const WarpGeometry g = self->geometry->negotiating();
+  GST_OBJECT_UNLOCK(self);
+  gint wn, hn;
+  layout_ratio(g.layout, &wn, &hn);
   if (from == GST_PAD_SINK) {
-    gst_pseudo3d_scale_field(s, "width", 2, 1);
-    gst_structure_set(s, "multiview-mode", G_TYPE_STRING, "side-by-side", "multiview-flags",
-                      GST_TYPE_VIDEO_MULTIVIEW_FLAGSET, 0, GST_FLAG_SET_MASK_EXACT, "views", G_TYPE_INT, 2, NULL);
-  } else {
-    gst_pseudo3d_scale_field(s, "width", 1, 2);
-    gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
+    GstStructure *s = gst_pseudo3d_sizes_forward(in, wn, 1, hn, 1);
+    gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
+    p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
+    return p3d::gst::packed_output_caps(s);
   }
-  return gst_pseudo3d_caps_of(s);
+  GstCaps *caps = gst_caps_new_empty();
+  for (const bool rounded : {false, true}) {  // the exact sizes first (gst_pseudo3d_sizes_back())
+    GstStructure *s = gst_pseudo3d_sizes_back(in, wn, 1, hn, 1, rounded);
+    gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
+    gst_pseudo3d_set_formats(s, P3D_ALL_FORMATS);
+    caps = gst_caps_merge_structure(caps, s);
+  }
+  return caps;
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
-  if (GST_VIDEO_INFO_WIDTH(out) != 2 * GST_VIDEO_INFO_WIDTH(in) || GST_VIDEO_INFO_HEIGHT(out) != GST_VIDEO_INFO_HEIGHT(in)) {
-    return gst_pseudo3d_base_refuse_caps(base, "The output must be twice as wide as the input",
-                                         "input %dx%d, output %dx%d", GST_VIDEO_INFO_WIDTH(in),
+  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
+  GST_OBJECT_LOCK(self);
+  const WarpGeometry g = self->geometry->commit();
+  GST_OBJECT_UNLOCK(self);
+  int w = 0, h = 0;
+  p3d::pack_size(g.layout, GST_VIDEO_INFO_WIDTH(in), GST_VIDEO_INFO_HEIGHT(in), &w, &h);
+  if (GST_VIDEO_INFO_WIDTH(out) != w || GST_VIDEO_INFO_HEIGHT(out) != h) {
+    return gst_pseudo3d_base_refuse_caps(base, "The output does not have the size of the layout's frame",
+                                         "input %dx%d, output %dx%d, layout's frame %dx%d", GST_VIDEO_INFO_WIDTH(in),
                                          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
-                                         GST_VIDEO_INFO_HEIGHT(out));
+                                         GST_VIDEO_INFO_HEIGHT(out), w, h);
   }
+  p3d::PackParams p;
+  p.layout = g.layout;
+  p.swap_eyes = g.swap_eyes;
+  if (!GST_VIDEO_INFO_IS_RGB(out)) p.yuv = p3d::gst::rgb_to_yuv(out);
+  GST_OBJECT_LOCK(self);
+  self->active = p;
+  GST_OBJECT_UNLOCK(self);
   return TRUE;
+}
+
+static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
+  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
+  GST_OBJECT_LOCK(self);
+  self->geometry->freeze(frozen);
+  GST_OBJECT_UNLOCK(self);
+}
+
+// A request whose output caps equal the negotiated ones (swap-eyes of an
+// anaglyph) takes effect at once; any other asks for renegotiation.
+static gboolean frame_boundary(GstPseudo3DBase *base) {
+  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
+  GST_OBJECT_LOCK(self);
+  const bool pending = self->geometry->pending();
+  const WarpGeometry want = self->geometry->requested();
+  GST_OBJECT_UNLOCK(self);
+  if (!pending) return FALSE;
+  const GstVideoInfo *in = &base->in_info, *out = &base->out_info;
+  int w = 0, h = 0;
+  p3d::pack_size(want.layout, GST_VIDEO_INFO_WIDTH(in), GST_VIDEO_INFO_HEIGHT(in), &w, &h);
+  const p3d::gst::MultiviewSignal sig = p3d::gst::layout_signal(want.layout, want.swap_eyes);
+  if (w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out) ||
+      sig.mode != GST_VIDEO_INFO_MULTIVIEW_MODE(out) || sig.flags != GST_VIDEO_INFO_MULTIVIEW_FLAGS(out))
+    return TRUE;
+  GST_OBJECT_LOCK(self);
+  self->geometry->activate(want);
+  self->active.layout = want.layout;
+  self->active.swap_eyes = want.swap_eyes;
+  GST_OBJECT_UNLOCK(self);
+  return FALSE;
+}
+
+// The CPU path: the pair straight into the output where the layout is the
+// pair itself, else into the element's pair buffer (in the output's packed
+// format, RGBA for 4:2:0), then packed by pack_cpu. The hole count, or -1
+// when the frames do not fit.
+static long long render_cpu(WarpState *state, const p3d::WarpParams &params, const p3d::PackParams &pack,
+                            const p3d::FrameView &src, const p3d::YuvToRgb &yuv, p3d::ImageView<const float> depth,
+                            const p3d::FrameView &dst) {
+  if (p3d::pack_is_identity(pack) && p3d::is_packed_rgb(dst.format))
+    return p3d::warp_render_cpu(params, src, yuv, depth, dst, state->cpu);
+  p3d::FrameView pair;
+  pair.format = p3d::is_packed_rgb(dst.format) ? dst.format : p3d::PixelFormat::RGBA;
+  pair.width = 2 * src.width;
+  pair.height = src.height;
+  pair.stride[0] = 4 * pair.width;
+  state->pair.resize(static_cast<size_t>(pair.stride[0]) * pair.height);
+  pair.plane[0] = state->pair.data();
+  const long long holes = p3d::warp_render_cpu(params, src, yuv, depth, pair, state->cpu);
+  if (holes < 0 || !p3d::pack_args_valid(pack, pair, dst)) return -1;
+  p3d::pack_cpu(pack, pair, dst);
+  return holes;
 }
 
 static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
@@ -84,6 +210,9 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
   const p3d::WarpParams params = self->params;
+  p3d::PackParams pack = self->active;
+  pack.glasses = self->pack.glasses;
+  pack.method = self->pack.method;
   GST_OBJECT_UNLOCK(self);
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   const p3d::FrameView dst = p3d::gst::frame_view(out);
@@ -96,12 +225,13 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->grid(), true, &d));
       P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
-      P3D_CUDA_TRY_STATUS(self->state->gpu.render(params, fin, yuv, p3d::as_const(d), fout, base->gpu->stream()));
+      P3D_CUDA_TRY_STATUS(
+          self->state->gpu.render_packed(params, pack, fin, yuv, p3d::as_const(d), fout, base->gpu->stream()));
       return p3d::gst::frame_to_host(base, path, fout, dst);
     });
   }
 #endif
-  const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), dst, self->state->cpu);
+  const long long holes = render_cpu(self->state, params, pack, src, yuv, p3d::as_const(depth->view()), dst);
   if (holes < 0) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
@@ -121,15 +251,29 @@ static void release(GstPseudo3DBase *base) {
 
 static void gst_pseudo3d_warp_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(object);
+  bool reconfigure = false;
   GST_OBJECT_LOCK(self);
   switch (prop_id) {
     case PROP_MAX_DISPARITY: self->params.max_disparity = g_value_get_float(value); break;
     case PROP_CONVERGENCE: self->params.convergence = g_value_get_float(value); break;
     case PROP_VIEW: self->params.view = static_cast<p3d::StereoView>(g_value_get_enum(value)); break;
     case PROP_FILL: self->params.fill = static_cast<p3d::HoleFill>(g_value_get_enum(value)); break;
+    case PROP_GLASSES: self->pack.glasses = static_cast<p3d::AnaglyphGlasses>(g_value_get_enum(value)); break;
+    case PROP_ANAGLYPH_METHOD: self->pack.method = static_cast<p3d::AnaglyphMethod>(g_value_get_enum(value)); break;
+    case PROP_LAYOUT:
+    case PROP_SWAP_EYES: {
+      WarpGeometry g = self->geometry->requested();
+      if (prop_id == PROP_LAYOUT)
+        g.layout = static_cast<p3d::PackLayout>(g_value_get_enum(value));
+      else
+        g.swap_eyes = g_value_get_boolean(value);
+      reconfigure = self->geometry->request(g);
+      break;
+    }
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
+  if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_pseudo3d_warp_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
@@ -140,12 +284,17 @@ static void gst_pseudo3d_warp_get_property(GObject *object, guint prop_id, GValu
     case PROP_CONVERGENCE: g_value_set_float(value, self->params.convergence); break;
     case PROP_VIEW: g_value_set_enum(value, static_cast<gint>(self->params.view)); break;
     case PROP_FILL: g_value_set_enum(value, static_cast<gint>(self->params.fill)); break;
+    case PROP_LAYOUT: g_value_set_enum(value, static_cast<gint>(self->geometry->requested().layout)); break;
+    case PROP_SWAP_EYES: g_value_set_boolean(value, self->geometry->requested().swap_eyes); break;
+    case PROP_GLASSES: g_value_set_enum(value, static_cast<gint>(self->pack.glasses)); break;
+    case PROP_ANAGLYPH_METHOD: g_value_set_enum(value, static_cast<gint>(self->pack.method)); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pseudo3d_warp_finalize(GObject *object) {
+  delete GST_PSEUDO3D_WARP(object)->geometry;
   delete GST_PSEUDO3D_WARP(object)->state;
   G_OBJECT_CLASS(parent_class)->finalize(object);
 }
@@ -155,6 +304,7 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
   GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
   GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
   const p3d::WarpParams d;
+  const WarpGeometry dg;
   const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
 
   gobject_class->set_property = gst_pseudo3d_warp_set_property;
@@ -184,21 +334,42 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
       g_param_spec_enum("fill", "Hole filling",
                         "How disocclusion holes are filled", GST_TYPE_PSEUDO3D_FILL, static_cast<gint>(d.fill), flags));
 
+  // The pack's properties, as pseudo3dpack has them (its blurbs), but for
+  // layout, whose default here is the pair itself.
+  g_object_class_install_property(
+      gobject_class, PROP_LAYOUT,
+      g_param_spec_enum("layout", "Layout",
+                        "Stereo format of the output: side-by-side (default) is the rendered pair itself, for "
+                        "pseudo3dpack; any other packs it here, as pseudo3dpack would (on the GPU an anaglyph in one "
+                        "pass with the views). A change while playing renegotiates the output caps before the next "
+                        "frame",
+                        GST_TYPE_PSEUDO3D_LAYOUT, static_cast<gint>(dg.layout), flags));
+  auto *pack_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_PACK));
+  const struct {
+    guint id;
+    const char *name;
+  } kPackProperties[] = {{PROP_GLASSES, "glasses"}, {PROP_ANAGLYPH_METHOD, "anaglyph-method"},
+                         {PROP_SWAP_EYES, "swap-eyes"}};
+  for (const auto &pp : kPackProperties)
+    g_object_class_install_property(gobject_class, pp.id,
+                                    p3d::gst::clone_pspec(g_object_class_find_property(pack_class, pp.name)));
+  g_type_class_unref(pack_class);
+
   gst_element_class_set_static_metadata(element_class, "pseudo3d DIBR view synthesis", "Filter/Effect/Video",
-                                        "Renders left and right views from a frame and its depth map, side by side",
+                                        "Renders left and right views from a frame and its depth map, side by "
+                                        "side or packed in a stereo layout",
                                         "pseudo3d developers");
   GstCaps *sink = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, p3d::kMaxFrameSide);
-  GstCaps *src = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, 2 * p3d::kMaxFrameSide,
-                                            ", multiview-mode=(string)side-by-side");
+  GstCaps *src = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, 2 * p3d::kMaxFrameSide);
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, sink));
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, src));
   gst_caps_unref(sink);
   gst_caps_unref(src);
 
-  base_class->src_formats = P3D_PACKED_FORMATS;
-  base_class->sink_formats = P3D_ALL_FORMATS;
-  base_class->transform_geometry = transform_geometry;
+  base_class->transform_geometry = transform_geometry;  // formats too: packed RGB or 4:2:0 out
   base_class->set_info = set_info;
+  base_class->freeze_geometry = freeze_geometry;
+  base_class->frame_boundary = frame_boundary;
   base_class->process = process;
   base_class->release = release;
 
@@ -209,6 +380,10 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
 
 static void gst_pseudo3d_warp_init(GstPseudo3DWarp *self) {
   self->params = p3d::WarpParams();
+  self->pack = p3d::PackParams();
+  self->geometry = new p3d::gst::StagedGeometry<WarpGeometry>();
+  self->active = p3d::PackParams();
+  self->active.layout = WarpGeometry().layout;
   self->state = new WarpState();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
 }

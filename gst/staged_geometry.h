@@ -44,6 +44,13 @@ class StagedGeometry {
   void end_negotiation() {
     if (frozen_ > 0) --frozen_;
   }
+  // GstPseudo3DBaseClass::freeze_geometry's bracket: begin (true) or end.
+  void freeze(bool frozen) {
+    if (frozen)
+      begin_negotiation();
+    else
+      end_negotiation();
+  }
 
   // transform_caps: the value to negotiate with.
   const G &negotiating() const { return frozen_ ? configuring_ : requested_; }

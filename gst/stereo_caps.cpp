@@ -1,5 +1,8 @@
 #include "stereo_caps.h"
 
+#include "gstpseudo3dbase.h"
+#include "video_util.h"
+
 namespace p3d::gst {
 
 namespace {
@@ -86,6 +89,35 @@ void set_multiview_fields(GstStructure *s, const MultiviewSignal &sig, guint mas
   gst_structure_set(s, "multiview-mode", G_TYPE_STRING, gst_video_multiview_mode_to_caps_string(sig.mode),
                     "multiview-flags", GST_TYPE_VIDEO_MULTIVIEW_FLAGSET, static_cast<guint>(sig.flags), mask, "views",
                     G_TYPE_INT, sig.views, NULL);
+}
+
+GstCaps *packed_output_caps(GstStructure *s) {
+  GstStructure *yuv = gst_structure_copy(s);
+  gst_pseudo3d_set_formats(yuv, P3D_YUV420_FORMATS);
+  GValue list = G_VALUE_INIT, item = G_VALUE_INIT;
+  gst_value_list_init(&list, 3);
+  g_value_init(&item, G_TYPE_STRING);
+  for (const char *c : {"bt709", "bt601", "bt2020"}) {
+    g_value_set_string(&item, c);
+    gst_value_list_append_value(&list, &item);
+  }
+  g_value_unset(&item);
+  gst_structure_take_value(yuv, "colorimetry", &list);
+  gst_structure_set(yuv, "chroma-site", G_TYPE_STRING, "jpeg", NULL);
+  return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), yuv);
+}
+
+bool names_yuv420(const GstStructure *s) {
+  const GValue *v = gst_structure_get_value(s, "format");
+  if (!v) return false;
+  auto is_yuv = [](const GValue *f) {
+    const char *name = G_VALUE_HOLDS_STRING(f) ? g_value_get_string(f) : nullptr;
+    return name && (g_str_equal(name, "NV12") || g_str_equal(name, "I420"));
+  };
+  if (!GST_VALUE_HOLDS_LIST(v)) return is_yuv(v);
+  for (guint i = 0; i < gst_value_list_get_size(v); ++i)
+    if (is_yuv(gst_value_list_get_value(v, i))) return true;
+  return false;
 }
 
 }  // namespace p3d::gst

@@ -37,4 +37,16 @@ bool arrangement_from_structure(const GstStructure *s, StereoInput *arrangement,
 // Writes multiview-mode, multiview-flags (with `mask`) and views into s.
 void set_multiview_fields(GstStructure *s, const MultiviewSignal &sig, guint mask);
 
+// The output caps of a stage that writes a packed stereo layout
+// (pseudo3dpack, and pseudo3dwarp with a layout), from `s` (taken) with the
+// output's size, multiview fields and packed formats: s itself first (kept
+// unless downstream asks otherwise), then a 4:2:0 variant for encoders, in
+// a colorimetry stated rather than left to GStreamer's size-based default
+// (BT.2020 from 2160 rows up, which the R'G'B' views, decoded from
+// BT.709/601 video, are not); chroma-site jpeg: each chroma sample is the
+// mean of its 2x2 block.
+GstCaps *packed_output_caps(GstStructure *s);
+// Whether a caps structure's format (a name or a list) names NV12 or I420.
+bool names_yuv420(const GstStructure *s);
+
 }  // namespace p3d::gst

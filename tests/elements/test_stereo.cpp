@@ -1,4 +1,5 @@
-// pseudo3dpack as a stereo converter and its signalling: the output caps of
+// pseudo3dpack as a stereo converter and its signalling, and pseudo3dwarp
+// packing its own pair the same way (WarpLayout): the output caps of
 // every layout with and without swap-eyes (GStreamer's multiview
 // conventions), every input arrangement from the caps against a reference
 // reconstruction computed in the test, declared input layouts, 2D input
@@ -8,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <string>
+
+#include <opencv2/imgproc.hpp>
 
 #include "element_helpers.h"
 #include "stereo_frames.h"
@@ -334,4 +337,128 @@ TEST(StereoYuvOutput, SameArrangementInAnotherFormatIsConverted) {
   pack_cpu(params, frame.view(), want.view());
   EXPECT_EQ(yuv_diff(p, want), 0);
   release(p);
+}
+
+// ---- pseudo3dwarp with a layout: the warp packs its own pair --------------
+
+namespace {
+
+constexpr const char *kDepthStages =
+    "pseudo3ddepth processing=cpu temporal-smoothing=0 ! pseudo3dfilter processing=cpu ! ";
+
+// The Aloe view, small, as 4:2:0 input.
+HostFrame small_aloe(int w, int h) {
+  const cv::Mat bgr = load_data_image("aloeL.jpg");
+  if (bgr.empty()) return HostFrame();
+  cv::Mat small;
+  cv::resize(bgr, small, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  return HostFrame::from_bgr(small, PixelFormat::NV12);
+}
+
+std::string warp_props(const char *layout, bool swap) {
+  return std::string(" layout=") + layout + (swap ? " swap-eyes=true" : "") + " anaglyph-method=dubois-ffmpeg";
+}
+
+// Same caps (size, multiview mode and flags, PAR, format) and same pixels.
+void expect_same_output(const Packed &got, const Packed &want, const std::string &what) {
+  ASSERT_NE(got.out, nullptr) << what;
+  ASSERT_NE(want.out, nullptr) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_FORMAT(&got.info), GST_VIDEO_INFO_FORMAT(&want.info)) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_WIDTH(&got.info), GST_VIDEO_INFO_WIDTH(&want.info)) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_HEIGHT(&got.info), GST_VIDEO_INFO_HEIGHT(&want.info)) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_MODE(&got.info), GST_VIDEO_INFO_MULTIVIEW_MODE(&want.info)) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_FLAGS(&got.info), GST_VIDEO_INFO_MULTIVIEW_FLAGS(&want.info)) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_PAR_N(&got.info), GST_VIDEO_INFO_PAR_N(&want.info)) << what;
+  EXPECT_EQ(GST_VIDEO_INFO_PAR_D(&got.info), GST_VIDEO_INFO_PAR_D(&want.info)) << what;
+  const DiffStats d = compare_u8(got.bgra, want.bgra, 0);
+  EXPECT_EQ(d.max_abs, 0) << what << ": " << d.over_tolerance << " samples differ";
+}
+
+}  // namespace
+
+// pseudo3dwarp layout=L is pseudo3dwarp ! pseudo3dpack layout=L: every
+// layout with and without swap-eyes (and an anaglyph method, passed on),
+// caps and bytes, from a real picture with a non-square PAR.
+TEST(WarpLayout, EveryLayoutIsTheWarpThenThePack) {
+  const HostFrame frame = small_aloe(96, 64);
+  ASSERT_FALSE(frame.empty());
+  const std::string caps = raw_caps(PixelFormat::NV12, 96, 64, ",pixel-aspect-ratio=4/3");
+  for (const LayoutSignal &s : kSignals)
+    for (bool swap : {false, true}) {
+      const std::string props = warp_props(s.layout, swap);
+      Packed got = push_one(std::string(kDepthStages) + "pseudo3dwarp processing=cpu" + props, caps, frame);
+      Packed want = push_one(std::string(kDepthStages) + "pseudo3dwarp processing=cpu ! pseudo3dpack processing=cpu" +
+                                 props,
+                             caps, frame);
+      expect_same_output(got, want, props);
+      if (got.out) {
+        EXPECT_EQ(GST_VIDEO_INFO_WIDTH(&got.info), 96 * s.w_num) << props;
+      }
+      release(got);
+      release(want);
+    }
+}
+
+// An encoder's 4:2:0 caps after the warp: packed and converted by the warp
+// itself, in the colorimetry downstream names (BT.709 by default), as the
+// pack writes them.
+TEST(WarpLayout, EncoderFormatsAreWrittenByTheWarp) {
+  const HostFrame frame = small_aloe(96, 64);
+  ASSERT_FALSE(frame.empty());
+  const std::string caps = raw_caps(PixelFormat::NV12, 96, 64);
+  for (const char *tail : {" ! capsfilter caps=video/x-raw,format=I420",
+                           " ! capsfilter caps=\"video/x-raw,format=NV12,colorimetry=bt601\""})
+    for (const char *layout : {"side-by-side-half", "side-by-side"}) {
+      const std::string props = warp_props(layout, false);
+      Packed got = push_one(std::string(kDepthStages) + "pseudo3dwarp processing=cpu" + props + tail, caps, frame);
+      Packed want = push_one(
+          std::string(kDepthStages) + "pseudo3dwarp processing=cpu ! pseudo3dpack processing=cpu" + props + tail, caps,
+          frame);
+      expect_same_output(got, want, props + tail);
+      if (got.out) {
+        EXPECT_FALSE(GST_VIDEO_INFO_IS_RGB(&got.info)) << props + tail;
+      }
+      release(got);
+      release(want);
+    }
+}
+
+// layout and swap-eyes changed between frames of one stream: each frame
+// comes out in the layout set before it (renegotiated where the caps
+// change; swap-eyes of an anaglyph keeps them), as a fresh warp ! pack
+// with those properties gives it.
+TEST(WarpLayout, LayoutChangedWhilePlaying) {
+  const HostFrame frame = small_aloe(96, 64);
+  ASSERT_FALSE(frame.empty());
+  const std::string caps = raw_caps(PixelFormat::NV12, 96, 64);
+  GstHarness *h = gst_harness_new_parse((std::string(kDepthStages) + "pseudo3dwarp name=w processing=cpu").c_str());
+  gst_harness_set_src_caps_str(h, caps.c_str());
+  GstElement *warp = gst_bin_get_by_name(GST_BIN(h->element), "w");
+  ASSERT_NE(warp, nullptr);
+  const struct {
+    const char *layout;
+    bool swap;
+  } steps[] = {{"side-by-side", false}, {"anaglyph", false}, {"anaglyph", true},
+               {"top-bottom-half", true}, {"side-by-side", false}};
+  for (const auto &st : steps) {
+    gst_util_set_object_arg(G_OBJECT(warp), "layout", st.layout);
+    g_object_set(warp, "swap-eyes", st.swap, NULL);
+    GstBuffer *out = gst_harness_push_and_pull(h, buffer_from_frame(frame));
+    ASSERT_NE(out, nullptr) << st.layout;
+    Packed got;
+    got.out = out;
+    GstCaps *c = gst_pad_get_current_caps(h->sinkpad);
+    gst_video_info_from_caps(&got.info, c);
+    got.bgra = buffer_to_bgra(out, c);
+    gst_caps_unref(c);
+    const std::string props = std::string(" layout=") + st.layout + (st.swap ? " swap-eyes=true" : "");
+    Packed want = push_one(std::string(kDepthStages) + "pseudo3dwarp processing=cpu ! pseudo3dpack processing=cpu" +
+                               props,
+                           caps, frame);
+    expect_same_output(got, want, props);
+    release(got);
+    release(want);
+  }
+  gst_object_unref(warp);
+  gst_harness_teardown(h);
 }

@@ -242,6 +242,75 @@ TEST(GpuConvertBin, SystemMemoryOnGpuMatchesCpu) {
   expect_same(gpu, cpu, "pseudo3dconvert");
 }
 
+// pseudo3dwarp with a layout on CUDA memory packs its own pair
+// (WarpRendererGpu::render_packed: an anaglyph fused into the warp where
+// the rows of a cell are resolved together, as on the filter's cells of 2
+// and 4 rows here on Hopper; the other layouts and NV12 through the pair
+// and the pack kernel): the frames of pseudo3dwarp ! pseudo3dpack on the
+// CPU, byte for byte. Then layout and swap-eyes changed between the frames
+// of one stream on the GPU, each frame against the CPU chain with the
+// values set before it; and the bin on CUDA memory, which packs this way.
+TEST(GpuWarpLayout, PacksAsTheCpuChain) {
+  std::vector<HostFrame> frames;
+  for (uint32_t s = 0; s < 3; ++s) frames.push_back(picture(PixelFormat::I420, 642, 362, 700 + s));
+  auto launch = [](bool gpu, int scale, const std::string &props, const char *format) {
+    const std::string p = gpu ? " processing=gpu" : " processing=cpu";
+    const std::string warp = "pseudo3dwarp max-disparity=4" + p + (gpu ? props : " ! pseudo3dpack" + p + props);
+    return std::string(gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") + "pseudo3ddepth" + p +
+           " ! pseudo3dfilter scale=" + std::to_string(scale) + p + " ! " + warp + (gpu ? " ! cudadownload" : "") +
+           " ! capsfilter caps=video/x-raw,format=" + format;
+  };
+  for (const int scale : {2, 4})
+    for (const char *props : {" layout=anaglyph", " layout=anaglyph swap-eyes=true anaglyph-method=gray",
+                              " layout=side-by-side-half", " layout=top-bottom swap-eyes=true"})
+      for (const char *format : {"RGBA", "NV12"}) {
+        const std::string what = std::string("scale ") + std::to_string(scale) + props + " " + format;
+        const auto gpu = run_chain(launch(true, scale, props, format), PixelFormat::I420, 642, 362, frames);
+        const auto cpu = run_chain(launch(false, scale, props, format), PixelFormat::I420, 642, 362, frames);
+        expect_same(gpu, cpu, what);
+      }
+
+  // Changed while playing, on the GPU.
+  GstHarness *hx = gst_harness_new_parse(
+      "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth processing=gpu ! pseudo3dfilter scale=4 "
+      "processing=gpu ! pseudo3dwarp name=w max-disparity=4 processing=gpu ! cudadownload ! "
+      "capsfilter caps=video/x-raw,format=RGBA");
+  gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::I420, 642, 362).c_str());
+  GstElement *warp = gst_bin_get_by_name(GST_BIN(hx->element), "w");
+  ASSERT_NE(warp, nullptr);
+  const char *steps[][2] = {{"anaglyph", "false"}, {"anaglyph", "true"}, {"side-by-side", "false"},
+                            {"top-bottom-half", "true"}, {"anaglyph", "false"}};
+  for (size_t k = 0; k < G_N_ELEMENTS(steps); ++k) {
+    gst_util_set_object_arg(G_OBJECT(warp), "layout", steps[k][0]);
+    gst_util_set_object_arg(G_OBJECT(warp), "swap-eyes", steps[k][1]);
+    GstBuffer *b = gst_harness_push_and_pull(hx, buffer_from_frame(frames[k % frames.size()]));
+    ASSERT_NE(b, nullptr) << steps[k][0];
+    GstCaps *caps = gst_pad_get_current_caps(hx->sinkpad);
+    const std::vector<cv::Mat> got = {buffer_to_bgra(b, caps)};
+    gst_caps_unref(caps);
+    gst_buffer_unref(b);
+    // The CPU chain on the frames so far (the depth stage's history), with
+    // this step's layout for its last frame.
+    std::vector<HostFrame> seq;
+    for (size_t i = 0; i <= k; ++i) seq.push_back(frames[i % frames.size()]);
+    const std::string props = std::string(" layout=") + steps[k][0] + " swap-eyes=" + steps[k][1];
+    const auto cpu = run_chain(launch(false, 4, props, "RGBA"), PixelFormat::I420, 642, 362, seq);
+    ASSERT_EQ(cpu.size(), seq.size());
+    expect_same(got, {cpu.back()}, props + " changed while playing");
+  }
+  gst_object_unref(warp);
+  gst_harness_teardown(hx);
+
+  // The bin on CUDA memory packs in the warp.
+  const std::string bin = "pseudo3dconvert max-disparity=4 layout=anaglyph swap-eyes=true";
+  const auto gpu = run_chain("cudaupload ! video/x-raw(memory:CUDAMemory) ! " + bin +
+                                 " ! cudadownload ! capsfilter caps=video/x-raw,format=RGBA",
+                             PixelFormat::I420, 642, 362, frames);
+  const auto cpu = run_chain(bin + " processing=cpu ! capsfilter caps=video/x-raw,format=RGBA", PixelFormat::I420, 642,
+                             362, frames);
+  expect_same(gpu, cpu, "pseudo3dconvert on CUDA memory");
+}
+
 // Device memory stays flat over 1000 frames (pools, no per-frame allocation).
 TEST(GpuChainMemory, FlatOver1000Frames) {
   const int w = 640, h = 360;

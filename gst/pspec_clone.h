@@ -1,0 +1,14 @@
+// A property of one element offered by another under the same name, range,
+// default and blurb: pseudo3dconvert offers its stages' properties, and
+// pseudo3dwarp pseudo3dpack's glasses, anaglyph-method and swap-eyes.
+#pragma once
+
+#include <gst/gst.h>
+
+namespace p3d::gst {
+
+// A new pspec like `p` (enum, int, float or boolean), readable and
+// writable, keeping p's mutability flags (GST_PARAM_MUTABLE_*).
+GParamSpec *clone_pspec(GParamSpec *p);
+
+}  // namespace p3d::gst
