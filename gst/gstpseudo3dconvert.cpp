@@ -37,6 +37,7 @@
 
 #include "gstpseudo3ddepth.h"
 #include "gstpseudo3dfilter.h"
+#include "gstpseudo3dpack.h"
 #include "gstpseudo3dwarp.h"
 #include "property_guard.h"
 #include "pspec_clone.h"
@@ -58,6 +59,13 @@ static const struct {
     {STAGE_WARP, "fill"},             {STAGE_WARP, "layout"},           {STAGE_WARP, "glasses"},
     {STAGE_WARP, "anaglyph-method"},  {STAGE_WARP, "swap-eyes"},
 };
+// Whether a property of the warp is one of the pack's (layout, glasses,
+// anaglyph-method, swap-eyes).
+static bool warp_packs(const char *name) {
+  for (const char *p : {"layout", "glasses", "anaglyph-method", "swap-eyes"})
+    if (g_str_equal(name, p)) return true;
+  return false;
+}
 #define PROP_CUDA_DEVICE_ID (G_N_ELEMENTS(kProxied) + 1)
 #define PROP_PROCESSING (G_N_ELEMENTS(kProxied) + 2)
 #define DEFAULT_PROCESSING GST_PSEUDO3D_PROCESSING_AUTO
@@ -188,7 +196,12 @@ static void gst_pseudo3d_convert_class_init(GstPseudo3DConvertClass *klass) {
 
   const GType stage_types[N_STAGES] = {GST_TYPE_PSEUDO3D_DEPTH, GST_TYPE_PSEUDO3D_FILTER, GST_TYPE_PSEUDO3D_WARP};
   for (guint i = 0; i < G_N_ELEMENTS(kProxied); ++i) {
-    auto *stage_class = static_cast<GObjectClass *>(g_type_class_ref(stage_types[kProxied[i].stage]));
+    // The pack's properties, which the warp takes, keep pseudo3dpack's
+    // documentation and defaults (layout: anaglyph, where the warp's own
+    // default is the pair itself); the stage gets them at init.
+    const bool pack_property = kProxied[i].stage == STAGE_WARP && warp_packs(kProxied[i].name);
+    const GType owner = pack_property ? GST_TYPE_PSEUDO3D_PACK : stage_types[kProxied[i].stage];
+    auto *stage_class = static_cast<GObjectClass *>(g_type_class_ref(owner));
     GParamSpec *p = g_object_class_find_property(stage_class, kProxied[i].name);
     g_object_class_install_property(gobject_class, i + 1, p3d::gst::clone_pspec(p));
     g_type_class_unref(stage_class);
@@ -231,6 +244,16 @@ static void gst_pseudo3d_convert_init(GstPseudo3DConvert *self) {
     gst_bin_add(GST_BIN(self), self->stage[i]);
   }
   gst_element_link_many(self->stage[0], self->stage[1], self->stage[2], NULL);
+  // The stages start at the bin's defaults (the pack's, for the warp's
+  // layout: anaglyph).
+  for (guint i = 0; i < G_N_ELEMENTS(kProxied); ++i) {
+    GParamSpec *p = g_object_class_find_property(G_OBJECT_GET_CLASS(self), kProxied[i].name);
+    GValue v = G_VALUE_INIT;
+    g_value_init(&v, p->value_type);
+    g_param_value_set_default(p, &v);
+    g_object_set_property(G_OBJECT(self->stage[kProxied[i].stage]), kProxied[i].name, &v);
+    g_value_unset(&v);
+  }
   GstPad *sink = gst_element_get_static_pad(self->stage[STAGE_DEPTH], "sink");
   GstPad *src = gst_element_get_static_pad(self->stage[STAGE_WARP], "src");
   GstElementClass *klass = GST_ELEMENT_GET_CLASS(self);

@@ -462,3 +462,29 @@ TEST(WarpLayout, LayoutChangedWhilePlaying) {
   gst_object_unref(warp);
   gst_harness_teardown(h);
 }
+
+// pseudo3dconvert keeps pseudo3dpack's defaults for the properties the warp
+// now takes (the warp's own layout default is the pair): with no property
+// set it writes the anaglyph, as pseudo3ddepth ! pseudo3dfilter !
+// pseudo3dwarp ! pseudo3dpack does, and says so through its property.
+TEST(WarpLayout, TheBinDefaultsToTheAnaglyph) {
+  const HostFrame frame = small_aloe(96, 64);
+  ASSERT_FALSE(frame.empty());
+  GstElement *bin = gst_element_factory_make("pseudo3dconvert", nullptr);
+  ASSERT_NE(bin, nullptr);
+  gint layout = -1;
+  g_object_get(bin, "layout", &layout, NULL);
+  EXPECT_EQ(layout, static_cast<gint>(PackLayout::Anaglyph));
+  gst_object_unref(bin);
+  const std::string caps = raw_caps(PixelFormat::NV12, 96, 64);
+  Packed got = push_one("pseudo3dconvert processing=cpu", caps, frame);
+  Packed want = push_one(std::string(kDepthStages) + "pseudo3dwarp processing=cpu ! pseudo3dpack processing=cpu", caps,
+                         frame);
+  expect_same_output(got, want, "pseudo3dconvert's defaults");
+  if (got.out) {
+    EXPECT_EQ(GST_VIDEO_INFO_WIDTH(&got.info), 96);
+    EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_MODE(&got.info), GST_VIDEO_MULTIVIEW_MODE_MONO);
+  }
+  release(got);
+  release(want);
+}

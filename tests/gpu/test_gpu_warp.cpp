@@ -349,8 +349,9 @@ TEST_F(GpuWarp, BackgroundSmoothFramesQueuedBackToBack) {
 // either eye first, three output formats; groups of 2 and 4 rows; smooth
 // depth (a few tiles listed) and noise (every tile); 1363 rows leave a
 // tail past the last whole wave (RowGroupsThenSingleRowsPastTheLastWholeWave),
-// at a width that is a multiple of 4 and one that is not; and the Aloe
-// image with its true depth on cells of 4. Each is byte for byte
+// at a width that is a multiple of 4 and one that is not; an RGBA source
+// with random alpha, either eye first; and the Aloe image with its true
+// depth on cells of 4. Each is byte for byte
 // warp_render_cpu then pack_cpu, and on Hopper each ran fused.
 TEST_F(GpuWarp, PackFusedIntoTheWarp) {
   const uint32_t seed = fresh_seed();
@@ -390,6 +391,20 @@ TEST_F(GpuWarp, PackFusedIntoTheWarp) {
           EXPECT_TRUE(fused);
         }
       }
+  // A source with its own alpha (random), either eye first: the anaglyph's
+  // alpha is the left view's as shown, the swapped eye's with swap-eyes.
+  for (const bool swap : {false, true})
+    for (const PixelFormat out : {PixelFormat::RGBA, PixelFormat::BGRA}) {
+      HostFrame src(PixelFormat::RGBA, 402, 203, 1);
+      src.fill_random(rng());
+      const cv::Mat depth = cell_constant(random_depth(402, 203, DepthKind::Smooth, rng()), 2);
+      const bool fused = expect_packed_same(
+          w, pack_params(PackLayout::Anaglyph, AnaglyphGlasses::GreenMagenta, AnaglyphMethod::Dubois, swap), src,
+          depth, 2, out);
+      if (hopper) {
+        EXPECT_TRUE(fused);
+      }
+    }
   const cv::Mat bgr = test::load_data_image("aloeL.jpg"), gt = test::load_data_image("aloeGT.png");
   ASSERT_FALSE(bgr.empty());
   ASSERT_FALSE(gt.empty());
@@ -445,7 +460,8 @@ TEST_F(GpuWarp, PackedOutputsThatAreNotFused) {
 
 // Fused and unfused frames queued back to back with no host sync, sizes
 // alternating (the pair scratch reused, its contents from the last frame):
-// each output checked against the CPU once all are queued.
+// each output checked against the CPU once all are queued, and on Hopper
+// every anaglyph frame fused.
 TEST_F(GpuWarp, PackedFramesQueuedBackToBack) {
   const uint32_t seed = fresh_seed();
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
@@ -477,13 +493,17 @@ TEST_F(GpuWarp, PackedFramesQueuedBackToBack) {
     douts.emplace_back(PixelFormat::RGBA, pw, ph);
   }
   ASSERT_EQ(cudaSuccess, cudaDeviceSynchronize());
+  bool fused[6] = {};
   for (size_t k = 0; k < srcs.size(); ++k)
     test::check_cuda(renderer_.render_packed(w, packs[k], dsrcs[k].view(), YuvToRgb(), as_const(ddepths[k].grid()),
-                                             douts[k].view(), stream_));
+                                             douts[k].view(), stream_, &fused[k]));
   ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
   for (size_t k = 0; k < srcs.size(); ++k) {
     SCOPED_TRACE(::testing::Message() << "frame " << k);
     EXPECT_EQ(first_difference(cpus[k], douts[k].download()), "");
+    if (fuses_on_this_gpu()) {
+      EXPECT_EQ(fused[k], packs[k].layout == PackLayout::Anaglyph);
+    }
   }
 }
 
