@@ -79,7 +79,7 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   convert_ = make("pseudo3dconvert", &missing);
   // System memory after the 3D stages: the CPU encoders and videoconvert
   // take nothing else (pseudo3dconvert downloads once when on the GPU), in
-  // the encoder's format where pseudo3dpack can write it.
+  // the encoder's format where the bin's warp can pack into it.
   GstElement *to_system = make("capsfilter", &missing);
   GstElement *q2 = make_frame_queue(4);
   GstElement *vconv = make("videoconvert", &missing);
@@ -93,10 +93,11 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   }
   apply_to_bin(o, convert_);
   gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing == Processing::Gpu ? "gpu" : "cpu");
-  // pseudo3dpack writes I420/NV12 itself (on the GPU when the frames are
-  // there): a third of the bytes to download and no CPU conversion; the
-  // videoconvert after it then passes frames through. Other encoder
-  // formats (Y444 for anaglyphs) still go through videoconvert.
+  // The bin's warp packs into I420/NV12 itself, as pseudo3dpack would (on
+  // the GPU when the frames are there): a third of the bytes to download
+  // and no CPU conversion; the videoconvert after it then passes frames
+  // through. Other encoder formats (Y444 for anaglyphs) still go through
+  // videoconvert.
   const bool packed_yuv = raw_format == "I420" || raw_format == "NV12";
   subsampled_ = packed_yuv;
   GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL)
