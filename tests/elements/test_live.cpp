@@ -137,7 +137,13 @@ TEST(LiveProperties, EveryLivePropertyFromASecondThread) {
       if (!f) continue;
       GstElement *e = find(h, f);
       ASSERT_NE(e, nullptr) << f;
-      for (GParamSpec *p : live_properties(e)) targets.emplace_back(e, p);
+      for (GParamSpec *p : live_properties(e)) {
+        // The warp's own layout makes it pack its pair: a mono or one-view
+        // frame, which the pseudo3dpack after it rightly refuses (the bin
+        // has no pack after its warp, and takes layout itself).
+        if (c == 0 && g_str_equal(f, "pseudo3dwarp") && g_str_equal(p->name, "layout")) continue;
+        targets.emplace_back(e, p);
+      }
     }
     ASSERT_GT(targets.size(), 10u);
     std::vector<HostFrame> frames;
