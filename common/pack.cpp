@@ -197,7 +197,7 @@ namespace {
 // The default case, the anaglyph of a side-by-side pair into packed RGB
 // mixed in gamma-encoded R'G'B' (every method but DuboisLinear), a row at a
 // time with the format's channel order and the views' places worked out
-// once instead of per pixel: anaglyph_mix_word(), anaglyph()'s own mix, on the
+// once instead of per pixel: anaglyph_gamma(), anaglyph()'s own mix, on the
 // channels load_rgba() would read, written where store_rgba() would write
 // them, so the same output (tests/common/test_pack.cpp checks it against
 // pack_pixel() for every method, format and eye order).
@@ -207,8 +207,7 @@ void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp,
   constexpr int ri = kBgr ? 2 : 0, bi = 2 - ri;  // byte offsets of R' and B' (the output has the input's format)
   auto pixel = [](const uint8_t *p) { return Rgba{p[ri], p[1], p[bi], kAlpha ? p[3] : uint8_t{255}}; };
   for (int x = 0; x < w; ++x) {
-    const Rgba c = word_rgba(pack_detail::anaglyph_mix_word(am.left_q, am.right_q, rgba_word(pixel(lp + 4 * x)),
-                                                            rgba_word(pixel(rp + 4 * x))));
+    const Rgba c = pack_detail::anaglyph_gamma(am, pixel(lp + 4 * x), pixel(rp + 4 * x));
     o[4 * x + ri] = c.r;
     o[4 * x + 1] = c.g;
     o[4 * x + bi] = c.b;

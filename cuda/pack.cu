@@ -60,9 +60,10 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
 // kVec pixels a thread: each eye's kVec input pixels come in one 16-byte
 // load (the launcher checks that the rows are 16-byte aligned and the view
 // width is a multiple of kVec, so no thread has a ragged end), then
-// anaglyph() per pixel (anaglyph_mix_word for the gamma mixes) on the
-// words as load_rgba()
-// reads them and store_rgba() writes them. The format's byte order and
+// anaglyph() per pixel (for the gamma mixes anaglyph_mix_word on the words
+// themselves: through anaglyph_gamma()'s Rgba round trip the 1080p pack
+// took 0.0121 ms against 0.0117, two calls on an H100) on the words as
+// load_rgba() reads them and store_rgba() writes them. The format's byte order and
 // alpha are template parameters (kBgr, kAlpha: one kernel a packed
 // format), so a pixel costs no format test: the kernel was bound by
 // instructions rather than by memory (about 370 PTX instructions a pixel

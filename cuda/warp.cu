@@ -22,9 +22,8 @@ namespace p3d {
 // below): `out` W x H, packed RGB in the pair's format with 4-byte aligned
 // rows; the gamma mix's fixed-point matrices (anaglyph_mix_word,
 // common/pack.h), kernel parameters so that the mix reads them as constant
-// operands; `swap`: the
-// right eye is shown as the left (PackParams::swap_eyes). out.plane[0]
-// null: not fused.
+// operands; `swap`: the right eye is shown as the left
+// (PackParams::swap_eyes). out.plane[0] null: not fused.
 struct FusedAnaglyph {
   FrameView out;
   int32_t left[9], right[9];  // AnaglyphMatrices::left_q, right_q
@@ -1089,11 +1088,11 @@ __global__ void fused_anaglyph_patch_kernel(FrameView pair, FusedAnaglyph f, Smo
       // hold a past frame's (initialised) bytes, loaded with the flag and
       // dropped.
       const bool in_rows = y < H;
-      const size_t row = (static_cast<size_t>(eye) * H + (in_rows ? y : 0)) * W;
-      const bool flag = in_rows && sc.chunk_holes[(static_cast<size_t>(eye) * H + (in_rows ? y : 0)) * chunks + tx];
+      const size_t eye_row = static_cast<size_t>(eye) * H + (in_rows ? y : 0);  // of the eyes' planes' rows
+      const bool flag = in_rows && sc.chunk_holes[eye_row * chunks + tx];
       uint8_t state[kPatchPerThread];
 #pragma unroll
-      for (int i = 0; i < kPatchPerThread; ++i) state[i] = x0 + i < W ? sc.state[row + x0 + i] : 0;
+      for (int i = 0; i < kPatchPerThread; ++i) state[i] = x0 + i < W ? sc.state[eye_row * W + x0 + i] : 0;
 #pragma unroll
       for (int i = 0; i < kPatchPerThread; ++i) mix[i] = flag && (state[i] & kStateHole);
     } else {
@@ -1499,11 +1498,12 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
   pair.stride[0] = 8 * W;
   if (!pack_args_valid(pp, pair, out))
     return CudaStatus{cudaErrorInvalidValue, "render_packed: pack_args_valid(pack, pair, out)", __FILE__, __LINE__};
-  const AnaglyphMatrices am = anaglyph_matrices(pp.glasses, pp.method);
+  // The gamma mixes fuse (dubois-linear mixes in linear light, in float).
   FusedAnaglyph fused{};
-  const bool fusable = pp.layout == PackLayout::Anaglyph && !am.linear_light && out.format == pair_format &&
-                       rows_aligned(out, 0, 4);
+  const bool fusable = pp.layout == PackLayout::Anaglyph && pp.method != AnaglyphMethod::DuboisLinear &&
+                       out.format == pair_format && rows_aligned(out, 0, 4);
   if (fusable) {
+    const AnaglyphMatrices am = anaglyph_matrices(pp.glasses, pp.method);
     fused.out = out;
     for (int k = 0; k < 9; ++k) {
       fused.left[k] = am.left_q[k];

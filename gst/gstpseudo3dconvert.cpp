@@ -59,13 +59,6 @@ static const struct {
     {STAGE_WARP, "fill"},             {STAGE_WARP, "layout"},           {STAGE_WARP, "glasses"},
     {STAGE_WARP, "anaglyph-method"},  {STAGE_WARP, "swap-eyes"},
 };
-// Whether a property of the warp is one of the pack's (layout, glasses,
-// anaglyph-method, swap-eyes).
-static bool warp_packs(const char *name) {
-  for (const char *p : {"layout", "glasses", "anaglyph-method", "swap-eyes"})
-    if (g_str_equal(name, p)) return true;
-  return false;
-}
 #define PROP_CUDA_DEVICE_ID (G_N_ELEMENTS(kProxied) + 1)
 #define PROP_PROCESSING (G_N_ELEMENTS(kProxied) + 2)
 #define DEFAULT_PROCESSING GST_PSEUDO3D_PROCESSING_AUTO
@@ -195,17 +188,19 @@ static void gst_pseudo3d_convert_class_init(GstPseudo3DConvertClass *klass) {
   gobject_class->get_property = gst_pseudo3d_convert_get_property;
 
   const GType stage_types[N_STAGES] = {GST_TYPE_PSEUDO3D_DEPTH, GST_TYPE_PSEUDO3D_FILTER, GST_TYPE_PSEUDO3D_WARP};
+  auto *pack_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_PACK));
   for (guint i = 0; i < G_N_ELEMENTS(kProxied); ++i) {
     // The pack's properties, which the warp takes, keep pseudo3dpack's
     // documentation and defaults (layout: anaglyph, where the warp's own
     // default is the pair itself); the stage gets them at init.
-    const bool pack_property = kProxied[i].stage == STAGE_WARP && warp_packs(kProxied[i].name);
-    const GType owner = pack_property ? GST_TYPE_PSEUDO3D_PACK : stage_types[kProxied[i].stage];
-    auto *stage_class = static_cast<GObjectClass *>(g_type_class_ref(owner));
-    GParamSpec *p = g_object_class_find_property(stage_class, kProxied[i].name);
+    GParamSpec *p = kProxied[i].stage == STAGE_WARP ? g_object_class_find_property(pack_class, kProxied[i].name)
+                                                     : nullptr;
+    auto *stage_class = static_cast<GObjectClass *>(g_type_class_ref(stage_types[kProxied[i].stage]));
+    if (!p) p = g_object_class_find_property(stage_class, kProxied[i].name);
     g_object_class_install_property(gobject_class, i + 1, p3d::gst::clone_pspec(p));
     g_type_class_unref(stage_class);
   }
+  g_type_class_unref(pack_class);
   auto *depth_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_DEPTH));
   g_object_class_install_property(gobject_class, PROP_CUDA_DEVICE_ID,
                                   p3d::gst::clone_pspec(g_object_class_find_property(depth_class, "cuda-device-id")));

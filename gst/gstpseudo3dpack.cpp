@@ -110,9 +110,8 @@ static bool resolve(const PackGeometry &g, GstVideoMultiviewMode mode, GstVideoM
 
 // Output size over input size per axis, as a ratio, for views of `input`.
 static void size_ratio(p3d::StereoInput input, p3d::PackLayout layout, gint *wn, gint *wd, gint *hn, gint *hd) {
-  *wn = layout == p3d::PackLayout::SideBySide ? 2 : 1;
+  p3d::pack_size(layout, 1, 1, wn, hn);  // the layout's frame of views of 1 x 1
   *wd = input == p3d::StereoInput::SideBySide ? 2 : 1;
-  *hn = layout == p3d::PackLayout::TopBottom ? 2 : 1;
   *hd = input == p3d::StereoInput::TopBottom ? 2 : 1;
 }
 

@@ -93,12 +93,6 @@ struct _GstPseudo3DWarp {
 G_DEFINE_TYPE(GstPseudo3DWarp, gst_pseudo3d_warp, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dwarp, "pseudo3dwarp", GST_RANK_NONE, GST_TYPE_PSEUDO3D_WARP);
 
-// Output size over input size per axis: the views have the input's size.
-static void layout_ratio(p3d::PackLayout layout, gint *wn, gint *hn) {
-  *wn = layout == p3d::PackLayout::SideBySide ? 2 : 1;
-  *hn = layout == p3d::PackLayout::TopBottom ? 2 : 1;
-}
-
 // Output: the layout's frame of the two views (the pair side by side, 2W x
 // H, by default), signalled as pseudo3dpack signals it, in a packed RGB
 // format or, for encoders, NV12/I420; the pixel aspect ratio is the
@@ -108,8 +102,8 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   GST_OBJECT_LOCK(self);
   const WarpGeometry g = self->geometry->negotiating();
   GST_OBJECT_UNLOCK(self);
-  gint wn, hn;
-  layout_ratio(g.layout, &wn, &hn);
+  gint wn, hn;  // output size over input size per axis: the layout's frame of views of 1 x 1
+  p3d::pack_size(g.layout, 1, 1, &wn, &hn);
   if (from == GST_PAD_SINK) {
     GstStructure *s = gst_pseudo3d_sizes_forward(in, wn, 1, hn, 1);
     gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);

@@ -36,6 +36,7 @@ using test::cell_constant;
 using test::kAllGlasses;
 using test::kAllLayouts;
 using test::kAllMethods;
+using test::pack_params;
 
 constexpr uint8_t kCpuPoison = 0x5A;  // DeviceFrame poisons with 0xA5: unwritten bytes differ
 
@@ -118,15 +119,6 @@ std::string describe(const PackParams &p, PixelFormat out) {
   s << "layout " << int(p.layout) << " glasses " << int(p.glasses) << " method " << int(p.method) << " swap "
     << p.swap_eyes << " into " << test::format_name(out);
   return s.str();
-}
-
-PackParams pack_params(PackLayout layout, AnaglyphGlasses glasses, AnaglyphMethod method, bool swap) {
-  PackParams p;
-  p.layout = layout;
-  p.glasses = glasses;
-  p.method = method;
-  p.swap_eyes = swap;
-  return p;
 }
 
 // Whether this GPU resolves the rows of a group together where the tests
