@@ -16,7 +16,10 @@
  * object's edge would be neither the object's nor the background's).
  * `convention` says how grey values mean depth: white = near
  * (most depth maps), dark = near, or a distance (a depth camera's
- * millimetres) with `near` and `far` limits.
+ * millimetres) with `near` and `far` limits. Changing the pair while
+ * playing sets one property after the other: while the pair is invalid
+ * (near not below far), frames keep the last valid pair and one warning is
+ * posted; a pair that was never valid is an error.
  *
  * Frames in CUDA memory get their depth in the same CUDA context, ready for
  * the GPU stages. The frames themselves pass through untouched.
@@ -62,6 +65,12 @@ struct MuxState {
   GstBuffer *plane_source = nullptr;  // the depth buffer it came from (no ref: compared only)
   p3d::DepthImportParams plane_params;
   void *plane_context = nullptr;
+  // near and far are two properties, so setting a new pair passes through
+  // a pair that may be invalid (near=20000 before far=50000): frames then
+  // keep the last valid pair, with one warning, until the pair is valid.
+  bool have_valid_range = false;
+  float valid_near = 0.f, valid_far = 0.f;
+  bool warned_invalid_range = false;
 };
 
 struct _GstPseudo3DDepthMux {
@@ -124,18 +133,45 @@ static GstCudaContext *cuda_context_of(GstBuffer *buf) {
 }
 #endif
 
+// Makes params' near/far a valid pair for convention=metric: the pair as
+// set when it is valid (remembered), else the last valid one (a warning the
+// first time). FALSE, after an error, when no pair was ever valid: the
+// properties themselves are wrong, not merely half-changed.
+static bool metric_range_usable(GstPseudo3DDepthMux *self, p3d::DepthImportParams *params) {
+  MuxState &st = *self->state;
+  if (params->near > 0.f && params->near < params->far) {
+    st.have_valid_range = true;
+    st.valid_near = params->near;
+    st.valid_far = params->far;
+    st.warned_invalid_range = false;
+    return true;
+  }
+  if (params->convention != p3d::DepthConvention::Metric) return true;
+  if (!st.have_valid_range) {
+    GST_ELEMENT_ERROR(self, LIBRARY, SETTINGS, ("near must be above 0 and below far for convention=metric"),
+                      ("near %g, far %g", params->near, params->far));
+    return false;
+  }
+  if (!st.warned_invalid_range) {
+    st.warned_invalid_range = true;
+    GST_ELEMENT_WARNING(self, LIBRARY, SETTINGS,
+                        ("near must be above 0 and below far for convention=metric: keeping the last valid pair"),
+                        ("near %g, far %g set; near %g, far %g used until the pair is valid again", params->near,
+                         params->far, st.valid_near, st.valid_far));
+  }
+  params->near = st.valid_near;
+  params->far = st.valid_far;
+  return true;
+}
+
 // The current depth picture as a plane of the frame's size, in the frame's
 // memory domain; null after posting an error.
 static p3d::gst::DepthPlanePtr depth_plane_for(GstPseudo3DDepthMux *self, GstBuffer *frame) {
   MuxState &st = *self->state;
   GST_OBJECT_LOCK(self);
-  const p3d::DepthImportParams params = self->params;
+  p3d::DepthImportParams params = self->params;
   GST_OBJECT_UNLOCK(self);
-  if (params.convention == p3d::DepthConvention::Metric && !(params.near > 0.f && params.near < params.far)) {
-    GST_ELEMENT_ERROR(self, LIBRARY, SETTINGS, ("near must be above 0 and below far for convention=metric"),
-                      ("near %g, far %g", params.near, params.far));
-    return nullptr;
-  }
+  if (!metric_range_usable(self, &params)) return nullptr;
   const int w = GST_VIDEO_INFO_WIDTH(&self->video_info), h = GST_VIDEO_INFO_HEIGHT(&self->video_info);
   void *context = nullptr;
 #if HAVE_CUDA
@@ -334,6 +370,8 @@ static void forget_depth(GstPseudo3DDepthMux *self) {
   self->state->plane.reset();
   self->state->plane_source = nullptr;
   self->state->pool.clear();
+  self->state->have_valid_range = false;
+  self->state->warned_invalid_range = false;
 }
 
 static gboolean gst_pseudo3d_depth_mux_stop(GstAggregator *agg) {
@@ -399,7 +437,7 @@ static void gst_pseudo3d_depth_mux_class_init(GstPseudo3DDepthMuxClass *klass) {
       gobject_class, PROP_FAR,
       g_param_spec_float("far", "Far distance",
                          "convention=metric: the distance (in the depth's unit) that is farthest; farther is "
-                         "clamped. Must be above near",
+                         "clamped. Must be above near (while playing, an invalid pair keeps the last valid one)",
                          1e-6f, 1e9f, d.far, flags));
 
   gst_element_class_set_static_metadata(element_class, "pseudo3d external depth", "Filter/Video",

@@ -278,6 +278,60 @@ TEST(DepthMux, MetricNeedsNearBelowFar) {
   EXPECT_NE(errors[0].find("near 5000, far 1000"), std::string::npos) << errors[0];
 }
 
+// A new metric pair is set one property after the other, and in one order
+// the pair in between is invalid (near=20000 while far is still 10000).
+// That must not stop the stream: frames keep the last valid pair, one
+// warning says so, and the new pair applies once it is valid. In the other
+// order every pair is valid: no warning at all.
+TEST(DepthMux, MetricPairChangedWhilePlayingKeepsTheStreamGoing) {
+  const cv::Mat grey = random_grey(8, 6, CV_16UC1, 5);
+  DepthImportParams old_pair, new_pair;
+  old_pair.convention = new_pair.convention = DepthConvention::Metric;
+  old_pair.near = 500;
+  old_pair.far = 10000;
+  new_pair.near = 20000;
+  new_pair.far = 50000;
+  for (const bool near_first : {true, false}) {
+    SCOPED_TRACE(near_first ? "near set first" : "far set first");
+    Mux m("convention=metric near=500 far=10000");
+    BusMessages bus(m.element());
+    gst_harness_set_src_caps_str(m.video, raw_caps(PixelFormat::RGBA, 8, 6).c_str());
+    gst_harness_set_src_caps_str(m.depth, grey_caps(grey).c_str());
+    ASSERT_EQ(gst_harness_push(m.depth, at(buffer_from_grey(grey), 0)), GST_FLOW_OK);
+    gst_harness_push_event(m.depth, gst_event_new_eos());
+    int frame = 0;
+    auto next_depth = [&]() {
+      const double t = 0.04 * frame++;
+      EXPECT_EQ(gst_harness_push(m.video, at(buffer_from_frame(frame_of(8, 6, 1)), t)), GST_FLOW_OK);
+      GstBuffer *out = gst_harness_pull(m.video);
+      if (!out) {
+        ADD_FAILURE() << "frame " << frame - 1 << " did not come out";
+        return cv::Mat(6, 8, CV_32FC1, cv::Scalar(-1));
+      }
+      cv::Mat d = buffer_depth(out).clone();
+      gst_buffer_unref(out);
+      return d;
+    };
+    EXPECT_EQ(cv::norm(next_depth(), imported(grey, 8, 6, old_pair), cv::NORM_INF), 0);
+    g_object_set(m.element(), near_first ? "near" : "far", near_first ? 20000.f : 50000.f, nullptr);
+    // Two frames between the sets: near first leaves an invalid pair, and
+    // the old pair stays in use; far first gives the valid pair 500/50000.
+    DepthImportParams between = old_pair;
+    if (!near_first) between.far = 50000;
+    for (int i = 0; i < 2; ++i) EXPECT_EQ(cv::norm(next_depth(), imported(grey, 8, 6, between), cv::NORM_INF), 0);
+    g_object_set(m.element(), near_first ? "far" : "near", near_first ? 50000.f : 20000.f, nullptr);
+    EXPECT_EQ(cv::norm(next_depth(), imported(grey, 8, 6, new_pair), cv::NORM_INF), 0);
+    EXPECT_TRUE(bus.take(GST_MESSAGE_ERROR).empty());
+    const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
+    if (near_first) {
+      ASSERT_EQ(warnings.size(), 1u) << "one warning for the invalid pair, not one a frame";
+      EXPECT_NE(warnings[0].find("near 20000, far 10000"), std::string::npos) << warnings[0];
+    } else {
+      EXPECT_TRUE(warnings.empty()) << warnings[0];
+    }
+  }
+}
+
 // The stages that follow take the depth as they take pseudo3ddepth's: a
 // whole chain from a video test source and a grey depth picture.
 TEST(DepthMux, FeedsTheStereoChain) {
