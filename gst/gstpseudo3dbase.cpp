@@ -336,10 +336,90 @@ static GstCaps *cuda_first(GstCaps *caps) {
 }
 #endif
 
-// Brackets a negotiation in the streaming thread (see staged_geometry.h).
+// Brackets each negotiation (a CAPS event, the renegotiation before a
+// buffer, a caps, accept-caps or allocation query; from any thread,
+// possibly nested): the staged geometry's configuring value stays frozen
+// (see staged_geometry.h).
 static void freeze_geometry(GstPseudo3DBase *self, gboolean frozen) {
-  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  if (klass->freeze_geometry) klass->freeze_geometry(self, frozen);
+  if (!self->staged) return;
+  GST_OBJECT_LOCK(self);
+  self->staged->freeze(frozen);
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void settle_geometry(GstPseudo3DBase *self) {
+  if (!self->staged) return;
+  GST_OBJECT_LOCK(self);
+  self->staged->settle();
+  GST_OBJECT_UNLOCK(self);
+}
+
+// GstBaseTransform renegotiates a running stream before a buffer when a
+// property or downstream asked for it, and any failure there posts a bare
+// "not negotiated" warning and stops the stream. Two failures are not the
+// user's fault and must not stop it:
+//  * a flush (a seek) racing the renegotiation: downstream refuses while
+//    flushing. The buffer is dropped as flushing, silently; the request
+//    stays and is negotiated with the next buffer.
+//  * a live value the stream cannot take (method=rgbd on a width that
+//    cannot be halved, input-layout=top-bottom on an odd height): the value
+//    is refused with one warning saying why, the property goes back to the
+//    value of the caps in force, and the stream goes on with it.
+// Any other failure is the parent's: its warning and NOT_NEGOTIATED.
+static GstFlowReturn renegotiate_running_stream(GstPseudo3DBase *self) {
+  GstBaseTransform *trans = GST_BASE_TRANSFORM(self);
+  if (!gst_pad_needs_reconfigure(trans->srcpad) || !gst_pad_has_current_caps(trans->srcpad)) return GST_FLOW_OK;
+  GST_OBJECT_LOCK(self);
+  const bool change = self->staged && self->staged->pending();
+  GST_OBJECT_UNLOCK(self);
+  const gint flushes = g_atomic_int_get(&self->flush_starts);
+  self->live_thread = g_thread_self();  // refusals collected, the parent's bare warning dropped
+  const gboolean ok = gst_base_transform_reconfigure(trans);
+  self->live_thread = nullptr;
+  gchar *refusal = self->live_refusal, *debug = self->live_refusal_debug;
+  self->live_refusal = self->live_refusal_debug = nullptr;
+  GstFlowReturn ret = GST_FLOW_OK;
+  if (ok) {
+    settle_geometry(self);
+  } else if (flushes != g_atomic_int_get(&self->flush_starts) || GST_PAD_IS_FLUSHING(trans->sinkpad) ||
+             GST_PAD_IS_FLUSHING(trans->srcpad)) {
+    GST_DEBUG_OBJECT(self, "renegotiation met a flush: the buffer is dropped, the request stays");
+    ret = GST_FLOW_FLUSHING;
+  } else if (change) {
+    GST_OBJECT_LOCK(self);
+    self->staged->revert();
+    GST_OBJECT_UNLOCK(self);
+    GST_ELEMENT_WARNING(self, CORE, NEGOTIATION,
+                        ("%s: the new value is refused, and the stream goes on with the previous one",
+                         refusal ? refusal : "The stream cannot take the new property value"),
+                        ("%s", debug ? debug : "downstream did not accept the output caps of the new value"));
+  } else {
+    GST_ELEMENT_WARNING(self, STREAM, FORMAT, ("not negotiated"), ("%s", debug ? debug : "not negotiated"));
+    ret = GST_FLOW_NOT_NEGOTIATED;
+  }
+  g_free(refusal);
+  g_free(debug);
+  return ret;
+}
+
+// The parent's bare "not negotiated" warning, posted from inside
+// renegotiate_running_stream's renegotiation, is dropped: that function
+// tells the failures apart and reports them itself.
+static gboolean gst_pseudo3d_base_post_message(GstElement *element, GstMessage *msg) {
+  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(element);
+  if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_WARNING && GST_MESSAGE_SRC(msg) == GST_OBJECT(element) &&
+      self->live_thread == g_thread_self()) {
+    GError *err = nullptr;
+    gst_message_parse_warning(msg, &err, nullptr);
+    const bool bare = err && g_error_matches(err, GST_STREAM_ERROR, GST_STREAM_ERROR_FORMAT) &&
+                      g_strcmp0(err->message, "not negotiated") == 0;
+    g_clear_error(&err);
+    if (bare) {
+      gst_message_unref(msg);
+      return TRUE;
+    }
+  }
+  return GST_ELEMENT_CLASS(parent_class)->post_message(element, msg);
 }
 
 static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection direction, GstQuery *query) {
@@ -353,10 +433,14 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
   // pending renegotiation: each is one negotiation, bracketed like the one
   // before a buffer, or a property change from another thread between its
   // transform_caps calls (or before its set_caps) would make them disagree.
+  // The allocation query renegotiates first, as a buffer does: through
+  // renegotiate_running_stream, for the same reasons.
   const GstQueryType type = GST_QUERY_TYPE(query);
   const bool negotiates = type == GST_QUERY_CAPS || type == GST_QUERY_ACCEPT_CAPS || type == GST_QUERY_ALLOCATION;
   if (negotiates) freeze_geometry(self, TRUE);
-  const gboolean answered = GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query);
+  const bool allocation = type == GST_QUERY_ALLOCATION && direction == GST_PAD_SINK;
+  const gboolean answered = (!allocation || renegotiate_running_stream(self) == GST_FLOW_OK) &&
+                            GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query);
   if (negotiates) freeze_geometry(self, FALSE);
   if (!answered) return FALSE;
 #if HAVE_CUDA
@@ -442,6 +526,17 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
 }
 
 gboolean gst_pseudo3d_base_refuse_caps(GstPseudo3DBase *self, const char *text, const char *debug_format, ...) {
+  if (self->live_thread == g_thread_self()) {
+    // A live property change: the stream keeps its caps, the caller warns.
+    va_list args;
+    va_start(args, debug_format);
+    g_free(self->live_refusal_debug);
+    self->live_refusal_debug = g_strdup_vprintf(debug_format, args);
+    va_end(args);
+    g_free(self->live_refusal);
+    self->live_refusal = g_strdup(text);
+    return FALSE;
+  }
   GstCaps *caps = self->negotiating_caps;
   if (caps && self->refused_caps && gst_caps_is_equal(caps, self->refused_caps)) {
     GST_DEBUG_OBJECT(self, "caps refused again: %s", text);
@@ -606,6 +701,7 @@ static void request_history_reset(GstPseudo3DBase *self, const char *why) {
 static gboolean gst_pseudo3d_base_sink_event(GstBaseTransform *trans, GstEvent *event) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
   switch (GST_EVENT_TYPE(event)) {
+    case GST_EVENT_FLUSH_START: g_atomic_int_inc(&self->flush_starts); break;
     case GST_EVENT_FLUSH_STOP:
     case GST_EVENT_STREAM_START:
     case GST_EVENT_SEGMENT: request_history_reset(self, GST_EVENT_TYPE_NAME(event)); break;
@@ -614,6 +710,7 @@ static gboolean gst_pseudo3d_base_sink_event(GstBaseTransform *trans, GstEvent *
       request_history_reset(self, "caps");
       freeze_geometry(self, TRUE);
       const gboolean ret = GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
+      if (ret) settle_geometry(self);
       freeze_geometry(self, FALSE);
       return ret;
     }
@@ -631,9 +728,18 @@ static GstFlowReturn gst_pseudo3d_base_submit_input_buffer(GstBaseTransform *tra
 #if HAVE_CUDA
   adopt_buffer_context(self, input);
 #endif
-  // The parent renegotiates if a property asked for it, then applies QoS.
+  // The parent renegotiates if a property asked for it, then applies QoS;
+  // a renegotiation of a running stream is done here first, so that its
+  // failure is told apart (renegotiate_running_stream).
   freeze_geometry(self, TRUE);
-  const GstFlowReturn ret = GST_BASE_TRANSFORM_CLASS(parent_class)->submit_input_buffer(trans, is_discont, input);
+  const GstFlowReturn renegotiated = renegotiate_running_stream(self);
+  GstFlowReturn ret;
+  if (renegotiated == GST_FLOW_OK) {
+    ret = GST_BASE_TRANSFORM_CLASS(parent_class)->submit_input_buffer(trans, is_discont, input);
+  } else {
+    gst_buffer_unref(input);
+    ret = renegotiated;
+  }
   freeze_geometry(self, FALSE);
   return ret;
 }
@@ -790,6 +896,8 @@ static GstFlowReturn gst_pseudo3d_base_transform_ip(GstBaseTransform *trans, Gst
 static void gst_pseudo3d_base_finalize(GObject *object) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(object);
   gst_clear_caps(&self->refused_caps);
+  g_free(self->live_refusal);
+  g_free(self->live_refusal_debug);
   delete self->gpu;
   self->gpu = nullptr;
   G_OBJECT_CLASS(parent_class)->finalize(object);
@@ -833,6 +941,7 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
                        -1, G_MAXINT, DEFAULT_DEVICE_ID,
                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
 
+  element_class->post_message = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_post_message);
 #if HAVE_CUDA
   element_class->set_context = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_set_context);
 #else

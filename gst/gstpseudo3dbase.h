@@ -24,6 +24,7 @@
 #include "enums.h"
 #include "frame.h"
 #include "gpu_context.h"
+#include "staged_geometry.h"
 
 G_BEGIN_DECLS
 
@@ -62,6 +63,14 @@ struct _GstPseudo3DBase {
   gboolean staged_warned;
   GstCaps *negotiating_caps; /* input caps of the set_info call in progress */
   GstCaps *refused_caps;     /* input caps whose refusal was posted */
+  /* The stage's caps-deciding properties (staged_geometry.h), owned by the
+   * stage; null when no property changes the caps. Object lock. */
+  p3d::gst::StagedGeometryBase *staged;
+  /* Streaming thread: a renegotiation for a live property change is under
+   * way in this thread; refusals are collected, not posted. */
+  GThread *live_thread;
+  gchar *live_refusal, *live_refusal_debug;
+  gint flush_starts; /* atomic: FLUSH_START events seen */
 };
 
 struct _GstPseudo3DBaseClass {
@@ -82,11 +91,6 @@ struct _GstPseudo3DBaseClass {
    * gst_pseudo3d_base_refuse_caps) and set in-place/passthrough. */
   gboolean (*set_info)(GstPseudo3DBase *self, GstCaps *incaps, GstVideoInfo *in_info, GstCaps *outcaps,
                        GstVideoInfo *out_info);
-  /* Called with TRUE before and FALSE after each negotiation (a CAPS event,
-   * the renegotiation before a buffer, a caps, accept-caps or allocation
-   * query; from any thread, possibly nested): freeze the StagedGeometry's
-   * configuring value. */
-  void (*freeze_geometry)(GstPseudo3DBase *self, gboolean frozen);
   /* Before each frame, in the streaming thread: TRUE when a staged geometry
    * request differs from the active value (the base then renegotiates). */
   gboolean (*frame_boundary)(GstPseudo3DBase *self);
@@ -107,7 +111,10 @@ GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self);
 
 /* From set_info: refuses the caps with a CORE/NEGOTIATION error saying why.
  * GstBaseTransform retries a failed negotiation for every buffer; the error
- * is posted once per input caps. Returns FALSE (for set_info to return). */
+ * is posted once per input caps. During the renegotiation of a live
+ * property change the refusal is kept instead: the base then refuses the
+ * change with a warning and the stream goes on. Returns
+ * FALSE (for set_info to return). */
 gboolean gst_pseudo3d_base_refuse_caps(GstPseudo3DBase *self, const char *text, const char *debug_format, ...)
     G_GNUC_PRINTF(3, 4);
 

@@ -112,13 +112,6 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   return TRUE;
 }
 
-static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
-  GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
-  GST_OBJECT_LOCK(self);
-  self->state->method.freeze(frozen);
-  GST_OBJECT_UNLOCK(self);
-}
-
 static gboolean frame_boundary(GstPseudo3DBase *base) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
   GST_OBJECT_LOCK(self);
@@ -309,7 +302,7 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
       g_param_spec_enum("method", "Method",
                         "Where depth comes from: estimated from edges, or read from the right half of RGBD frames "
                         "(rgbd halves the output width: a change while playing renegotiates the caps before the "
-                        "next frame)",
+                        "next frame; a stream whose width cannot be halved refuses rgbd with a warning and goes on)",
                         GST_TYPE_PSEUDO3D_DEPTH_METHOD, DEFAULT_METHOD, flags));
   g_object_class_install_property(
       gobject_class, PROP_HYPOTHESIS,
@@ -381,7 +374,6 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
 
   base_class->transform_geometry = transform_geometry;
   base_class->set_info = set_info;
-  base_class->freeze_geometry = freeze_geometry;
   base_class->frame_boundary = frame_boundary;
   base_class->process = process;
   base_class->process_ip = process_ip;
@@ -395,5 +387,6 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
 static void gst_pseudo3d_depth_init(GstPseudo3DDepth *self) {
   self->params = p3d::DepthParams();
   self->state = new DepthState();
+  GST_PSEUDO3D_BASE(self)->staged = &self->state->method;
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), DEFAULT_METHOD == GST_PSEUDO3D_DEPTH_METHOD_EDGES);
 }

@@ -230,13 +230,6 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   return TRUE;
 }
 
-static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
-  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
-  GST_OBJECT_LOCK(self);
-  self->geometry->freeze(frozen);
-  GST_OBJECT_UNLOCK(self);
-}
-
 // A request whose output caps equal the negotiated ones (swap-eyes of an
 // anaglyph, or a declared input layout that the caps already said) takes
 // effect at once; any other asks for renegotiation.
@@ -389,7 +382,8 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
       g_param_spec_enum("input-layout", "Input layout",
                         "How the input frames hold the stereo pair: from the caps' multiview-mode and "
                         "multiview-flags (pseudo3dwarp, 3D decoders and demuxers set them), or declared here for "
-                        "input whose caps say nothing (plain 2D caps)",
+                        "input whose caps say nothing (plain 2D caps). While playing, a layout the frames cannot "
+                        "hold (top-bottom of an odd height) is refused with a warning and the stream goes on",
                         GST_TYPE_PSEUDO3D_INPUT_LAYOUT, dg.input, flags));
   g_object_class_install_property(
       gobject_class, PROP_INPUT_RIGHT_FIRST,
@@ -412,7 +406,6 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
 
   base_class->transform_geometry = transform_geometry;
   base_class->set_info = set_info;
-  base_class->freeze_geometry = freeze_geometry;
   base_class->frame_boundary = frame_boundary;
   base_class->process = process;
 
@@ -426,6 +419,7 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
 static void gst_pseudo3d_pack_init(GstPseudo3DPack *self) {
   self->params = p3d::PackParams();
   self->geometry = new p3d::gst::StagedGeometry<PackGeometry>();
+  GST_PSEUDO3D_BASE(self)->staged = self->geometry;
   self->active = p3d::PackParams();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
 }

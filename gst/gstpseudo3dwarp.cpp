@@ -143,13 +143,6 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   return TRUE;
 }
 
-static void freeze_geometry(GstPseudo3DBase *base, gboolean frozen) {
-  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
-  GST_OBJECT_LOCK(self);
-  self->geometry->freeze(frozen);
-  GST_OBJECT_UNLOCK(self);
-}
-
 // A request whose output caps equal the negotiated ones (swap-eyes of an
 // anaglyph) takes effect at once; any other asks for renegotiation.
 static gboolean frame_boundary(GstPseudo3DBase *base) {
@@ -362,7 +355,6 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
 
   base_class->transform_geometry = transform_geometry;  // formats too: packed RGB or 4:2:0 out
   base_class->set_info = set_info;
-  base_class->freeze_geometry = freeze_geometry;
   base_class->frame_boundary = frame_boundary;
   base_class->process = process;
   base_class->release = release;
@@ -376,6 +368,7 @@ static void gst_pseudo3d_warp_init(GstPseudo3DWarp *self) {
   self->params = p3d::WarpParams();
   self->pack = p3d::PackParams();
   self->geometry = new p3d::gst::StagedGeometry<WarpGeometry>();
+  GST_PSEUDO3D_BASE(self)->staged = self->geometry;
   self->active = p3d::PackParams();
   self->active.layout = WarpGeometry().layout;
   self->state = new WarpState();

@@ -17,16 +17,40 @@
 // (gst_base_transform_reconfigure_src); GstBaseTransform renegotiates before
 // the next buffer, so a change takes effect at a frame boundary.
 //
+// A live request that the running stream cannot take (an RGBD method on a
+// width that cannot be halved, a declared top-bottom input of odd height)
+// must not stop the stream: the base renegotiates it before the frame, and
+// when that fails, revert() goes back to the value of the caps in force
+// (settle() records it after every negotiation that succeeded), and frames
+// go on with it.
+//
 // Not thread-safe by itself: every call is made with the element's object
 // lock held. G needs operator==.
 #pragma once
 
 namespace p3d::gst {
 
-template <typename G>
-class StagedGeometry {
+// What GstPseudo3DBase calls, whatever the stage's geometry type.
+class StagedGeometryBase {
  public:
-  explicit StagedGeometry(const G &initial = G()) : requested_(initial), configuring_(initial), active_(initial) {}
+  virtual ~StagedGeometryBase() = default;
+  // GstPseudo3DBase's bracket around each negotiation: begin (true) or end.
+  virtual void freeze(bool frozen) = 0;
+  // Whether the request still differs from the active value.
+  virtual bool pending() const = 0;
+  // The caps in force (negotiated and accepted downstream) belong to the
+  // active value.
+  virtual void settle() = 0;
+  // The request could not be negotiated: request, configuring and active
+  // value go back to the settled one.
+  virtual void revert() = 0;
+};
+
+template <typename G>
+class StagedGeometry final : public StagedGeometryBase {
+ public:
+  explicit StagedGeometry(const G &initial = G())
+      : requested_(initial), configuring_(initial), active_(initial), settled_(initial) {}
 
   // set_property: returns true when the caps must be renegotiated.
   bool request(const G &g) {
@@ -44,8 +68,7 @@ class StagedGeometry {
   void end_negotiation() {
     if (frozen_ > 0) --frozen_;
   }
-  // GstPseudo3DBaseClass::freeze_geometry's bracket: begin (true) or end.
-  void freeze(bool frozen) {
+  void freeze(bool frozen) override {
     if (frozen)
       begin_negotiation();
     else
@@ -66,11 +89,13 @@ class StagedGeometry {
   // once (GstBaseTransform calls set_caps only when the caps change).
   void activate(const G &g) { active_ = g; }
 
-  // Before a frame: whether the request still differs from the active value.
-  bool pending() const { return !(requested_ == active_); }
+  bool pending() const override { return !(requested_ == active_); }
+
+  void settle() override { settled_ = active_; }
+  void revert() override { requested_ = configuring_ = active_ = settled_; }
 
  private:
-  G requested_, configuring_, active_;
+  G requested_, configuring_, active_, settled_;
   int frozen_ = 0;  // nesting depth of the negotiation brackets
 };
 

@@ -360,6 +360,146 @@ TEST(LiveProperties, DepthMethodFramesMatchTheirCaps) {
   }
 }
 
+// A live value the running stream cannot take is refused, not fatal:
+// method=rgbd on a 321-wide I420 stream (no colour half of that width) and
+// input-layout=top-bottom on a pair of odd height. Frames keep coming, the
+// same as before the set, one warning says why, the property reads back
+// the value in force, and a value that fits is still taken afterwards.
+struct LiveRefusal {
+  const char *launch, *caps;
+  int width, height;
+  const char *property, *refused, *kept, *reason;
+  const char *later;  // a value that fits, set after the refusal
+};
+
+TEST(LiveProperties, ValueTheStreamCannotTakeIsRefusedWithAWarning) {
+  const LiveRefusal cases[] = {
+      {"pseudo3ddepth", "", 321, 8, "method", "rgbd", "edges", "twice as wide", nullptr},
+      {"pseudo3dpack layout=side-by-side-half", ",multiview-mode=side-by-side", 24, 7, "input-layout", "top-bottom",
+       "from-caps", "even height", "side-by-side"},
+  };
+  for (const LiveRefusal &c : cases) {
+    SCOPED_TRACE(c.launch);
+    const PixelFormat fmt = std::string(c.property) == "method" ? PixelFormat::I420 : PixelFormat::RGBA;
+    HostFrame input(fmt, c.width, c.height);
+    input.fill_random(9);
+    GstHarness *hx = gst_harness_new_parse(c.launch);
+    const std::string factory = std::string(c.launch).substr(0, std::string(c.launch).find(' '));
+    GstElement *el = find(hx, factory.c_str());
+    BusMessages bus(hx->element);
+    gst_harness_set_src_caps_str(hx, raw_caps(fmt, c.width, c.height, c.caps).c_str());
+    auto push_pull = [&](std::string *caps_out) {
+      GstBuffer *out = gst_harness_push_and_pull(hx, buffer_from_frame(input));
+      if (!out) return cv::Mat();
+      GstCaps *caps = gst_pad_get_current_caps(hx->sinkpad);
+      *caps_out = current_caps(hx->sinkpad);
+      cv::Mat m = buffer_to_bgra(out, caps).clone();
+      gst_caps_unref(caps);
+      gst_buffer_unref(out);
+      return m;
+    };
+    std::string caps_before, caps_after;
+    const cv::Mat before = push_pull(&caps_before);
+    ASSERT_FALSE(before.empty());
+    gst_util_set_object_arg(G_OBJECT(el), c.property, c.refused);
+    for (int i = 0; i < 3; ++i) {
+      const cv::Mat after = push_pull(&caps_after);
+      ASSERT_FALSE(after.empty()) << "frame " << i << " after the set did not come out";
+      EXPECT_EQ(caps_after, caps_before);
+      EXPECT_EQ(cv::norm(after, before, cv::NORM_INF), 0) << "frame " << i;
+    }
+    EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{});
+    const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
+    ASSERT_EQ(warnings.size(), 1u) << "one warning, not one a frame";
+    EXPECT_NE(warnings[0].find(c.reason), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[0].find("refused"), std::string::npos) << warnings[0];
+    GValue v = G_VALUE_INIT;
+    g_value_init(&v, G_PARAM_SPEC_VALUE_TYPE(g_object_class_find_property(G_OBJECT_GET_CLASS(el), c.property)));
+    g_object_get_property(G_OBJECT(el), c.property, &v);
+    EXPECT_STREQ(g_enum_get_value(G_ENUM_CLASS(g_type_class_peek(G_VALUE_TYPE(&v))), g_value_get_enum(&v))->value_nick,
+                 c.kept);
+    g_value_unset(&v);
+    if (c.later) {
+      gst_util_set_object_arg(G_OBJECT(el), c.property, c.later);
+      ASSERT_FALSE(push_pull(&caps_after).empty());
+      EXPECT_TRUE(bus.take(GST_MESSAGE_WARNING).empty());
+      EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{});
+    }
+    gst_object_unref(el);
+    gst_harness_teardown(hx);
+  }
+}
+
+// A layout change racing a flushing seek: the renegotiation before the next
+// buffer meets the flush (here made certain: the flush starts while the
+// element asks downstream for its caps, so the new caps then cannot leave
+// the flushing source pad). That is the seek's doing, not a failure: no "not
+// negotiated" warning reaches the application, and after the flush the
+// change is negotiated and applied.
+TEST(LiveProperties, LayoutChangeRacingAFlushPostsNoWarning) {
+  const int w = 12, h = 8;
+  struct Case {
+    const char *launch, *factory, *caps;
+    int width;  // of the input frame
+  };
+  for (const Case &c : {Case{"pseudo3dpack layout=side-by-side", "pseudo3dpack", ",multiview-mode=side-by-side", 2 * w},
+                        Case{"pseudo3ddepth ! pseudo3dwarp", "pseudo3dwarp", "", w}}) {
+    SCOPED_TRACE(c.factory);
+    HostFrame pair(PixelFormat::RGBA, c.width, h);
+    pair.fill_random(21);
+    GstHarness *hx = gst_harness_new_parse(c.launch);
+    GstElement *el = find(hx, c.factory);
+    BusMessages bus(hx->element);
+    gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::RGBA, c.width, h, c.caps).c_str());
+    GstBuffer *first = gst_harness_push_and_pull(hx, buffer_from_frame(pair));
+    ASSERT_NE(first, nullptr);
+    gst_buffer_unref(first);
+
+    // GstBaseTransform asks the peer pad itself for its caps: the probe sits there.
+    GstPad *src = gst_element_get_static_pad(el, "src"), *sink = gst_element_get_static_pad(el, "sink");
+    GstPad *peer = gst_pad_get_peer(src);
+    struct Race {
+      GstPad *sink;
+      bool flushed = false;
+    } race{sink};
+    const gulong probe = gst_pad_add_probe(
+        peer, static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_QUERY_DOWNSTREAM | GST_PAD_PROBE_TYPE_PUSH),
+        [](GstPad *, GstPadProbeInfo *info, gpointer data) {
+          auto *r = static_cast<Race *>(data);
+          if (GST_QUERY_TYPE(GST_PAD_PROBE_INFO_QUERY(info)) == GST_QUERY_CAPS && !r->flushed) {
+            r->flushed = true;
+            gst_pad_send_event(r->sink, gst_event_new_flush_start());
+          }
+          return GST_PAD_PROBE_OK;
+        },
+        &race, nullptr);
+    g_object_set(el, "layout", PackLayout::TopBottom, NULL);
+    EXPECT_NE(gst_harness_push(hx, buffer_from_frame(pair)), GST_FLOW_OK) << "the buffer meets the flush";
+    EXPECT_TRUE(race.flushed);
+    gst_pad_remove_probe(peer, probe);
+    gst_harness_push_event(hx, gst_event_new_flush_stop(TRUE));
+    GstSegment segment;
+    gst_segment_init(&segment, GST_FORMAT_TIME);
+    gst_harness_push_event(hx, gst_event_new_segment(&segment));
+
+    GstBuffer *out = gst_harness_push_and_pull(hx, buffer_from_frame(pair));
+    ASSERT_NE(out, nullptr);
+    gst_buffer_unref(out);
+    GstCaps *caps = gst_pad_get_current_caps(hx->sinkpad);
+    GstVideoInfo info;
+    ASSERT_TRUE(gst_video_info_from_caps(&info, caps));
+    EXPECT_EQ(GST_VIDEO_INFO_MULTIVIEW_MODE(&info), GST_VIDEO_MULTIVIEW_MODE_TOP_BOTTOM) << "the change applies after";
+    gst_caps_unref(caps);
+    EXPECT_EQ(bus.take(GST_MESSAGE_WARNING), std::vector<std::string>{});
+    EXPECT_EQ(bus.take(GST_MESSAGE_ERROR), std::vector<std::string>{});
+    gst_object_unref(peer);
+    gst_object_unref(src);
+    gst_object_unref(sink);
+    gst_object_unref(el);
+    gst_harness_teardown(hx);
+  }
+}
+
 // processing and cuda-device-id may only change in NULL or READY: while
 // playing the change is refused with a warning, and the value stays.
 TEST(LiveProperties, ReadyOnlyPropertiesAreRefusedWhilePlaying) {
