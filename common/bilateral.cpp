@@ -43,9 +43,10 @@ ImageView<float> float_view(cv::Mat &m) { return ImageView<float>{m.ptr<float>()
 // the mirrored table's centre, indexed by the signed guide difference, so no
 // branch on its sign. The strip keeps
 // kStrip independent sums in registers, which the compiler vectorises,
-// instead of one pixel's chain of dependent additions at a time.
-// Measured on 2 cores at 1080p, r 5: separable filter 17-19 ms against
-// 71 ms per pixel (row pass) and as row sweeps (column pass).
+// instead of one pixel's chain of dependent additions at a time, which is
+// several times faster than a pixel at a time (row pass) or row sweeps
+// (column pass) (measured: docs/benchmarks.md, Design measurements,
+// "Filter").
 constexpr int kStrip = 16;
 
 inline void window_strip(const uint8_t *tap_guide, ptrdiff_t guide_step, const float *tap_depth,

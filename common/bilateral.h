@@ -68,12 +68,11 @@ constexpr int kBilateralRangeTableSize = 256;  // |guide difference| 0..255
 
 enum class BilateralMode : int { Exact = 0, Separable = 1 };
 
-// The mode pseudo3dfilter and the tools run by default. Separable: on 2 CPU
-// cores at 1080p the filter takes 17-21 ms against 115 ms for Exact, on an
-// H100 at 4K 0.135 against 0.350 ms (docs/benchmarks.md), and the measured
-// quality moves within noise (Aloe right view through the warp +0.01 dB,
-// depth rank rho 0.7469 -> 0.7468, vtest.avi static-background flicker
-// 0.0562 -> 0.0572 levels; docs/quality.md). BilateralParams() itself
+// The mode pseudo3dfilter and the tools run by default. Separable: a few
+// times faster than Exact on the CPU and the GPU (docs/benchmarks.md,
+// Design measurements, "Filter"), and its measured quality is within noise
+// of Exact's (Aloe right view through the warp, depth rank, vtest.avi
+// static-background flicker; docs/quality.md). BilateralParams() itself
 // stays Exact: the definition the references and their tests start from.
 constexpr BilateralMode kDefaultFilterMode = BilateralMode::Separable;
 
@@ -82,12 +81,11 @@ constexpr int kMaxBilateralScale = 8;
 // of the picture's shorter side, kAutoFilterStep from there: cells of 4 x 4
 // pixels at 4K and at 8K. At 4K that is depth_estimate.h's automatic block
 // (one per 540 rows), at 8K half of it, so there a cell never straddles
-// two of the estimator's blocks where both are automatic. Until 2026-11-26
-// the step was one per 1080 rows (2 at 4K); step 4 at 4K took the 4K
-// filter from 0.035 to 0.014 ms and the chain from 0.297 to 0.280 ms on an
-// H200 (the warp's row groups then share one scatter between 4 rows), and
-// on Aloe enlarged to 4K it measured +0.11 dB, +0.003 SSIM, rho -0.002
-// against step 2 (docs/quality.md, docs/benchmarks.md).
+// two of the estimator's blocks where both are automatic. Step 4 rather
+// than 2 at 4K: the filter is cheaper and the warp's row groups share one
+// scatter between 4 rows, and the quality on Aloe enlarged to 4K is no
+// worse than step 2's (measured: docs/quality.md, "The filter on a coarser
+// grid"; docs/benchmarks.md, Design measurements, "Filter").
 constexpr int kAutoFilterGridRows = 2160;
 constexpr int kAutoFilterStep = 4;
 

@@ -79,7 +79,7 @@
 // of products plus 2^15 shifted down 16 bits and clipped (anaglyph_mix_word;
 // within one code of the float mix, equal to it but where the float sum
 // lies within about 2^-16 of a half: the integers cost a pixel 18
-// multiply-adds where floats took about 60 instructions, and the GPU's
+// multiply-adds where floats take about 60 instructions, and the GPU's
 // fused anaglyph is bound by its instructions); DuboisLinear in float:
 // (Ml row . L) + (Mr row . R) on linear values, each dot left to right.
 // Anaglyphs keep colour detail only in full-resolution chroma: encode them
@@ -308,9 +308,10 @@ P3D_HD uint8_t linear_to_code(const AnaglyphMatrices &am, float v) {
 // sum of the six products plus 2^15, shifted down 16 bits (rounded to the
 // nearest, halves up) and clipped to 0..255. Integer arithmetic, so the
 // CPU and every GPU kernel agree without care for operation order; a pixel
-// is 18 multiply-adds where the float mix took about 60 instructions,
-// which counted in the warp's fused anaglyph (cuda/warp.cu), a kernel
-// bound by its instructions. |q| < 2^17 and 6 * 255 * 2^17 < 2^31: no
+// is 18 multiply-adds where the float mix takes about 60 instructions,
+// which counts in the warp's fused anaglyph (cuda/warp.cu), a kernel bound
+// by its instructions (measured: docs/benchmarks.md, Design measurements,
+// "Fused pack"). |q| < 2^17 and 6 * 255 * 2^17 < 2^31: no
 // overflow. Against the float mix it differs by at most one code, where
 // the float sum lies within about 2^-16 of a half (tests/common/test_pack.cpp).
 P3D_HD uint32_t anaglyph_mix_word(const int32_t *left, const int32_t *right, uint32_t l, uint32_t r) {

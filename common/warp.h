@@ -78,7 +78,7 @@
 //       that every pixel from X to X' is a hole; n is the total count.
 //       n = 0: kFillBlack. Integer sums (uint32, no overflow for the
 //       largest R): the result does not depend on the order of summation.
-//    Compared with Background, one noisy pixel no longer streaks along a
+//    Compared with Background, one noisy pixel does not streak along a
 //    row, and the colour of a disocclusion is the local mean of the
 //    background next to it (docs/quality.md). Everything but the column
 //    and row sums is row-local, so the GPU finds the anchors in the warp's
@@ -119,10 +119,9 @@ struct WarpParams {
   float max_disparity = 3.f;   // percent of frame width, 0..kMaxDisparityPercent
   float convergence = 0.5f;    // depth that lands on the screen plane, 0..1
   StereoView view = StereoView::Both;
-  // BackgroundSmooth is the default (2026-11-23): Aloe 24.54 dB / SSIM
-  // 0.804 against Background's 22.97 / 0.790, at about 0.10 ms per 4K frame
-  // on an H100 over fill=none (Background 0.02) and about 10 ms more than
-  // Background per 1080p frame on two CPU cores (docs/benchmarks.md).
+  // BackgroundSmooth is the default: the best quality of the fills
+  // (docs/quality.md), for a cost on the GPU and the CPU measured in
+  // docs/benchmarks.md, Design measurements, "Default fill".
   HoleFill fill = HoleFill::BackgroundSmooth;
 };
 

@@ -19,9 +19,9 @@
 // to its s x s cell (store_cell), or once to an output grid of the cells'
 // size (the depth handoff on grids, docs/architecture.md), so the coarse
 // picture never goes through global memory. The step is a template
-// parameter, not a run-time branch in every instance: a run-time step in
-// the step-1 kernels cost 1.7 us at 1080p and 7 us at 4K on an H100
-// (docs/benchmarks.md).
+// parameter, not a run-time branch in every instance, so the step-1
+// kernels carry no code for other steps (measured: docs/benchmarks.md,
+// Design measurements, "Filter").
 #include "chained_launch.cuh"
 #include "bilateral_gpu.h"
 #include "launch_bounds.cuh"
@@ -48,9 +48,8 @@ constexpr int kRangeMid = kBilateralRangeTableSize - 1;
 // The luma is kept as the byte offset of its entry in a float table (luma
 // * 4), so that a tap's range weight is one add and one load from a table
 // pointer that already holds the centre's offset (range_weight), where an
-// index took an add, a shift-add and the load: 360.5 -> 339.6 instructions
-// a pixel, 4K filter 0.1190 -> 0.1158 ms, 8K 0.4431 -> 0.4301 on an H100
-// (docs/benchmarks.md).
+// index would take an add, a shift-add and the load (measured:
+// docs/benchmarks.md, Design measurements, "Filter").
 struct alignas(8) Texel {
   float depth;
   int luma4;
@@ -93,10 +92,10 @@ struct Cells {
 
 // The grid a kernel instance filters, and how its depth comes in and goes
 // out (a template parameter, so that the cell instances that run
-// full-size maps carry none of the grids' run-time shifts: in the step-2
-// kernel they cost 40 bytes of spills and the 4K filter 0.0390 -> 0.0455
-// ms on an H200 on full-size maps; the step-1 instances read through the
-// shift whatever the map, at no measured cost on grids):
+// full-size maps carry none of the grids' run-time shifts, which make the
+// step-2 kernel spill (measured: docs/benchmarks.md, Design measurements,
+// "Filter"); the step-1 instances read through the shift whatever the
+// map, which costs them nothing measurable on grids):
 //  * kPixelGrid: the pixels (step 1); the depth read through its grid's
 //    shift (the estimator's blocks), the output full-size;
 //  * kCellsFullSize: the cells of a step s > 1, the depth read from a
@@ -124,8 +123,8 @@ __device__ __forceinline__ int grid_height(const DepthGrid<const float> &depth_i
 // Where the cell's rows start 2-byte aligned (step 2) or 4-byte aligned
 // (step 4), a row is one 16- or 32-bit load, its bytes added by shifts or
 // one byte dot product (__dp4a with ones): the same integer sum with half
-// or a quarter of the loads (at 8K, step 4, the byte loads were most of
-// the filter's difference from 4K).
+// or a quarter of the loads (at step 4, byte loads would be most of a
+// cell's staging).
 template <int S>
 __device__ __forceinline__ int whole_cell_luma(const uint8_t *p, int stride) {
   unsigned sum = 0;
@@ -162,9 +161,9 @@ __device__ __forceinline__ int cell_luma(const FrameView &guide, int cx, int cy,
 // origin is (ox, oy) in the grid, row-major so a warp reads consecutive
 // texels of a row. Texels outside the grid stay unset: the clipped windows
 // never read them. A thread loads all its texels before it stores any, so
-// their loads are in flight together (one store after each load left the
-// staging waiting on each texel's loads in turn: 37 % of the 4K step-2
-// filter's stall samples, docs/benchmarks.md).
+// their loads are in flight together (one store after each load leaves the
+// staging waiting on each texel's loads in turn; measured:
+// docs/benchmarks.md, Design measurements, "Filter").
 template <int kTileW, int kTexels, int kTables, GridIo kIo>
 __device__ __forceinline__ void stage_tile(const FrameView &guide, const DepthGrid<const float> &depth_in,
                                            const Cells &cells, int ox, int oy, const float *__restrict__ tables,
@@ -363,9 +362,10 @@ __device__ __forceinline__ float pass_unclipped(int centre4, const float (&space
 }
 
 // As many blocks as an SM holds threads for (6 from sm_80 up, 4 on sm_75;
-// cuda/launch_bounds.cuh): at most 40 registers a thread, where the
-// compiler took 58 and so ran 4 blocks on an H100 (4K filter 0.133 -> 0.120
-// ms; a bound of 5 blocks gave 0.124).
+// cuda/launch_bounds.cuh): at most 40 registers a thread. Unbounded, the
+// compiler takes more registers and fewer blocks run an SM, which is
+// slower, as is a bound of 5 blocks (measured: docs/benchmarks.md, Design
+// measurements, "Filter").
 template <int R, GridIo kIo>
 __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
     separable_kernel(FrameView guide, DepthGrid<const float> depth_in, DepthGrid<float> depth_out,

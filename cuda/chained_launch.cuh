@@ -9,20 +9,19 @@
 // own chained_kernel_start() then waits until that kernel has completed and
 // its writes are visible. So every kernel still sees all of its
 // predecessors' results, as after a plain launch; only the launch and the
-// ramp-up overlap the predecessor's last blocks. Measured on an H100
-// (pseudo3d-bench, same-loan A/B, docs/benchmarks.md): 4K chain 0.4714 ->
-// 0.4600 ms, 1080p 0.2001 -> 0.1885, 8K 1.6635 -> 1.6523.
+// ramp-up overlap the predecessor's last blocks (measured:
+// docs/benchmarks.md, Design measurements, "Chained launches").
 //
 // Every kernel launched by launch_chained() calls chained_kernel_start()
 // first, before it reads or writes anything (tests/gpu/test_gpu_chained.cpp
 // fails without the wait). A kernel whose code has no wait (PTX for an
 // architecture before sm_90, as the compute_75 PTX that a newer card would
 // JIT) is launched plainly: chained_launch_allowed() checks the function's
-// PTX version, so a missing wait can never race. Not every kernel gains:
-// the warp's BackgroundSmooth sums kernel, whose grid is mostly blocks that
-// return at once, lost 11 us at 4K to the two instructions in each of them
-// while it had a block a tile; with a block for every 8 tiles it gains and
-// is chained too (cuda/warp.cu, launch_smooth).
+// PTX version, so a missing wait can never race. Chain a kernel only where
+// it gains: in a grid of mostly blocks that return at once, the two
+// instructions in each of them cost more than the overlap saves (the
+// warp's BackgroundSmooth sums kernel gains because it has a block for
+// every 8 tiles, not one a tile: cuda/warp.cu, launch_smooth).
 #pragma once
 
 #include <utility>

@@ -25,20 +25,19 @@ unsigned grid_for(long long items, int per_block) { return static_cast<unsigned>
 // columns, one thread a column) and `rows_per_cta` block rows
 // (feature_rows_per_cta: 8 up to B = 8). First every thread sums its
 // column over each of the CTA's block rows in integers, all of its loads
-// independent of each other so that they are in flight together (one
-// loop per block row, each waiting for its loads, took 37 us at 4K under
-// Nsight Compute, 29 us this way); then one thread per block adds the
-// block's B column sums, so every block sum is formed by one thread,
-// exactly. kB > 0: B is kB, known at compile
-// time (the automatic sizes); 0: any B.
+// independent of each other so that they are in flight together (a loop
+// per block row, each waiting for its loads, is latency bound; measured:
+// docs/benchmarks.md, Design measurements, "Depth"); then one thread per
+// block adds the block's B column sums, so every block sum is formed by one
+// thread, exactly. kB > 0: B is kB, known at compile time (the automatic
+// sizes); 0: any B.
 constexpr int kFeatureRowsMax = 8;  // block rows a CTA holds: feature_rows_per_cta(B) at most
 
 // Block rows a CTA of the features kernel sums: 8 up to B = 8 (16, 32 and
-// 64 pixel rows at the automatic 2, 4 and 8), else 1. With 16 pixel rows a
-// CTA at B = 4 and 8, a thread summed a single four-column item or none
-// (8K: half the threads idle); more rows give every thread loads in
-// flight: depth 4K 0.0651 -> 0.0637 ms, 8K 0.1055 -> 0.0919 (32 rows) ->
-// 0.0881 (64) on an H200 (docs/benchmarks.md).
+// 64 pixel rows at the automatic 2, 4 and 8), else 1. With fewer rows a
+// CTA at B = 4 and 8, a thread would sum a single four-column item or none
+// (at 8K half the threads idle); 8 block rows give every thread loads in
+// flight (measured: docs/benchmarks.md, Design measurements, "Depth").
 __host__ __device__ constexpr int feature_rows_per_cta(int B) { return B <= 8 ? 8 : 1; }
 
 // Column x's sums over the kB rows from y0 (clipped to the frame) of a
@@ -291,8 +290,8 @@ __device__ TemporalDecision device_decision(const DepthDeviceState *state, const
 // (no atomics; that is a valid forest, each run's root its smallest
 // index), and only the vertical joins go through unite(), skipping those
 // that the join to the left already made (both blocks joined to their left
-// neighbours, which are joined vertically). Large regions, whose every
-// block used to unite twice, now cost about one unite per run and row.
+// neighbours, which are joined vertically). So a large region costs about
+// one unite per run and row, not two a block.
 __global__ void tile_labels_kernel(const float *__restrict__ features, float *__restrict__ smoothed, int bx, int by,
                                    DepthParams params, bool yuv, bool have_state, const DepthDeviceState *state, int *labels,
                                    unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
@@ -501,11 +500,11 @@ __global__ void block_depth_kernel(const int *__restrict__ labels, const unsigne
 // ---------------------------------------------------------------- step 6 ---
 // Each thread writes kExpandPixels consecutive pixels of a row: one
 // division by the block size for all of them, and one 16-byte store where
-// the row allows it. Measured per pixel (a division each, 4-byte stores):
-// 32 us at 4K under Nsight Compute, compute bound. kB > 0: B is kB, known
-// at compile time (the automatic sizes, as block_features_kernel), so the
-// divisions are shifts (and at 4 and 8 a thread's four pixels one load);
-// 0: any B.
+// the row allows it: a division and a 4-byte store per pixel would make the
+// kernel compute bound (measured: docs/benchmarks.md, Design measurements,
+// "Depth"). kB > 0: B is kB, known at compile time (the automatic sizes, as
+// block_features_kernel), so the divisions are shifts (and at 4 and 8 a
+// thread's four pixels one load); 0: any B.
 constexpr int kExpandPixels = 4;  // the float4 below
 static_assert(kExpandPixels == 4, "expand_kernel stores a float4");
 template <int kB>
@@ -560,8 +559,8 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
     return {};
   }
   const bool block_grid = depth.shift > 0;  // the blocks' own cells: no expansion
-  // A full-size map is expanded within its own size (as an ImageView always
-  // was); a grid must have the cells of its picture, and a block grid the
+  // A full-size map is expanded within its own size (as an ImageView is);
+  // a grid must have the cells of its picture, and a block grid the
   // frame's blocks.
   if ((!depth.cells.empty() && !grid_fits(depth)) ||
       (block_grid && (depth.cells.empty() || (1 << depth.shift) != B || depth.width != W || depth.height != H)))
@@ -586,9 +585,10 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   P3D_CUDA_TRY_STATUS(block_depth_.ensure(nb * sizeof(float)));
   // Two states, this frame's and the next one's, in turn: this frame's
   // depth kernel clears the next one's difference sum, so that no kernel
-  // of its own has to (a chained kernel before the features: 4K depth
-  // 0.0704 -> 0.0694 ms on an H100, docs/benchmarks.md). Cleared here
-  // instead where the last frame did not queue its depth kernel.
+  // of its own has to (a clearing kernel before the features costs a
+  // launch; measured: docs/benchmarks.md, Design measurements, "Depth").
+  // Cleared here instead where the last frame did not queue its depth
+  // kernel.
   P3D_CUDA_TRY_STATUS(state_.ensure(2 * sizeof(DepthDeviceState)));
   const int slot = 1 - state_slot_;
   auto *state = state_.as<DepthDeviceState>() + slot;

@@ -61,14 +61,14 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
 // load (the launcher checks that the rows are 16-byte aligned and the view
 // width is a multiple of kVec, so no thread has a ragged end), then
 // anaglyph() per pixel (for the gamma mixes anaglyph_mix_word on the words
-// themselves: through anaglyph_gamma()'s Rgba round trip the 1080p pack
-// took 0.0121 ms against 0.0117, two calls on an H100) on the words as
-// load_rgba() reads them and store_rgba() writes them. The format's byte order and
-// alpha are template parameters (kBgr, kAlpha: one kernel a packed
-// format), so a pixel costs no format test: the kernel was bound by
-// instructions rather than by memory (about 370 PTX instructions a pixel
-// with the format read at run time through pixel_at() and store_rgba() on
-// registers; docs/benchmarks.md).
+// themselves, which is cheaper than anaglyph_gamma()'s Rgba round trip) on
+// the words as load_rgba() reads them and store_rgba() writes them. The
+// format's byte order and alpha are template parameters (kBgr, kAlpha: one
+// kernel a packed format), so a pixel costs no format test: the kernel is
+// bound by instructions rather than by memory, and reading the format at
+// run time through pixel_at() and store_rgba() on registers costs several
+// hundred instructions a pixel (measured: docs/benchmarks.md, Design
+// measurements, "Pack").
 template <bool kBgr, bool kAlpha>
 __device__ Rgba view_word_rgba(uint32_t w) {
   Rgba c = word_rgba(kBgr ? swap_rb_word(w) : w);  // load_rgba()'s channels
@@ -78,10 +78,10 @@ __device__ Rgba view_word_rgba(uint32_t w) {
 __device__ uint32_t word_at(const uint4 &v, int i) { return i == 0 ? v.x : i == 1 ? v.y : i == 2 ? v.z : v.w; }
 
 // Rows go bottom to top (in every pack kernel): the warp before it wrote
-// its last rows last, and those are still in L2 (the 4K pair is 66 MB, L2
-// 50 MB): 4K chain 0.2611 -> 0.2588 ms, 8K 0.8349 -> 0.8333 on an H100
-// (docs/benchmarks.md); the pack stage timed alone, on pairs not just
-// written, is unchanged.
+// its last rows last, and those may still be in L2 (the 4K pair is 66 MB,
+// Hopper's L2 50 MB), so the pack meets them first; on a pair not just
+// written the order makes no difference (measured: docs/benchmarks.md,
+// Design measurements, "Pack").
 template <bool kBgr, bool kAlpha>
 __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   chained_kernel_start();
@@ -121,9 +121,10 @@ __global__ void pack_kernel_yuv(const PackKernelParams kp) {
   pack_detail::pack_block_yuv<I>(kp.p, kp.am, kp.in, kp.out, bx, by);
 }
 
-// Vectorised stores paid on an H200 at 3840x2160 per view (TopBottom 0.051
-// vs 0.069 ms, anaglyph 0.052 vs 0.056 ms) except for SideBySideHalf, whose
-// thread would read 8 neighbouring input pixels byte by byte (0.058 vs 0.048 ms).
+// Vectorised (16-byte) stores into packed RGB with 16-byte aligned rows,
+// for every layout but SideBySideHalf, whose thread would read 8
+// neighbouring input pixels byte by byte, which costs more than the stores
+// save (measured: docs/benchmarks.md, Design measurements, "Pack").
 bool use_vector_stores(const PackParams &p, const FrameView &out) {
   return p.layout != PackLayout::SideBySideHalf && is_packed_rgb(out.format) && rows_aligned(out, 0, 16);
 }

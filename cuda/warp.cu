@@ -107,7 +107,8 @@ __device__ Rgba rendered_colour(const FrameView &out, const Rgba *src_row, int W
 // ---- Pixels as 32-bit words --------------------------------------------------
 // The source row in shared memory holds rgba_word() of each load_rgba()
 // value, and covered pixels are resolved with sample_word() (common/warp.h)
-// and stored with one 32-bit store (4K warp 0.287 -> 0.285 ms on an H100).
+// and stored with one 32-bit store (measured: docs/benchmarks.md, Design
+// measurements, "Warp: resident rows, words, both eyes").
 
 // One eye's part of output row y, which starts at column col0 of `out`:
 // store() is store_rgba() of a word, one 32-bit store when the frame's rows
@@ -178,8 +179,8 @@ __device__ void store_aligned_word(const FrameView &out, int col, int y, uint32_
 // sums kernel works on tiles of 32 columns (one chunk) x `tile_rows` rows
 // of one eye; the row kernel lists the tiles that hold a hole (after each
 // eye's resolve loop), so that the sums kernel visits those and no others
-// (most tiles of a frame have none: launching a block for each cost about
-// as much as the sums themselves). Tile t = (eye * tiles_y + y /
+// (most tiles of a frame have none: launching a block for each would cost
+// about as much as the sums themselves). Tile t = (eye * tiles_y + y /
 // tile_rows) * tiles_x + chunk.
 struct SmoothScratch {
   uint8_t *state;        // kState* flags of every pixel of the chunks with holes
@@ -298,7 +299,7 @@ __device__ void smooth_anchor_row(const RowJob<Keys> &j, int eye) {
 }
 
 // Clears n key words before a scatter. In shared memory (kShared: 16-byte
-// aligned) 16 bytes a store, where a word a store cost five instructions a
+// aligned) 16 bytes a store, where a word a store costs five instructions a
 // pixel and eye; a row's keys in global memory (rows too wide for shared
 // memory) are not always 16-byte aligned.
 template <bool kShared, class Word>
@@ -322,7 +323,7 @@ template <class Keys>
 __device__ void scatter_source(typename Keys::Word *keys, const WarpSource &s, int W) {
   const WarpSpan span = warp_span(s, W);
   // Not unrolled: a span is one target for most pixels, and the unrolled
-  // loop's set-up cost more than the loop.
+  // loop's set-up costs more than the loop.
 #pragma unroll 1
   for (int X = span.first; X <= span.last; ++X) atomicMax(keys + X, Keys::key(warp_hit_at(s, X, W), X));
 }
@@ -350,8 +351,9 @@ __device__ WarpSource place_source(const RowJob<Keys> &j, int x, float shift) {
 // one 32-pixel chunk) so that the fills take each chunk's hole bits by
 // ballot. All else the fills need per chunk (BackgroundSmooth's chunk
 // flags, tile list and states) is written after the loop, from the hole
-// bits: in the loop it cost about 18 instructions a pixel and eye, mostly
-// for chunks without a hole (4K warp: docs/benchmarks.md).
+// bits: in the loop it would cost about 18 instructions a pixel and eye,
+// mostly for chunks without a hole (measured: docs/benchmarks.md, Design
+// measurements, "Warp: resident rows, words, both eyes").
 template <class Keys, HoleFill kFill>
 __device__ void resolve_target(const RowJob<Keys> &j, int eye, const OutRow &out_row, uint8_t *mask_row, int base,
                                int lane, int *holes) {
@@ -663,36 +665,39 @@ __device__ void render_rows_together(RowJob<Keys> &j, const FrameView &src, cons
 // threads for (cuda/launch_bounds.cuh: 4 on sm_80, sm_90 and sm_100, at
 // most 32 registers a thread; 3 on the other Ampere to Blackwell parts,
 // 40; 2 on Turing); launch_rows asks for the largest shared-memory
-// carveout. The kernel is instruction bound (ncu, 4K: 75 % of issue slots,
-// DRAM 19 %), so every further resident row helps: the third took the 4K
-// warp from 0.286 to 0.230 ms on an H100, the fourth (32-bit keys, 32 KB
-// of shared memory a row at 4K) 0.2385 -> 0.2280. Under the 32-register
-// bound (sm_90) only the Group and WideGroup kernels with BackgroundSmooth
-// (ptxas: 4 bytes) and RowsTogether with NeighborAverage (44) spill. Both eyes at once (a second z-buffer, 15 KB at 4K,
-// still four rows an SM) took the warp from 0.0682 to 0.0667 ms at 1080p
-// and from 0.1983 to 0.1967 at 4K (H200, docs/benchmarks.md); from about
-// 4600 pixels a row on Hopper it would cost a resident row, and the eyes
-// go in turn.
+// carveout. The kernel is instruction bound (Nsight Compute at 4K: three
+// quarters of the issue slots, a fifth of DRAM's bandwidth), so every
+// further resident row helps (the fourth fits with 32-bit keys: 32 KB of
+// shared memory a row at 4K). Under the 32-register bound (sm_90) only the
+// Group and WideGroup kernels with BackgroundSmooth (ptxas: 4 bytes) and
+// RowsTogether with NeighborAverage (44) spill. Both eyes at once take a
+// second z-buffer (15 KB at 4K, still four rows an SM) and save a scatter's
+// depth reads and the eyes' barriers; from about 4600 pixels a row on
+// Hopper it would cost a resident row, and the eyes go in turn (measured:
+// docs/benchmarks.md, Design measurements, "Warp: resident rows, words,
+// both eyes").
 // A WideGroup block: half the threads an SM holds (1024 on Hopper), two an
 // SM, for rows whose both z-buffers would leave room for fewer row blocks
 // (8K: 92 KB of shared memory a block, two still fit an SM, where a row's
 // block of 512 threads would keep two, 1024 threads, resident). Where a
-// row's block keeps as many threads resident (4K), Group blocks did
-// better: 4K warp 0.168 ms against 0.178 for WideGroup, whose 1024 threads
-// share 3840 pixels unevenly, one row at a time (H200,
-// docs/benchmarks.md). A RowsTogether block has WideGroup's size and
-// bounds, but its threads resolve all of the group's rows in one pass.
+// row's block keeps as many threads resident (4K), Group blocks are faster
+// than WideGroup ones, whose 1024 threads share 3840 pixels unevenly, one
+// row at a time (measured: docs/benchmarks.md, Design measurements, "Warp:
+// row groups"). A RowsTogether block has WideGroup's size and bounds, but
+// its threads resolve all of the group's rows in one pass.
 enum class RowBlock { Row, Group, WideGroup, RowsTogether };
 // Blocks a row of the tail (group_tail_y0) takes: one an eye in
-// RowsTogether kernels, where the shorter blocks paid (4K), one a row in
-// the others, where the eyes' path made the groups' code spill more.
+// RowsTogether kernels, where the shorter blocks pay (4K), one a row in
+// the others, where the eyes' path would make the groups' code spill more
+// (measured: docs/benchmarks.md, Design measurements, "Warp: row groups").
 __host__ __device__ constexpr int tail_blocks_a_row(RowBlock b) { return b == RowBlock::RowsTogether ? 2 : 1; }
 constexpr int kRowThreadsMax = 512;
 constexpr int kWideGroupThreads = P3D_MAX_THREADS_PER_SM / 2;
 // At most 1 << kGroupShiftMax rows a group (4: the 4K and 8K grids'
 // cells). Even where that leaves few blocks for the GPU's slots (4K: 540
-// Group blocks for 528 on an H200) the longer groups win: 4K warp 0.1635
-// ms with 4 rows a group against 0.171 with 2 (docs/benchmarks.md).
+// Group blocks for 528 slots on a Hopper card of 132 SMs) the longer
+// groups win over groups of 2 rows (measured: docs/benchmarks.md, Design
+// measurements, "Warp: row groups").
 constexpr int kGroupShiftMax = 2;
 template <class Keys, bool kSharedKeys, HoleFill kFill, bool kBothEyes, RowBlock kBlock, bool kFused>
 __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == RowBlock::RowsTogether ? kWideGroupThreads
@@ -907,9 +912,10 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
     // are sparse, so most of the copy costs no load. The block works
     // through each copy as one flat range, kSmoothCopyBatch pixels a thread
     // at a time whose loads are all issued before any is used: a listed
-    // tile's time is mostly these loads' latency. Copied a warp a row, each
-    // row waiting for the last (ten rows a warp at 4K), the 4K warp took
-    // 0.2185 ms against 0.2172, the 8K 0.891 against 0.844 (H100).
+    // tile's time is mostly these loads' latency, which a warp a row, each
+    // row waiting for the last, would serialise (measured:
+    // docs/benchmarks.md, Design measurements, "Warp: the smooth fill's
+    // sums").
     const int fc0 = sx0 / 32, fcn = (sx0 + cols - 1) / 32 - fc0 + 1;
     for (int i = threadIdx.x; i < rows * fcn; i += blockDim.x) {
       const int r = i / fcn;
@@ -918,9 +924,10 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
     __syncthreads();
     // Pixel i of the range is row i / cols, column i % cols; a thread's
     // pixels are blockDim.x apart, so it steps its row and column by the
-    // block's quotient and remainder instead of dividing for each (the
-    // division was a third of the copy's instructions, which were a third
-    // of the kernel's: 4K warp 0.2046 -> 0.2016 ms on an H200).
+    // block's quotient and remainder instead of dividing for each (a
+    // division a pixel would be a third of the copy's instructions, which
+    // are a third of the kernel's; measured: docs/benchmarks.md, Design
+    // measurements, "Warp: the smooth fill's sums").
     const int count = rows * cols, step = static_cast<int>(blockDim.x);
     const int step_rows = step / cols, step_cols = step - step_rows * cols;
     int r = static_cast<int>(threadIdx.x) / cols, c = static_cast<int>(threadIdx.x) - r * cols;
@@ -1013,12 +1020,13 @@ __device__ void smooth_tile(unsigned char *smem_bytes, const FrameView &out, int
 // grid has a block for every kSmoothTilesPerBlock tiles the frame may list
 // (launch_smooth), so a frame whose every tile has a hole (noise depth,
 // GpuWarp.AllModesRandomDepth) takes each block through several tiles.
-// A 4K frame lists about 900 of its 32400 tiles. Measured on an H200
-// against a block for every tile: 4K warp 0.2016 -> 0.1986 ms, 8K 0.820 ->
-// 0.808, 1080p unchanged; 4, 8 and 16 tiles a block alike, 32 cost 1080p
-// 7 us (docs/benchmarks.md). (A grid of only as many blocks as the GPU
-// holds measured slower: 4K warp 0.2172 -> 0.2266 ms, 8K 0.844 -> 0.876 on
-// an H100, chained or not.)
+// A 4K frame lists about 900 of its 32400 tiles. A block for every 8
+// tiles beats a block for every tile (4 to 16 measure alike; 32 leave a
+// 1080p frame's few tiles to too few blocks), and a grid of only as many
+// blocks as the GPU holds is slower than either, chained or not: tiles
+// differ in cost, and many short-lived blocks balance them better
+// (measured: docs/benchmarks.md, Design measurements, "Warp: the smooth
+// fill's sums").
 // kTight: blocks of kSmoothTileThreads, as many as an SM holds threads for
 // (at most 32 registers a thread on Hopper; ptxas: no spills in the
 // staged narrow kernel, 12 to 24 bytes in the others), else
@@ -1051,9 +1059,9 @@ __global__ void __launch_bounds__(kTight ? kSmoothTileThreads : kSmoothTileThrea
 // pair): the work is kPatchPerThread pixels of one row an item (a quarter
 // of a tile's row, or of a tail row), every item of the frame shared out
 // over one wave of resident threads, each issuing the loads of all its
-// pixels before it uses any: 7-8 us at 4K on an H100 (Nsight Compute),
-// where a block a listed tile plus a block a tail row took 14 us, and two
-// waves of blocks a tile or a quarter of a tail row 10 (docs/benchmarks.md).
+// pixels before it uses any, which beats a block a listed tile plus a
+// block a tail row, and two waves of blocks a tile or a quarter of a tail
+// row (measured: docs/benchmarks.md, Design measurements, "Fused pack").
 constexpr int kPatchThreads = 256, kPatchPerThread = 4;
 static_assert(kSmoothTileW % kPatchPerThread == 0, "a tile row is whole items");
 
@@ -1066,7 +1074,7 @@ __global__ void fused_anaglyph_patch_kernel(FrameView pair, FusedAnaglyph f, Smo
   chained_kernel_start();
   const int W = pair.width / 2, H = pair.height, chunks = row_chunks(W);
   constexpr int kItemsARow = kSmoothTileW / kPatchPerThread;
-  // 32-bit counts (a 64-bit division cost more than the rest of an item):
+  // 32-bit counts (a 64-bit division costs more than the rest of an item):
   // at most 2 x 256 x 8192 tile rows of 8 items (all listed at 8K), and
   // 8192 rows of 2048.
   const unsigned per_tile = static_cast<unsigned>(sc.tile_rows) * kItemsARow;
@@ -1277,9 +1285,10 @@ CudaStatus resident_threads(const void *kernel, int threads, size_t smem, int *r
 //    RowsTogether blocks where they hold as many threads as the row
 //    kernel chosen above (a source row each for up to 4 rows: 92 KB a
 //    block at 4K), else Group blocks where those do, else WideGroup
-//    blocks. At 4K, all three holding 2048 threads an SM on an H200, the
-//    warp took 0.1593 ms in RowsTogether blocks, 0.1641 in Group blocks
-//    and 0.17 in WideGroup ones (docs/benchmarks.md).
+//    blocks. At 4K, where all three hold 2048 threads an SM on Hopper,
+//    RowsTogether blocks are the fastest, then Group, then WideGroup
+//    (measured: docs/benchmarks.md, Design measurements, "Warp: row
+//    groups").
 CudaStatus choose_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                               RowKernelChoice *choice) {
   RowKernelChoice c;  // *choice is replaced only once every query succeeded
@@ -1358,9 +1367,9 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
   // kSmoothTileRowsMax; fewer when V would pass 64 KB (wide Rx). A listed
   // tile sums all its rows and copies 2R more, and holes are sparse: short
   // tiles do less work on rows without holes, tall ones copy the 2R rows
-  // fewer times. Measured on an H100 (warp, ms): 1080p (R = 15) 0.0817 with
-  // 32 rows -> 0.0776 with 16; 4K (R = 29) 0.2278 -> 0.2215 (64 rows:
-  // 0.250); 8K (R = 58) 0.897 with 32 rows, 0.959 with 16.
+  // fewer times: 16 rows win at R = 15 and 29 (1080p, 4K), 32 at R = 58
+  // (8K) (measured: docs/benchmarks.md, Design measurements, "Warp: the
+  // smooth fill's sums").
   const size_t v_pixel = p.narrow ? TileSums<true>::kPixelBytes : TileSums<false>::kPixelBytes;
   const int rows = Rmax <= kSmoothShortR ? 16 : kSmoothTileRowsMax;
   const int S = max(1, min(rows, static_cast<int>(65536 / (smooth_tile_columns(Rx) * v_pixel))));
@@ -1379,19 +1388,19 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
 // row sums all share its threads out, so more threads finish a tile
 // sooner; but where registers, not shared memory, bound the tiles an SM
 // holds, twice the threads hold half the tiles, and a frame's tiles take
-// more waves. Measured on an H200 (warp, ms): 8K (3 tiles an SM either
-// way: 64 KB of shared memory a tile) 0.806 -> 0.786 with 512 threads;
-// 4K (6 tiles an SM with 256, 3 with 512) 0.1963 -> 0.2050; 1080p, whose
-// few tiles all fit either way, 0.0668 -> 0.0660 with 512 forced, but its
-// tiles are bound by registers as at 4K, so the rule keeps 256 there
-// (docs/benchmarks.md). Each of these kernels has a twin bound to
+// more waves: 512 threads pay at 8K (3 tiles an SM either way: 64 KB of
+// shared memory a tile), not at 4K (6 tiles an SM with 256, 3 with 512);
+// 1080p's tiles are bound by registers as at 4K, so the rule keeps 256
+// there (measured: docs/benchmarks.md, Design measurements, "Warp: the
+// smooth fill's sums"). Each of these kernels has a twin bound to
 // kSmoothTileThreads threads and as many blocks as an SM holds threads
 // for (32 registers a thread on Hopper, so 8 tiles an SM at 4K instead of
 // 6); the twin runs where it keeps more threads resident, which it does
 // where registers, not shared memory, bound the tiles: 4K and 1080p, not
 // 8K. A 4K frame lists about a thousand tiles, which 8 tiles an SM take
-// in one wave: 4K warp 0.1606 -> 0.1579 ms; 1080p, whose few hundred
-// tiles fit either way, 0.0663 -> 0.0668 (H100, docs/benchmarks.md).
+// in one wave; 1080p's few hundred tiles fit either way, and gain nothing
+// (measured: docs/benchmarks.md, Design measurements, "Warp: the smooth
+// fill's sums").
 CudaStatus smooth_tile_threads(const void *loose, const void *tight, size_t smem, SmoothSumsLaunch *cache) {
   if (cache->kernel == loose && cache->smem == smem) return {};
   int tiles = 0, tiles_max = 0, tiles_tight = 0;
@@ -1430,11 +1439,11 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
                                           plan.smem, threads_cache));
   const Kernel kernel = reinterpret_cast<Kernel>(const_cast<void *>(threads_cache->launch));
   // Chained (cuda/chained_launch.cuh): its blocks start while the row
-  // kernel's last ones run. With a block for every tile (32400 at 4K) that
-  // had cost more than it gained (4K warp 0.2225 -> 0.2330 ms on an H100);
-  // with a block for every kSmoothTilesPerBlock tiles it gains: warp
-  // 1080p 0.0667 -> 0.0656 ms, 4K 0.1589 -> 0.1578, 8K alike (H200,
-  // docs/benchmarks.md).
+  // kernel's last ones run. That gains with a block for every
+  // kSmoothTilesPerBlock tiles; with a block for every tile (32400 at 4K),
+  // mostly returning at once, it would cost more than it gains (measured:
+  // docs/benchmarks.md, Design measurements, "Warp: the smooth fill's
+  // sums" and "Chained launches").
   const unsigned blocks = static_cast<unsigned>((plan.tiles() + kSmoothTilesPerBlock - 1) / kSmoothTilesPerBlock);
   P3D_CUDA_TRY(launch_chained(kernel, blocks, threads_cache->threads, plan.smem, stream, out, W, H, plan.radius, sc));
   return {};
@@ -1448,9 +1457,10 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
 // more SMs in shorter blocks. A frame with fewer groups than slots, or a
 // whole number of waves, has no tail: the height rounded up to whole
 // groups.
-// At 4K 540 groups of 4 rows met 264 RowsTogether slots on an H100: 12
-// groups ran alone after two full waves; 8K's 1080 WideGroup blocks left
-// 24 (the 8K warp took 0.517 ms at 4224 rows, 0.594 at 4320).
+// For example, at 4K 540 groups of 4 rows meet 264 RowsTogether slots on
+// a Hopper card of 132 SMs: without the tail, 12 groups would run alone
+// after two full waves (measured: docs/benchmarks.md, Design
+// measurements, "Warp: row groups").
 int group_tail_y0(int H, int group_rows, int slots) {
   const int groups = (H + group_rows - 1) / group_rows;
   if (group_rows <= 1 || slots <= 0 || groups <= slots || groups % slots == 0) return groups * group_rows;

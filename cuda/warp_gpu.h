@@ -22,17 +22,14 @@
 // on cells of 2 x 2 pixels or more (the filter's 4 x 4 grid at 4K and
 // 8K), the rows of a cell row hold the same z-buffers (the keys hold where
 // a hit comes from, not its colour), so one block renders up to 4 such
-// rows from one scatter, each with its own source row (on 4 x 4 cells, 4K
-// warp 0.198 -> 0.164 ms, 8K 0.783 -> 0.593, on an H200;
-// docs/benchmarks.md); where shared memory holds a source row for each of
-// them (4K), it converts them all first and resolves them in one pass
-// (4K warp 0.164 -> 0.159). The output is the same as row by row. The
-// groups past the last whole wave of them (as many blocks as the device
-// holds resident: 12 of 4K's 540 groups, 24 of 8K's 1080 on an H100)
-// ran alone on a few SMs while the rest idled; their rows now take a
-// block each (4K warp 0.158 -> 0.145 ms, 8K 0.608 -> 0.576 on an H100),
-// and in RowsTogether blocks (4K) a block an eye (4K chain 0.265 ->
-// 0.261 ms; docs/benchmarks.md).
+// rows from one scatter, each with its own source row; where shared memory
+// holds a source row for each of them (4K), it converts them all first and
+// resolves them in one pass. The output is the same as row by row. The
+// groups that whole waves of resident blocks take go first; the rows after
+// them, too few groups to fill another wave, take a block a row (in
+// RowsTogether blocks, at 4K, a block an eye), so that the last wave does
+// not run on a few SMs while the rest idle (measured: docs/benchmarks.md,
+// Design measurements, "Warp: row groups").
 //  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
 //    clean pixels from the chunks' hole bits, nearest clean / non-hole
 //    pixels by bit search as for Background) and writes the states of the
@@ -119,8 +116,8 @@ class WarpRendererGpu {
   // warped, depth on cells of 4 x 4 pixels, RowsTogether blocks: 4K on
   // Hopper), is fused: the row kernel writes the anaglyph pixels where
   // neither eye has a hole, and only the pixels next to holes go through
-  // the pair (4K: 0.158 ms against 0.141 for render() and 0.038 for
-  // pack_gpu() on an H100, docs/benchmarks.md).
+  // the pair, so the full pair is neither written nor read back
+  // (measured: docs/benchmarks.md, Design measurements, "Fused pack").
   // Anything else renders into a scratch pair, then pack_gpu(). *fused_out
   // (if not null) says which ran. No host sync (but fill=NeighborAverage's).
   CudaStatus render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src, const YuvToRgb &m,

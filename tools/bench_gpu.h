@@ -25,7 +25,7 @@ struct StageParams {
   YuvToRgb yuv;
   // GPU: the stages hand depth on as the elements do on CUDA memory, on
   // grids (p3d_defs.h DepthGrid: the estimator's blocks, the filter's
-  // cells); false: as full-size maps, the layout before 2026-11-26, for
+  // cells); false: as full-size maps (as the host planes hold it), for
   // same-binary A/B runs (--depth-handoff full).
   bool depth_grids = true;
 };

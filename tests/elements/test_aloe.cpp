@@ -2,7 +2,7 @@
 // view is synthesized from the left view plus its ground-truth disparity
 // through the elements (RGBD input, view=right, convergence=0,
 // max-disparity = 100 * max(GT) / width) and compared with the real right
-// view. Floors are measured values less a margin (README, "Quality").
+// view. Floors are measured values less a margin (docs/quality.md).
 #include <gtest/gtest.h>
 
 #include <gst/check/gstharness.h>
@@ -150,7 +150,7 @@ std::string default_fill(const char *factory) {
 
 }  // namespace
 
-// The default fill (background-smooth since 2026-11-23): the synthesized
+// The default fill (background-smooth): the synthesized
 // right view must be far closer to the real one than the left view itself
 // is (the no-warp baseline).
 TEST(Aloe, SynthesizedRightViewMatchesRealRightView) {
@@ -162,7 +162,7 @@ TEST(Aloe, SynthesizedRightViewMatchesRealRightView) {
   RecordProperty("baseline_psnr_db", std::to_string(r.baseline_psnr));
   std::printf("Aloe right view: PSNR %.2f dB, SSIM %.4f (left view as is: PSNR %.2f dB)\n", r.psnr, r.ssim,
               r.baseline_psnr);
-  // Measured (2026-11-23, CPU): 24.54 dB, SSIM 0.804, baseline 14.96 dB.
+  // Measured (CPU, docs/quality.md): 24.54 dB, SSIM 0.804, baseline 14.96 dB.
   // What is left is disocclusions, the right border (content the left view
   // never saw) and pixels whose ground truth is unknown (0). SSIM: even the
   // real right view blurred (sigma 4) in the holes scores 0.823, so no
@@ -194,7 +194,7 @@ TEST(Aloe, OtherFillsAndYuvInput) {
 // External depth (pseudo3ddepthmux): the ground truth as a grey picture
 // scores as it does through the RGBD input; from a half-size picture
 // (nearest-sample upsampling) it keeps at least 24.0 dB. Measured
-// (2026-11-23): 24.54 dB as RGBD; half size 24.20 dB / 0.793, and
+// (docs/quality.md): 24.54 dB as RGBD; half size 24.20 dB / 0.793, and
 // 23.43 dB with pseudo3dfilter's defaults after the mux (its smoothing
 // costs more than its edge alignment gains on a true depth).
 TEST(Aloe, ExternalDepthThroughDepthMux) {

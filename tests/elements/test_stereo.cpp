@@ -463,9 +463,9 @@ TEST(WarpLayout, LayoutChangedWhilePlaying) {
   gst_harness_teardown(h);
 }
 
-// pseudo3dconvert keeps pseudo3dpack's defaults for the properties the warp
-// now takes (the warp's own layout default is the pair): with no property
-// set it writes the anaglyph, as pseudo3ddepth ! pseudo3dfilter !
+// pseudo3dconvert keeps pseudo3dpack's defaults for the pack's properties
+// that the warp takes (the warp's own layout default is the pair): with no
+// property set it writes the anaglyph, as pseudo3ddepth ! pseudo3dfilter !
 // pseudo3dwarp ! pseudo3dpack does, and says so through its property.
 TEST(WarpLayout, TheBinDefaultsToTheAnaglyph) {
   const HostFrame frame = small_aloe(96, 64);

@@ -271,11 +271,12 @@ TEST_F(GpuWarp, RowGroupsInWideRows) { expect_row_groups(6000, 67, 2.f, PixelFor
 // whole waves go first, the rows after them a block each (at these widths,
 // RowsTogether blocks on Hopper, a block for each eye of each row). 1363
 // rows are 341 groups of 4 (the last of 3 rows), more than the 264
-// resident blocks of an H100 or H200 at these widths and not a multiple of
-// them, so the tail starts inside the frame and ends at a short group's
-// rows; cells of 2 rows give groups of 2 (682 of them), cells of 8 groups
-// of 4 again (at most 4 rows a group). 402 pixels is not a multiple of 4:
-// the second eye's z-buffer then starts off 16-byte alignment. The 8K
+// resident blocks of a 132-SM Hopper card at these widths and not a
+// multiple of them, so the tail starts inside the frame and ends at a
+// short group's rows; cells of 2 rows give groups of 2 (682 of them),
+// cells of 8 groups of 4 again (at most 4 rows a group). 402 pixels is not
+// a multiple of 4: the second eye's z-buffer then starts off 16-byte
+// alignment. The 8K
 // chain tests (test_gpu_extremes.cpp) meet the tail of WideGroup blocks.
 TEST_F(GpuWarp, RowGroupsThenSingleRowsPastTheLastWholeWave) {
   expect_row_groups(400, 1363, 6.f, PixelFormat::RGBA);

@@ -130,8 +130,9 @@ std::vector<Setting> settings() {
     d.params.temporal_smoothing = smoothing;
     s.push_back(std::move(d));
   }
-  // The defaults of 2026-11-22: 4-pixel blocks, no feature smoothing; then
-  // the same before the ground-contact cue ("previous").
+  // Two earlier settings for comparison, as the report labels them: 4-pixel
+  // blocks without feature smoothing (labelled by the date they were the
+  // defaults), then the same without the ground-contact cue ("previous").
   Setting before;
   before.label = "2026-11-22";
   before.params.block_size = 4;
