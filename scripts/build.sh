@@ -1,8 +1,16 @@
 #!/usr/bin/env bash
-# Configures (once) and builds pseudo3d into build/ (CUDA code too when nvcc
-# is found). Extra arguments go to meson setup, e.g. -Dcuda=disabled.
+# Configures and builds pseudo3d into build/ (CUDA code too when nvcc is
+# found). Extra arguments are meson options, e.g. -Dcuda=disabled or
+# -Dgpu_arch=86: they configure a new build/ and reconfigure an existing
+# one, so an option given later is not ignored. Meson prints what it found
+# and what it will build (CUDA on or off, the GPU architectures); ninja
+# shows each file as it compiles.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 cd "$top"
-[ -f build/build.ninja ] || meson setup build "$@" >/dev/null
+if [ ! -f build/build.ninja ]; then
+  meson setup build "$@"
+elif [ $# -gt 0 ]; then
+  meson configure build "$@"
+fi
 ninja -C build

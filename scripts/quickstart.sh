@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # From a fresh Debian 12 checkout to 3D files you can open: installs the
 # packages (setup-debian.sh asks for sudo itself when not root), fetches the
-# sample data, builds into build/, then converts the samples into out/ with
-# pseudo3d-convert:
+# sample data, builds into build/ (arguments are meson options for the
+# build, e.g. -Dgpu_arch=86 or -Dcuda=disabled), then converts the samples
+# into out/ with pseudo3d-convert:
 #   vtest-sbs.mp4      data/vtest-audio.mkv (a street scene with a ticking
 #                      sound track) as half side-by-side H.264 for a 3D TV,
 #                      audio copied, 3D layout signalled in the stream
@@ -16,7 +17,7 @@ cd "$top"
 
 scripts/setup-debian.sh
 scripts/get-test-data.sh
-scripts/build.sh
+scripts/build.sh "$@"
 
 mkdir -p out
 convert=build/tools/pseudo3d-convert
