@@ -51,8 +51,8 @@ P3D_DEFINE_ENUM(gst_pseudo3d_view_get_type, "GstPseudo3DView",
 P3D_DEFINE_ENUM(gst_pseudo3d_fill_get_type, "GstPseudo3DFill",
                 {(gint)p3d::HoleFill::Background, "Extend the background side of each row (depth-aware; cheapest, streaks along rows)", "background"},
                 {(gint)p3d::HoleFill::BackgroundSmooth,
-                 "Background side of each row, averaged across rows (depth-aware; best quality; about 0.08 ms "
-                 "more than background per 4K frame on the GPU, a fifth more warp time on the CPU)",
+                 "Background side of each row, averaged across rows (depth-aware; best quality; costs more than "
+                 "background: docs/benchmarks.md)",
                  "background-smooth"},
                 {(gint)p3d::HoleFill::NeighborAverage, "Iterative neighbour-average inpainting", "neighbor-average"},
                 {(gint)p3d::HoleFill::None, "Leave holes, painted magenta (diagnostics)", "none"})

@@ -166,17 +166,17 @@ static void gst_pseudo3d_filter_class_init(GstPseudo3DFilterClass *klass) {
   g_object_class_install_property(
       gobject_class, PROP_MODE,
       g_param_spec_enum("mode", "Filter mode",
-                        "A row pass then a column pass (the default: about 6 times faster on the CPU at radius 5, "
-                        "within 0.02 dB of the whole window through the warp: docs/quality.md), or the whole window",
+                        "A row pass then a column pass (the default: 2 (2r+1) taps a pixel instead of (2r+1)^2, "
+                        "near the whole window's quality: docs/quality.md), or the whole window",
                         GST_TYPE_PSEUDO3D_FILTER_MODE, static_cast<gint>(d.mode), flags));
   g_object_class_install_property(
       gobject_class, PROP_SCALE,
       g_param_spec_int("scale", "Grid step",
                        "Filter on a grid this many times coarser than the picture in each direction, each result "
                        "spread over its cell (the mean luma of a cell guides it): 1 = every pixel; 0 = automatic: "
-                       "1 up to 2159 rows, 4 from there (4K and 8K; at 4K 2.5 times faster on the GPU than step 2, "
-                       "+0.11 dB on Aloe enlarged to 4K: docs/quality.md). radius and sigma-space stay in pixels "
-                       "of the picture",
+                       "1 up to 2159 rows, 4 from there (4K and 8K: speed and quality against the step in "
+                       "docs/benchmarks.md and docs/quality.md). radius and sigma-space stay in pixels of the "
+                       "picture",
                        0, p3d::kMaxBilateralScale, d.scale, flags));
 
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_FILTER_MODE, (GstPluginAPIFlags)0);
