@@ -374,6 +374,38 @@ TEST_F(Convert, TruncatedInputIsReported) {
   EXPECT_EQ(complete.err.find("warning"), std::string::npos) << complete.err;
 }
 
+namespace {
+
+// A copy of `from` at `to` that ends 64 bytes into the first `tag` found
+// after the first `after` (Matroska's first Cluster; a fast-start MP4's
+// mdat, after its moov): every stream is declared, no frame is whole.
+bool cut_into(const std::string &from, const std::string &to, const std::string &tag, const std::string &after = "") {
+  const std::vector<uint8_t> whole = read_bytes(from);
+  const std::string text(whole.begin(), whole.end());
+  const size_t from_at = after.empty() ? 0 : text.find(after);
+  const size_t at = from_at == std::string::npos ? std::string::npos : text.find(tag, from_at);
+  if (at == std::string::npos || at + 64 > whole.size()) return false;
+  std::ofstream(to, std::ios::binary).write(text.data(), static_cast<std::streamsize>(at + 64));
+  return true;
+}
+
+const std::string kMkvCluster("\x1F\x43\xB6\x75", 4);
+
+}  // namespace
+
+// A file that yields no frame, converted without --start: the error says
+// no frame could be decoded, and does not blame a --start never given.
+TEST_F(Convert, NoFramesWithoutStartDoesNotBlameStart) {
+  const std::string cut = fx().dir + "/no-frame.mkv", out = fx().dir + "/from-no-frame.mp4";
+  ASSERT_TRUE(cut_into(fx().vorbis_mkv, cut, kMkvCluster));
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({cut, out, "--quiet"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("no video frames"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("--start"), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+}
+
 // 4:2:0 encoders take even sizes only: an odd picture loses its last column
 // and row, says so, and converts in every layout that encodes as 4:2:0.
 TEST_F(Convert, OddSizeIsCroppedToEven) {

@@ -213,8 +213,12 @@ bool convert_video(const Options &o, std::string *error) {
   }
   if (job.progress.frames() == 0) {
     job.progress.abandon();
+    // --start is blamed only when it was given (and is past 0): otherwise
+    // no frame means that none could be decoded.
+    const bool past_start = GST_CLOCK_TIME_IS_VALID(o.start) && o.start > 0;
     *error = o.input + ": no video frames to convert" +
-             (o.start > 0 ? std::string(" (--start is at or past the end of the video)") : std::string());
+             (past_start ? " (--start is at or past the end of the video)"
+                         : " (none could be decoded: a truncated or damaged file?)");
     return false;
   }
   // Frames are counted by where they end: a last frame a second or more
