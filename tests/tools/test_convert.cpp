@@ -406,6 +406,35 @@ TEST_F(Convert, NoFramesWithoutStartDoesNotBlameStart) {
   EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
 }
 
+// Streams declared but no frame whole (an MKV cut into its first cluster, a
+// fast-start MP4 cut into its mdat): decodebin exposes the video pad with
+// unfixed caps, which must not reach gst_video_info_from_caps (a
+// GStreamer-CRITICAL). One clean line instead. And the plan line names no
+// empty decoder: a photo's jpegdec or pngdec is an image decoder.
+TEST_F(Convert, FramelessStreamFailsWithoutCritical) {
+  const std::string mp4 = fx().dir + "/faststart.mp4", cut_mkv = fx().dir + "/frameless.mkv",
+                    cut_mp4 = fx().dir + "/frameless.mp4", out = fx().dir + "/from-frameless.mp4";
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=10 ! video/x-raw,width=160,height=120,framerate=25/1 ! x264enc ! "
+                      "mp4mux faststart=true ! filesink location=" + mp4),
+            "");
+  ASSERT_TRUE(cut_into(fx().vorbis_mkv, cut_mkv, kMkvCluster));
+  ASSERT_TRUE(cut_into(mp4, cut_mp4, "mdat", "moov"));
+  for (const std::string &in : {cut_mkv, cut_mp4}) {
+    g_remove(out.c_str());
+    const ToolRun r = run_convert({in, out, "--quiet"});
+    EXPECT_EQ(r.err.find("CRITICAL"), std::string::npos) << r.err;
+    expect_clean_failure(r, out, in, fx().dir);
+  }
+  const std::string photo = fx().dir + "/plan-photo.jpg", from_photo = fx().dir + "/from-plan-photo.mkv";
+  ASSERT_TRUE(cv::imwrite(photo, cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160))));
+  g_remove(from_photo.c_str());
+  const ToolRun r = run_convert({photo, from_photo, "--preset", "ultrafast"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err.find("CRITICAL"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("decoder )"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("decoder jpegdec"), std::string::npos) << r.err;
+}
+
 // 4:2:0 encoders take even sizes only: an odd picture loses its last column
 // and row, says so, and converts in every layout that encodes as 4:2:0.
 TEST_F(Convert, OddSizeIsCroppedToEven) {

@@ -115,12 +115,23 @@ struct Job {
     return true;
   }
 
+  // "(decoder avdec_h264, CUDA memory)": what is known of the decoding;
+  // empty when nothing is (no decoder was plugged yet).
+  std::string decoding() const {
+    std::vector<std::string> parts;
+    const std::string decoder = source.video_decoder();
+    if (!decoder.empty()) parts.push_back("decoder " + decoder);
+    if (chain.on_gpu_memory()) parts.push_back("CUDA memory");
+    std::string s;
+    for (const std::string &p : parts) s += (s.empty() ? " (" : ", ") + p;
+    return s.empty() ? s : s + ")";
+  }
+
   void print_plan() {
     const int crf = o.crf >= 0 ? o.crf : default_crf(o.codec);
     std::string line = "pseudo3d-convert: " + o.input + " -> " + o.output + ": " + layout + ", " + encoder.factory +
                        " crf " + std::to_string(crf) + " preset " + (o.preset.empty() ? "medium" : o.preset) +
-                       ", 3D on the " + (processing == Processing::Gpu ? "GPU" : "CPU") + " (decoder " +
-                       source.video_decoder() + (chain.on_gpu_memory() ? ", CUDA memory" : "") + ")";
+                       ", 3D on the " + (processing == Processing::Gpu ? "GPU" : "CPU") + decoding();
     std::lock_guard<std::mutex> l(lock);
     for (const std::string &s : streams) line += "; " + s;
     std::fprintf(stderr, "%s\n", line.c_str());

@@ -38,9 +38,13 @@ GstPadProbeReturn gate_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
   return GST_PAD_PROBE_OK;
 }
 
+// Video and picture decoders: a photo converted into a video file is
+// decoded by an image decoder (jpegdec, pngdec: "Codec/Decoder/Image").
 bool is_video_decoder(GstElement *e) {
   GstElementFactory *f = gst_element_get_factory(e);
-  return f && gst_element_factory_list_is_type(f, GST_ELEMENT_FACTORY_TYPE_DECODER | GST_ELEMENT_FACTORY_TYPE_MEDIA_VIDEO);
+  const GstElementFactoryListType decoder = GST_ELEMENT_FACTORY_TYPE_DECODER;
+  return f && (gst_element_factory_list_is_type(f, decoder | GST_ELEMENT_FACTORY_TYPE_MEDIA_VIDEO) ||
+               gst_element_factory_list_is_type(f, decoder | GST_ELEMENT_FACTORY_TYPE_MEDIA_IMAGE));
 }
 
 }  // namespace
@@ -189,6 +193,9 @@ gboolean MediaSource::on_autoplug_query(GstElement *, GstPad *, GstElement *elem
 
 void MediaSource::on_pad_added(GstElement *, GstPad *pad, gpointer self) {
   auto *s = static_cast<MediaSource *>(self);
+  // decodebin exposes a stream that ended before its first decoded frame
+  // (a file cut off there) without caps: what the pad could take stands in
+  // for them, unfixed (see Hooks::pad_added).
   GstCaps *caps = gst_pad_get_current_caps(pad);
   if (!caps) caps = gst_pad_query_caps(pad, nullptr);
   if (s->hooks_.pad_added) s->hooks_.pad_added(pad, caps);

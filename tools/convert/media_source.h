@@ -25,7 +25,8 @@ class MediaSource {
     // The caps the video chain takes (new ref), answered to video decoders'
     // caps queries while decodebin's pads are not linked yet.
     std::function<GstCaps *()> video_caps;
-    // A decodebin pad (streaming thread).
+    // A decodebin pad and its caps (streaming thread); unfixed caps when
+    // the stream ended before its first frame was decoded.
     std::function<void(GstPad *, GstCaps *)> pad_added;
     // All pads are there (streaming thread).
     std::function<void()> no_more_pads;

@@ -176,9 +176,11 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   // 4:2:0 encoders refuse odd sizes (x264: "Can not initialize"), and every
   // layout of an even picture is even: the last column or row of an odd one
   // is cropped before the 3D stages (and before a rotation, whose sizes it
-  // was measured in).
+  // was measured in). A pad exposed before any frame was decoded (a file
+  // cut off in its first frame) has unfixed caps and no size: no frame
+  // follows, so there is nothing to crop.
   GstVideoInfo info;
-  const bool known = subsampled_ && gst_video_info_from_caps(&info, caps);
+  const bool known = subsampled_ && gst_caps_is_fixed(caps) && gst_video_info_from_caps(&info, caps);
   const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
   const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
   if (cuda_input_) {
