@@ -783,3 +783,29 @@ TEST_F(Convert, PhotoPngIsThePackedPicture) {
   EXPECT_EQ(m.cols, 120);
   EXPECT_EQ(m.rows, 160);
 }
+
+// A JPEG cut short decodes without a word from jpegdec, which ends the data
+// itself and leaves the missing rows grey: the converter refuses it, naming
+// the file and why, for photo and video outputs alike. The whole file (a
+// progressive JPEG: several scans) converts.
+TEST_F(Convert, TruncatedJpegIsRefused) {
+  cv::Mat noise(240, 320, CV_8UC3);
+  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", noise, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95, cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+  const std::string whole = fx().dir + "/whole.jpg", cut = fx().dir + "/half.jpg";
+  std::ofstream(whole, std::ios::binary).write(reinterpret_cast<const char *>(jpeg.data()),
+                                               static_cast<std::streamsize>(jpeg.size()));
+  std::ofstream(cut, std::ios::binary).write(reinterpret_cast<const char *>(jpeg.data()),
+                                             static_cast<std::streamsize>(jpeg.size() / 2));
+  const std::string from_whole = fx().dir + "/from-whole.png";
+  g_remove(from_whole.c_str());
+  const ToolRun ok = run_convert({whole, from_whole, "--quiet"});
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  for (const std::string &out : {fx().dir + "/from-half.png", fx().dir + "/from-half.mp4"}) {
+    g_remove(out.c_str());
+    const ToolRun r = run_convert({cut, out, "--quiet"});
+    expect_clean_failure(r, out, "truncated", fx().dir);
+    EXPECT_NE(r.err.find("half.jpg"), std::string::npos) << r.err;
+  }
+}

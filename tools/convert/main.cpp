@@ -19,11 +19,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "benchmark.h"
 #include "convert_photo.h"
 #include "convert_video.h"
+#include "jpeg_meta.h"
 #include "options.h"
 #include "output_file.h"
 #include "stage_settings.h"
@@ -53,6 +56,23 @@ bool input_readable(const std::string &path, std::string *error) {
     return false;
   }
   return true;
+}
+
+// A JPEG cut short decodes without a word (jpegdec ends the data itself
+// and leaves the missing rows grey): refused before any output is begun,
+// for photo and video outputs alike. Regular files only: reading a FIFO
+// here would take the data meant for the pipeline.
+bool input_complete(const std::string &path, std::string *error) {
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return true;
+  std::ifstream f(path, std::ios::binary);
+  char soi[3] = {};
+  if (!f.read(soi, 3) || soi[0] != '\xFF' || soi[1] != '\xD8' || soi[2] != '\xFF') return true;  // no JPEG
+  f.seekg(0);
+  const p3d::convert::Bytes bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (p3d::convert::jpeg_complete(bytes)) return true;
+  *error = path + ": the JPEG data end before the picture does (a truncated or damaged file)";
+  return false;
 }
 
 // Whether two paths name one file: the same inode where both exist, else
@@ -103,7 +123,7 @@ int main(int argc, char **argv) {
     case ParseResult::ExitUsage: return fail(error, 2);
     case ParseResult::Run: break;
   }
-  if (!input_readable(o.input, &error)) return fail(error, 1);
+  if (!input_readable(o.input, &error) || !input_complete(o.input, &error)) return fail(error, 1);
   if (!o.benchmark && !distinct_files(o, &error)) return fail(error, 2);
   // Progress and messages go to stderr; a reader that goes away (a pipe
   // into `head`) must not kill the conversion and leave its temporary file.
