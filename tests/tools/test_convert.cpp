@@ -809,3 +809,47 @@ TEST_F(Convert, TruncatedJpegIsRefused) {
     EXPECT_NE(r.err.find("half.jpg"), std::string::npos) << r.err;
   }
 }
+
+namespace {
+
+// ffprobe's count of decoded video frames (-1 if none given) and the
+// file's duration in seconds (-1 if none).
+struct FfprobeCount {
+  int frames = -1;
+  double duration = -1;
+};
+FfprobeCount ffprobe_count(const std::string &path) {
+  std::string text;
+  run_program({"ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+               "stream=nb_read_frames:format=duration", "-of", "default=nw=1", path},
+              &text);
+  FfprobeCount c;
+  const std::string frames = ffprobe_value(text, "nb_read_frames"), duration = ffprobe_value(text, "duration");
+  if (!frames.empty() && frames.find_first_not_of("0123456789") == std::string::npos) c.frames = std::stoi(frames);
+  if (!duration.empty() && duration != "N/A") c.duration = std::stod(duration);
+  return c;
+}
+
+}  // namespace
+
+// A photo into a video file is a still video: 5 s at 25 frames/s by
+// default, --duration for another length, so that players (and ffprobe)
+// see frames and a duration; a lone frame of no duration played as nothing.
+TEST_F(Convert, PhotoIntoVideoIsAStillVideo) {
+  if (!have_program("ffprobe")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
+  const std::string photo = fx().dir + "/still.png", mp4 = fx().dir + "/still.mp4", mkv = fx().dir + "/still.mkv";
+  ASSERT_TRUE(cv::imwrite(photo, cv::Mat(96, 128, CV_8UC3, cv::Scalar(40, 90, 160))));
+  g_remove(mp4.c_str());
+  g_remove(mkv.c_str());
+  const ToolRun r = run_convert({photo, mp4, "--preset", "ultrafast"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("5 s still video"), std::string::npos) << r.err;
+  const FfprobeCount m = ffprobe_count(mp4);
+  EXPECT_EQ(m.frames, 125);
+  EXPECT_NEAR(m.duration, 5.0, 0.1);
+  const ToolRun k = run_convert({photo, mkv, "--preset", "ultrafast", "--duration", "2", "--quiet"});
+  ASSERT_EQ(k.status, 0) << k.err;
+  const FfprobeCount c = ffprobe_count(mkv);
+  EXPECT_EQ(c.frames, 50);
+  EXPECT_NEAR(c.duration, 2.0, 0.1);
+}

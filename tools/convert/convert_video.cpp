@@ -2,7 +2,9 @@
 
 #include <gst/pbutils/pbutils.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <mutex>
 #include <vector>
@@ -49,6 +51,7 @@ struct Job {
   VideoChain chain;
   Progress progress;
   std::atomic<bool> video_linked{false};
+  std::atomic<bool> still{false};  // the input is a picture, written as a still video
   std::mutex lock;  // streams, notes: written by streaming threads
   std::vector<std::string> streams, notes;
 
@@ -68,6 +71,10 @@ struct Job {
       if (video_linked.exchange(true)) {
         note("an extra video stream (" + codec_name(caps) + ") is left out");
         link_to_fakesink(pipeline, pad);
+        return;
+      }
+      if (source.still_picture() && !hold_still()) {
+        post_error(pipeline, chain.refusal());
         return;
       }
       source.gate_pad(pad, false);
@@ -98,13 +105,37 @@ struct Job {
     if (encoded) gst_caps_unref(encoded);
   }
 
+  GstClockTime still_duration() const {
+    return GST_CLOCK_TIME_IS_VALID(o.duration) ? o.duration : kStillDuration;
+  }
+
+  // A picture into a video file: its 3D frame repeated for still_duration()
+  // (a lone frame of no duration plays as nothing), with no piece to seek.
+  bool hold_still() {
+    still = true;
+    source.set_piece(GST_CLOCK_TIME_NONE, GST_CLOCK_TIME_NONE);
+    const double seconds = static_cast<double>(still_duration()) / GST_SECOND;
+    const int frames = std::max(1, static_cast<int>(std::lround(seconds * kStillFrameRate)));
+    char what[160];
+    std::snprintf(what, sizeof what,
+                  "the input is a still picture: it becomes a %g s still video "
+                  "at %d frames/s (--duration sets the length)",
+                  seconds, kStillFrameRate);
+    note(what);
+    return chain.hold_still(frames);
+  }
+
   // Main thread, once every stream is linked.
   bool ready(std::string *error) {
     if (!video_linked) {
       *error = "no video stream";
       return false;
     }
-    progress.set_total(source.total_time(chain.sink_pad()));
+    if (still && GST_CLOCK_TIME_IS_VALID(o.start)) {
+      *error = "--start does not apply to a still picture (--duration sets the length of its video)";
+      return false;
+    }
+    progress.set_total(still ? still_duration() : source.total_time(chain.sink_pad()));
     if (source.has_piece() && !source.seek_to_piece(chain.sink_pad())) {
       *error = "cannot seek for --start/--duration (the file is not seekable)";
       return false;

@@ -131,6 +131,11 @@ std::string MediaSource::video_decoder() const {
   return video_decoder_;
 }
 
+bool MediaSource::still_picture() const {
+  std::lock_guard<std::mutex> l(lock_);
+  return input_type_.rfind("image/", 0) == 0;
+}
+
 std::string MediaSource::missing_plugin(GstMessage *msg) {
   if (!gst_is_missing_plugin_message(msg)) return "";
   gchar *d = gst_missing_plugin_message_get_description(msg);
@@ -166,8 +171,19 @@ GstCaps *MediaSource::encoded_caps(GstPad *decoded_pad) {
   return found;
 }
 
-gboolean MediaSource::on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self) {
+gboolean MediaSource::on_autoplug_continue(GstElement *, GstPad *pad, GstCaps *caps, gpointer self) {
   auto *s = static_cast<MediaSource *>(self);
+  // The first pad decodebin looks at is its typefind's (behind the ghost
+  // pad decodebin passes): the file's type.
+  GstPad *target = GST_IS_GHOST_PAD(pad) ? gst_ghost_pad_get_target(GST_GHOST_PAD(pad)) : nullptr;
+  GstElement *parent = target ? gst_pad_get_parent_element(target) : nullptr;
+  GstElementFactory *f = parent ? gst_element_get_factory(parent) : nullptr;
+  if (f && g_strcmp0(GST_OBJECT_NAME(f), "typefind") == 0) {
+    std::lock_guard<std::mutex> l(s->lock_);
+    s->input_type_ = gst_structure_get_name(gst_caps_get_structure(caps, 0));
+  }
+  if (parent) gst_object_unref(parent);
+  if (target) gst_object_unref(target);
   return !(s->hooks_.keep_encoded && s->hooks_.keep_encoded(caps));
 }
 

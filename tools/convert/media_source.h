@@ -59,6 +59,9 @@ class MediaSource {
   GstClockTime total_time(GstPad *pad) const;
 
   std::string video_decoder() const;
+  // Whether the input is a picture (decodebin's typefind found an image/*
+  // type: a photo, not a video file), known before the first pad is added.
+  bool still_picture() const;
   // Whether build() reads a FIFO or device (fdsrc) rather than a file.
   bool reads_stream() const { return fd_ >= 0; }
   // decodebin's missing-plugin description, if one was posted ("" if not).
@@ -69,7 +72,7 @@ class MediaSource {
   static GstCaps *encoded_caps(GstPad *decoded_pad);
 
  private:
-  static gboolean on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self);
+  static gboolean on_autoplug_continue(GstElement *, GstPad *pad, GstCaps *caps, gpointer self);
   static gboolean on_autoplug_query(GstElement *, GstPad *, GstElement *element, GstQuery *query, gpointer self);
   static void on_pad_added(GstElement *, GstPad *pad, gpointer self);
   static void on_no_more_pads(GstElement *, gpointer self);
@@ -79,6 +82,7 @@ class MediaSource {
   GstClockTime start_ = GST_CLOCK_TIME_NONE, duration_ = GST_CLOCK_TIME_NONE;
   mutable std::mutex lock_;
   std::string video_decoder_;
+  std::string input_type_;  // the media type typefind found
   int fd_ = -1;  // a FIFO or device input, opened by build()
 };
 

@@ -157,6 +157,7 @@ void print_usage(FILE *f) {
       "  --crf N               constant quality, lower is better (default 20 for H.264, 24 for H.265)\n"
       "  --preset P            ultrafast ... veryslow (default: medium)\n"
       "  --start T --duration T   convert a piece only (seconds or [HH:]MM:SS[.frac])\n"
+      "  A photo into a video file becomes a still video of %d s at %d frames/s (--duration sets the length)\n"
       "General:\n"
       "  --processing auto|cpu|gpu   where the 3D conversion runs (default auto: GPU when usable)\n"
       "  --depth-out FILE.png  photos: also write the depth map used (16-bit grey, white = near)\n"
@@ -165,7 +166,8 @@ void print_usage(FILE *f) {
       "  --benchmark           time decoding alone against decoding and converting (encoder\n"
       "                        replaced by fakesink); --benchmark-out FILE appends JSON lines,\n"
       "                        --benchmark-runs N (default 2) repeats both\n"
-      "  --help, --version\n");
+      "  --help, --version\n",
+      static_cast<int>(kStillDuration / GST_SECOND), kStillFrameRate);
 }
 
 ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
