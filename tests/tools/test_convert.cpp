@@ -853,3 +853,67 @@ TEST_F(Convert, PhotoIntoVideoIsAStillVideo) {
   EXPECT_EQ(c.frames, 50);
   EXPECT_NEAR(c.duration, 2.0, 0.1);
 }
+
+namespace {
+
+uint32_t crc32(const std::string &bytes) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (const char ch : bytes) {
+    c ^= static_cast<uint8_t>(ch);
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return ~c;
+}
+
+std::string be32(uint32_t v) {
+  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16 & 0xFF), static_cast<char>(v >> 8 & 0xFF),
+          static_cast<char>(v & 0xFF)};
+}
+
+// A PNG of a few bytes whose header declares width x height (8-bit RGB)
+// and whose image data are cut off: refused from its header, it gives the
+// size limit; decoded, it would fail otherwise (or take gigabytes).
+void write_png_declaring(const std::string &path, uint32_t width, uint32_t height) {
+  auto chunk = [](const std::string &type, const std::string &data) {
+    return be32(static_cast<uint32_t>(data.size())) + type + data + be32(crc32(type + data));
+  };
+  const std::string ihdr = be32(width) + be32(height) + std::string("\x08\x02\x00\x00\x00", 5);
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
+                          chunk("IDAT", std::string("\x78\x9c\x01\x00\x00\xff\xff", 7)) + chunk("IEND", "");
+  std::ofstream(path, std::ios::binary) << png;
+}
+
+}  // namespace
+
+// The 3D stages take at most 8192 pixels a side: larger pictures and videos
+// are refused from their header (the parsers' caps), before anything is
+// decoded, with a line naming the size and the limit: a 9000x10 PNG to a
+// photo, a PNG declaring 20000x20000 to a video, an 8200x64 H.264 clip; a
+// YUV4MPEG file, whose size only its decoder's caps give, too.
+TEST_F(Convert, OversizedPicturesAreRefusedNamingTheLimit) {
+  const std::string wide = fx().dir + "/wide-9000x10.png", huge = fx().dir + "/huge-20000.png",
+                    clip = fx().dir + "/wide-8200x64.mkv", y4m = fx().dir + "/wide-9000x10.y4m";
+  ASSERT_TRUE(cv::imwrite(wide, cv::Mat(10, 9000, CV_8UC3, cv::Scalar(40, 90, 160))));
+  write_png_declaring(huge, 20000, 20000);
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=3 ! video/x-raw,width=8200,height=64,framerate=25/1 ! x264enc "
+                      "speed-preset=ultrafast ! h264parse ! matroskamux ! filesink location=" + clip),
+            "");
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=2 ! video/x-raw,format=I420,width=9000,height=10,framerate=25/1 ! "
+                      "y4menc ! filesink location=" + y4m),
+            "");
+  const struct {
+    std::string in, out, size;
+  } cases[] = {{wide, fx().dir + "/from-wide.png", "9000x10"},
+               {wide, fx().dir + "/from-wide.mp4", "9000x10"},
+               {huge, fx().dir + "/from-huge.jpg", "20000x20000"},
+               {huge, fx().dir + "/from-huge.mkv", "20000x20000"},
+               {clip, fx().dir + "/from-wide-clip.mp4", "8200x64"},
+               {y4m, fx().dir + "/from-y4m.mp4", "9000x10"},
+               {y4m, fx().dir + "/from-y4m.png", "9000x10"}};
+  for (const auto &c : cases) {
+    g_remove(c.out.c_str());
+    const ToolRun r = run_convert({c.in, c.out, "--quiet"});
+    expect_clean_failure(r, c.out, "8192", fx().dir);
+    EXPECT_NE(r.err.find(c.size), std::string::npos) << r.err;
+  }
+}

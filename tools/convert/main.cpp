@@ -21,6 +21,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <string>
 
 #include "benchmark.h"
@@ -135,12 +136,19 @@ int main(int argc, char **argv) {
   if (!check_stage_values(o, &error)) return fail(error, 2);
 
   bool ok;
-  if (o.benchmark)
-    ok = run_benchmark(o, &error);
-  else if (is_photo(o.kind))
-    ok = convert_photo(o, &error);
-  else
-    ok = convert_video(o, &error);
+  // A picture within the size limit can still exceed the memory there is;
+  // the converter's own buffers then end the run with a line, not an abort.
+  try {
+    if (o.benchmark)
+      ok = run_benchmark(o, &error);
+    else if (is_photo(o.kind))
+      ok = convert_photo(o, &error);
+    else
+      ok = convert_video(o, &error);
+  } catch (const std::bad_alloc &) {
+    ok = false;
+    error = o.input + ": out of memory";
+  }
   if (!ok) return fail(error, 1);
   return 0;
 }

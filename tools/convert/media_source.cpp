@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "gst_run.h"
+
 namespace p3d::convert {
 
 namespace {
@@ -171,8 +173,15 @@ GstCaps *MediaSource::encoded_caps(GstPad *decoded_pad) {
   return found;
 }
 
-gboolean MediaSource::on_autoplug_continue(GstElement *, GstPad *pad, GstCaps *caps, gpointer self) {
+gboolean MediaSource::on_autoplug_continue(GstElement *bin, GstPad *pad, GstCaps *caps, gpointer self) {
   auto *s = static_cast<MediaSource *>(self);
+  // Too large for the 3D stages: no decoder is plugged for it (the pad is
+  // exposed encoded and left unlinked), and the run ends on this error.
+  std::string message;
+  if (too_large(caps, &message)) {
+    if (!s->refused_.exchange(true)) post_error(bin, message);
+    return FALSE;
+  }
   // The first pad decodebin looks at is its typefind's (behind the ghost
   // pad decodebin passes): the file's type.
   GstPad *target = GST_IS_GHOST_PAD(pad) ? gst_ghost_pad_get_target(GST_GHOST_PAD(pad)) : nullptr;
@@ -207,14 +216,22 @@ gboolean MediaSource::on_autoplug_query(GstElement *, GstPad *, GstElement *elem
   return TRUE;
 }
 
-void MediaSource::on_pad_added(GstElement *, GstPad *pad, gpointer self) {
+void MediaSource::on_pad_added(GstElement *bin, GstPad *pad, gpointer self) {
   auto *s = static_cast<MediaSource *>(self);
+  if (s->refused_) return;  // the run ends on the refusal
   // decodebin exposes a stream that ended before its first decoded frame
   // (a file cut off there) without caps: what the pad could take stands in
   // for them, unfixed (see Hooks::pad_added).
   GstCaps *caps = gst_pad_get_current_caps(pad);
   if (!caps) caps = gst_pad_query_caps(pad, nullptr);
-  if (s->hooks_.pad_added) s->hooks_.pad_added(pad, caps);
+  // A decoder whose output decodebin exposes before its caps are fixed
+  // (y4mdec) gives the size only here.
+  std::string message;
+  if (too_large(caps, &message)) {
+    if (!s->refused_.exchange(true)) post_error(bin, message);
+  } else if (s->hooks_.pad_added) {
+    s->hooks_.pad_added(pad, caps);
+  }
   gst_caps_unref(caps);
 }
 

@@ -4,6 +4,8 @@
 //  * video decoders told what the 3D chain takes before it is linked
 //    (autoplug-query), so NVDEC hands over CUDA memory when the GPU runs,
 //  * the decoder in use recorded, missing-plugin messages made readable,
+//  * a stream larger than the 3D stages take refused from its parsed caps,
+//    before it is decoded (too_large(), gst_run.h),
 //  * --start/--duration as one accurate seek once every stream is linked:
 //    buffers decoded before it are dropped at the branch heads (gate_pad),
 //    so only the piece reaches the encoders and the muxer.
@@ -11,6 +13,7 @@
 
 #include <gst/gst.h>
 
+#include <atomic>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -72,9 +75,9 @@ class MediaSource {
   static GstCaps *encoded_caps(GstPad *decoded_pad);
 
  private:
-  static gboolean on_autoplug_continue(GstElement *, GstPad *pad, GstCaps *caps, gpointer self);
+  static gboolean on_autoplug_continue(GstElement *bin, GstPad *pad, GstCaps *caps, gpointer self);
   static gboolean on_autoplug_query(GstElement *, GstPad *, GstElement *element, GstQuery *query, gpointer self);
-  static void on_pad_added(GstElement *, GstPad *pad, gpointer self);
+  static void on_pad_added(GstElement *bin, GstPad *pad, gpointer self);
   static void on_no_more_pads(GstElement *, gpointer self);
   static void on_element_added(GstBin *, GstElement *element, gpointer self);
 
@@ -83,6 +86,7 @@ class MediaSource {
   mutable std::mutex lock_;
   std::string video_decoder_;
   std::string input_type_;  // the media type typefind found
+  std::atomic<bool> refused_{false};  // a stream too large for the 3D stages (too_large())
   int fd_ = -1;  // a FIFO or device input, opened by build()
 };
 
