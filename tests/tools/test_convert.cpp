@@ -917,3 +917,22 @@ TEST_F(Convert, OversizedPicturesAreRefusedNamingTheLimit) {
     EXPECT_NE(r.err.find(c.size), std::string::npos) << r.err;
   }
 }
+
+// `--` ends the options: what follows are file names, even one that starts
+// with '-'; without it such a name is an unknown option.
+TEST_F(Convert, DoubleDashEndsTheOptions) {
+  const std::string dir = fx().dir + "/dash";
+  g_mkdir_with_parents(dir.c_str(), 0755);
+  const std::vector<uint8_t> clip = read_bytes(fx().aac_mp4);
+  std::ofstream(dir + "/-x.mp4", std::ios::binary).write(reinterpret_cast<const char *>(clip.data()),
+                                                        static_cast<std::streamsize>(clip.size()));
+  g_remove((dir + "/-y.mkv").c_str());
+  const ToolRun plain = run_convert_in(dir, {"-x.mp4", "out.mkv"});
+  EXPECT_EQ(plain.status, 2) << plain.err;
+  EXPECT_NE(plain.err.find("unknown option '-x.mp4'"), std::string::npos) << plain.err;
+  const ToolRun r = run_convert_in(dir, {"--quiet", "--preset", "ultrafast", "--", "-x.mp4", "-y.mkv"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_back(dir + "/-y.mkv").video_frames, 50);
+  const ToolRun help = run_convert({"--help"});
+  EXPECT_NE(help.out.find("\n  --  "), std::string::npos) << help.out;
+}
