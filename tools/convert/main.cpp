@@ -113,6 +113,31 @@ bool distinct_files(const p3d::convert::Options &o, std::string *error) {
   return true;
 }
 
+// Everything after gst_init(): the plugin, the stage values, then the
+// conversion. Returns the exit status.
+int run(const p3d::convert::Options &o) {
+  using namespace p3d::convert;
+  std::string error;
+  if (!ensure_plugin(&error)) return fail(error, 1);
+  if (!check_stage_values(o, &error)) return fail(error, 2);
+
+  bool ok;
+  // A picture within the size limit can still exceed the memory there is;
+  // the converter's own buffers then end the run with a line, not an abort.
+  try {
+    if (o.benchmark)
+      ok = run_benchmark(o, &error);
+    else if (is_photo(o.kind))
+      ok = convert_photo(o, &error);
+    else
+      ok = convert_video(o, &error);
+  } catch (const std::bad_alloc &) {
+    ok = false;
+    error = o.input + ": out of memory";
+  }
+  return ok ? 0 : fail(error, 1);
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -132,23 +157,10 @@ int main(int argc, char **argv) {
   install_interrupt_cleanup();
 
   gst_init(&argc, &argv);
-  if (!ensure_plugin(&error)) return fail(error, 1);
-  if (!check_stage_values(o, &error)) return fail(error, 2);
-
-  bool ok;
-  // A picture within the size limit can still exceed the memory there is;
-  // the converter's own buffers then end the run with a line, not an abort.
-  try {
-    if (o.benchmark)
-      ok = run_benchmark(o, &error);
-    else if (is_photo(o.kind))
-      ok = convert_photo(o, &error);
-    else
-      ok = convert_video(o, &error);
-  } catch (const std::bad_alloc &) {
-    ok = false;
-    error = o.input + ": out of memory";
-  }
-  if (!ok) return fail(error, 1);
-  return 0;
+  const int status = run(o);
+  // Every way out after gst_init() passes here, with every pipeline and
+  // element released: GStreamer is deinitialised, so that its leaks tracer
+  // (GST_TRACERS=leaks) checks what is still alive and reports it.
+  gst_deinit();
+  return status;
 }
