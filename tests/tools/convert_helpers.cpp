@@ -1,6 +1,7 @@
 #include "convert_helpers.h"
 
 #include <dirent.h>
+#include <sys/wait.h>
 
 #include <cstring>
 #include <fstream>
@@ -20,11 +21,36 @@ std::string convert_program() {
   return env && *env ? env : P3D_CONVERT_BIN;
 }
 
-ToolRun run_convert(const std::vector<std::string> &args) {
+ToolRun run_convert(const std::vector<std::string> &args) { return run_convert_in("", args); }
+
+ToolRun run_convert_in(const std::string &cwd, const std::vector<std::string> &args,
+                       const std::vector<std::string> &env) {
   std::vector<std::string> argv{convert_program()};
   argv.insert(argv.end(), args.begin(), args.end());
+  std::vector<char *> argp;
+  for (const std::string &a : argv) argp.push_back(const_cast<char *>(a.c_str()));
+  argp.push_back(nullptr);
+  gchar **envp = g_get_environ();
+  for (const std::string &e : env) {
+    const size_t eq = e.find('=');
+    envp = g_environ_setenv(envp, e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), TRUE);
+  }
   ToolRun r;
-  r.status = run_program(argv, &r.out, &r.err);
+  gchar *out = nullptr, *err = nullptr;
+  gint status = 0;
+  GError *error = nullptr;
+  if (g_spawn_sync(cwd.empty() ? nullptr : cwd.c_str(), argp.data(), envp, G_SPAWN_SEARCH_PATH, nullptr, nullptr, &out,
+                   &err, &status, &error)) {
+    r.out = out ? out : "";
+    r.err = err ? err : "";
+    r.status = WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  } else {
+    r.err = error ? error->message : "spawn failed";
+    g_clear_error(&error);
+  }
+  g_free(out);
+  g_free(err);
+  g_strfreev(envp);
   return r;
 }
 

@@ -16,6 +16,10 @@ struct ToolRun {
 };
 // Runs pseudo3d-convert with `args` and waits for it.
 ToolRun run_convert(const std::vector<std::string> &args);
+// The same in folder `cwd` ("" for this process's), with the `env` entries
+// ("NAME=value") added to this process's environment.
+ToolRun run_convert_in(const std::string &cwd, const std::vector<std::string> &args,
+                       const std::vector<std::string> &env = {});
 std::string convert_program();
 
 // A launch line to EOS into `path` (run_to_eos with a timeout); "" on success.

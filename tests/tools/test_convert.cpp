@@ -374,6 +374,67 @@ TEST_F(Convert, TruncatedInputIsReported) {
   EXPECT_EQ(complete.err.find("warning"), std::string::npos) << complete.err;
 }
 
+namespace {
+
+// A copy of `from` at `to` that ends 64 bytes into the first `tag` found
+// after the first `after` (Matroska's first Cluster; a fast-start MP4's
+// mdat, after its moov): every stream is declared, no frame is whole.
+bool cut_into(const std::string &from, const std::string &to, const std::string &tag, const std::string &after = "") {
+  const std::vector<uint8_t> whole = read_bytes(from);
+  const std::string text(whole.begin(), whole.end());
+  const size_t from_at = after.empty() ? 0 : text.find(after);
+  const size_t at = from_at == std::string::npos ? std::string::npos : text.find(tag, from_at);
+  if (at == std::string::npos || at + 64 > whole.size()) return false;
+  std::ofstream(to, std::ios::binary).write(text.data(), static_cast<std::streamsize>(at + 64));
+  return true;
+}
+
+const std::string kMkvCluster("\x1F\x43\xB6\x75", 4);
+
+}  // namespace
+
+// A file that yields no frame, converted without --start: the error says
+// no frame could be decoded, and does not blame a --start never given.
+TEST_F(Convert, NoFramesWithoutStartDoesNotBlameStart) {
+  const std::string cut = fx().dir + "/no-frame.mkv", out = fx().dir + "/from-no-frame.mp4";
+  ASSERT_TRUE(cut_into(fx().vorbis_mkv, cut, kMkvCluster));
+  g_remove(out.c_str());
+  const ToolRun r = run_convert({cut, out, "--quiet"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("no video frames"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("--start"), std::string::npos) << r.err;
+  EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS));
+}
+
+// Streams declared but no frame whole (an MKV cut into its first cluster, a
+// fast-start MP4 cut into its mdat): decodebin exposes the video pad with
+// unfixed caps, which must not reach gst_video_info_from_caps (a
+// GStreamer-CRITICAL). One clean line instead. And the plan line names no
+// empty decoder: a photo's jpegdec or pngdec is an image decoder.
+TEST_F(Convert, FramelessStreamFailsWithoutCritical) {
+  const std::string mp4 = fx().dir + "/faststart.mp4", cut_mkv = fx().dir + "/frameless.mkv",
+                    cut_mp4 = fx().dir + "/frameless.mp4", out = fx().dir + "/from-frameless.mp4";
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=10 ! video/x-raw,width=160,height=120,framerate=25/1 ! x264enc ! "
+                      "mp4mux faststart=true ! filesink location=" + mp4),
+            "");
+  ASSERT_TRUE(cut_into(fx().vorbis_mkv, cut_mkv, kMkvCluster));
+  ASSERT_TRUE(cut_into(mp4, cut_mp4, "mdat", "moov"));
+  for (const std::string &in : {cut_mkv, cut_mp4}) {
+    g_remove(out.c_str());
+    const ToolRun r = run_convert({in, out, "--quiet"});
+    EXPECT_EQ(r.err.find("CRITICAL"), std::string::npos) << r.err;
+    expect_clean_failure(r, out, in, fx().dir);
+  }
+  const std::string photo = fx().dir + "/plan-photo.jpg", from_photo = fx().dir + "/from-plan-photo.mkv";
+  ASSERT_TRUE(cv::imwrite(photo, cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160))));
+  g_remove(from_photo.c_str());
+  const ToolRun r = run_convert({photo, from_photo, "--preset", "ultrafast"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err.find("CRITICAL"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("decoder )"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("decoder jpegdec"), std::string::npos) << r.err;
+}
+
 // 4:2:0 encoders take even sizes only: an odd picture loses its last column
 // and row, says so, and converts in every layout that encodes as 4:2:0.
 TEST_F(Convert, OddSizeIsCroppedToEven) {
@@ -721,4 +782,188 @@ TEST_F(Convert, PhotoPngIsThePackedPicture) {
   const cv::Mat m = cv::imread(out, cv::IMREAD_UNCHANGED);
   EXPECT_EQ(m.cols, 120);
   EXPECT_EQ(m.rows, 160);
+}
+
+// A JPEG cut short decodes without a word from jpegdec, which ends the data
+// itself and leaves the missing rows grey: the converter refuses it, naming
+// the file and why, for photo and video outputs alike. The whole file (a
+// progressive JPEG: several scans) converts.
+TEST_F(Convert, TruncatedJpegIsRefused) {
+  cv::Mat noise(240, 320, CV_8UC3);
+  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", noise, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95, cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+  const std::string whole = fx().dir + "/whole.jpg", cut = fx().dir + "/half.jpg";
+  std::ofstream(whole, std::ios::binary).write(reinterpret_cast<const char *>(jpeg.data()),
+                                               static_cast<std::streamsize>(jpeg.size()));
+  std::ofstream(cut, std::ios::binary).write(reinterpret_cast<const char *>(jpeg.data()),
+                                             static_cast<std::streamsize>(jpeg.size() / 2));
+  const std::string from_whole = fx().dir + "/from-whole.png";
+  g_remove(from_whole.c_str());
+  const ToolRun ok = run_convert({whole, from_whole, "--quiet"});
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  for (const std::string &out : {fx().dir + "/from-half.png", fx().dir + "/from-half.mp4"}) {
+    g_remove(out.c_str());
+    const ToolRun r = run_convert({cut, out, "--quiet"});
+    expect_clean_failure(r, out, "truncated", fx().dir);
+    EXPECT_NE(r.err.find("half.jpg"), std::string::npos) << r.err;
+  }
+}
+
+namespace {
+
+// ffprobe's count of decoded video frames (-1 if none given) and the
+// file's duration in seconds (-1 if none).
+struct FfprobeCount {
+  int frames = -1;
+  double duration = -1;
+};
+FfprobeCount ffprobe_count(const std::string &path) {
+  std::string text;
+  run_program({"ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+               "stream=nb_read_frames:format=duration", "-of", "default=nw=1", path},
+              &text);
+  FfprobeCount c;
+  const std::string frames = ffprobe_value(text, "nb_read_frames"), duration = ffprobe_value(text, "duration");
+  if (!frames.empty() && frames.find_first_not_of("0123456789") == std::string::npos) c.frames = std::stoi(frames);
+  if (!duration.empty() && duration != "N/A") c.duration = std::stod(duration);
+  return c;
+}
+
+}  // namespace
+
+// A photo into a video file is a still video: 5 s at 25 frames/s by
+// default, --duration for another length, so that players (and ffprobe)
+// see frames and a duration; a lone frame of no duration played as nothing.
+TEST_F(Convert, PhotoIntoVideoIsAStillVideo) {
+  if (!have_program("ffprobe")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
+  const std::string photo = fx().dir + "/still.png", mp4 = fx().dir + "/still.mp4", mkv = fx().dir + "/still.mkv";
+  ASSERT_TRUE(cv::imwrite(photo, cv::Mat(96, 128, CV_8UC3, cv::Scalar(40, 90, 160))));
+  g_remove(mp4.c_str());
+  g_remove(mkv.c_str());
+  const ToolRun r = run_convert({photo, mp4, "--preset", "ultrafast"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("5 s still video"), std::string::npos) << r.err;
+  const FfprobeCount m = ffprobe_count(mp4);
+  EXPECT_EQ(m.frames, 125);
+  EXPECT_NEAR(m.duration, 5.0, 0.1);
+  const ToolRun k = run_convert({photo, mkv, "--preset", "ultrafast", "--duration", "2", "--quiet"});
+  ASSERT_EQ(k.status, 0) << k.err;
+  const FfprobeCount c = ffprobe_count(mkv);
+  EXPECT_EQ(c.frames, 50);
+  EXPECT_NEAR(c.duration, 2.0, 0.1);
+}
+
+namespace {
+
+uint32_t crc32(const std::string &bytes) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (const char ch : bytes) {
+    c ^= static_cast<uint8_t>(ch);
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return ~c;
+}
+
+std::string be32(uint32_t v) {
+  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16 & 0xFF), static_cast<char>(v >> 8 & 0xFF),
+          static_cast<char>(v & 0xFF)};
+}
+
+// A PNG of a few bytes whose header declares width x height (8-bit RGB)
+// and whose image data are cut off: refused from its header, it gives the
+// size limit; decoded, it would fail otherwise (or take gigabytes).
+void write_png_declaring(const std::string &path, uint32_t width, uint32_t height) {
+  auto chunk = [](const std::string &type, const std::string &data) {
+    return be32(static_cast<uint32_t>(data.size())) + type + data + be32(crc32(type + data));
+  };
+  const std::string ihdr = be32(width) + be32(height) + std::string("\x08\x02\x00\x00\x00", 5);
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
+                          chunk("IDAT", std::string("\x78\x9c\x01\x00\x00\xff\xff", 7)) + chunk("IEND", "");
+  std::ofstream(path, std::ios::binary) << png;
+}
+
+}  // namespace
+
+// The 3D stages take at most 8192 pixels a side: larger pictures and videos
+// are refused from their header (the parsers' caps), before anything is
+// decoded, with a line naming the size and the limit: a 9000x10 PNG to a
+// photo, a PNG declaring 20000x20000 to a video, an 8200x64 H.264 clip; a
+// YUV4MPEG file, whose size only its decoder's caps give, too.
+TEST_F(Convert, OversizedPicturesAreRefusedNamingTheLimit) {
+  const std::string wide = fx().dir + "/wide-9000x10.png", huge = fx().dir + "/huge-20000.png",
+                    clip = fx().dir + "/wide-8200x64.mkv", y4m = fx().dir + "/wide-9000x10.y4m";
+  ASSERT_TRUE(cv::imwrite(wide, cv::Mat(10, 9000, CV_8UC3, cv::Scalar(40, 90, 160))));
+  write_png_declaring(huge, 20000, 20000);
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=3 ! video/x-raw,width=8200,height=64,framerate=25/1 ! x264enc "
+                      "speed-preset=ultrafast ! h264parse ! matroskamux ! filesink location=" + clip),
+            "");
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=2 ! video/x-raw,format=I420,width=9000,height=10,framerate=25/1 ! "
+                      "y4menc ! filesink location=" + y4m),
+            "");
+  const struct {
+    std::string in, out, size;
+  } cases[] = {{wide, fx().dir + "/from-wide.png", "9000x10"},
+               {wide, fx().dir + "/from-wide.mp4", "9000x10"},
+               {huge, fx().dir + "/from-huge.jpg", "20000x20000"},
+               {huge, fx().dir + "/from-huge.mkv", "20000x20000"},
+               {clip, fx().dir + "/from-wide-clip.mp4", "8200x64"},
+               {y4m, fx().dir + "/from-y4m.mp4", "9000x10"},
+               {y4m, fx().dir + "/from-y4m.png", "9000x10"}};
+  for (const auto &c : cases) {
+    g_remove(c.out.c_str());
+    const ToolRun r = run_convert({c.in, c.out, "--quiet"});
+    expect_clean_failure(r, c.out, "8192", fx().dir);
+    EXPECT_NE(r.err.find(c.size), std::string::npos) << r.err;
+  }
+}
+
+// `--` ends the options: what follows are file names, even one that starts
+// with '-'; without it such a name is an unknown option.
+TEST_F(Convert, DoubleDashEndsTheOptions) {
+  const std::string dir = fx().dir + "/dash";
+  g_mkdir_with_parents(dir.c_str(), 0755);
+  const std::vector<uint8_t> clip = read_bytes(fx().aac_mp4);
+  std::ofstream(dir + "/-x.mp4", std::ios::binary).write(reinterpret_cast<const char *>(clip.data()),
+                                                        static_cast<std::streamsize>(clip.size()));
+  g_remove((dir + "/-y.mkv").c_str());
+  const ToolRun plain = run_convert_in(dir, {"-x.mp4", "out.mkv"});
+  EXPECT_EQ(plain.status, 2) << plain.err;
+  EXPECT_NE(plain.err.find("unknown option '-x.mp4'"), std::string::npos) << plain.err;
+  const ToolRun r = run_convert_in(dir, {"--quiet", "--preset", "ultrafast", "--", "-x.mp4", "-y.mkv"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_back(dir + "/-y.mkv").video_frames, 50);
+  const ToolRun help = run_convert({"--help"});
+  EXPECT_NE(help.out.find("\n  --  "), std::string::npos) << help.out;
+}
+
+// The converter deinitialises GStreamer on its way out, so that the leaks
+// tracer checks what is still alive then, and finds nothing: after a video
+// and a photo conversion, and after a failed one.
+TEST_F(Convert, LeaksTracerFindsNothingAlive) {
+  const std::vector<std::string> env = {"GST_TRACERS=leaks", "GST_DEBUG=GST_TRACER:7,leaks:5", "GST_DEBUG_NO_COLOR=1"};
+  const std::string out = fx().dir + "/leaks.mkv", photo = fx().dir + "/leaks.png",
+                    photo_out = fx().dir + "/leaks.mpo", bad = fx().dir + "/leaks-no-film.mp4",
+                    bad_out = fx().dir + "/leaks-failed.mkv";
+  ASSERT_TRUE(cv::imwrite(photo, cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160))));
+  { std::ofstream(bad) << "this is no video\n"; }
+  g_remove(out.c_str());
+  g_remove(photo_out.c_str());
+  const ToolRun video = run_convert_in("", {fx().aac_mp4, out, "--quiet", "--preset", "ultrafast"}, env);
+  const ToolRun still = run_convert_in("", {photo, photo_out, "--quiet"}, env);
+  const ToolRun failed = run_convert_in("", {bad, bad_out, "--quiet"}, env);
+  ASSERT_EQ(video.status, 0) << video.err;
+  ASSERT_EQ(still.status, 0) << still.err;
+  EXPECT_EQ(failed.status, 1) << failed.err;
+  for (const ToolRun *r : {&video, &still, &failed}) {
+    EXPECT_NE(r->err.find("checking for leaks"), std::string::npos) << "the leaks tracer never checked";
+    EXPECT_EQ(r->err.find("Leaks detected"), std::string::npos) << r->err;
+    // A leaked object is logged as "object-alive, type-name=(string)Gst...";
+    // the record's format string ("...(string)%s") is no leak.
+    size_t at = 0;
+    while ((at = r->err.find("object-alive, type-name=(string)", at)) != std::string::npos) {
+      at += 32;
+      EXPECT_EQ(r->err.compare(at, 2, "%s"), 0) << r->err.substr(at, 200);
+    }
+  }
 }

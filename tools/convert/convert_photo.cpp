@@ -127,7 +127,7 @@ bool convert_photo(const Options &o, std::string *error) {
   const Bytes exif = find_exif(source);
   Image upright;
   if (!read_image(o.input, exif_orientation(exif), &upright, error)) {
-    *error = o.input + ": not a picture GStreamer can read (" + *error + ")";
+    *error = o.input + ": " + *error;
     return false;
   }
 

@@ -2,7 +2,9 @@
 
 #include <gst/pbutils/pbutils.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <mutex>
 #include <vector>
@@ -49,6 +51,7 @@ struct Job {
   VideoChain chain;
   Progress progress;
   std::atomic<bool> video_linked{false};
+  std::atomic<bool> still{false};  // the input is a picture, written as a still video
   std::mutex lock;  // streams, notes: written by streaming threads
   std::vector<std::string> streams, notes;
 
@@ -68,6 +71,10 @@ struct Job {
       if (video_linked.exchange(true)) {
         note("an extra video stream (" + codec_name(caps) + ") is left out");
         link_to_fakesink(pipeline, pad);
+        return;
+      }
+      if (source.still_picture() && !hold_still()) {
+        post_error(pipeline, chain.refusal());
         return;
       }
       source.gate_pad(pad, false);
@@ -98,13 +105,37 @@ struct Job {
     if (encoded) gst_caps_unref(encoded);
   }
 
+  GstClockTime still_duration() const {
+    return GST_CLOCK_TIME_IS_VALID(o.duration) ? o.duration : kStillDuration;
+  }
+
+  // A picture into a video file: its 3D frame repeated for still_duration()
+  // (a lone frame of no duration plays as nothing), with no piece to seek.
+  bool hold_still() {
+    still = true;
+    source.set_piece(GST_CLOCK_TIME_NONE, GST_CLOCK_TIME_NONE);
+    const double seconds = static_cast<double>(still_duration()) / GST_SECOND;
+    const int frames = std::max(1, static_cast<int>(std::lround(seconds * kStillFrameRate)));
+    char what[160];
+    std::snprintf(what, sizeof what,
+                  "the input is a still picture: it becomes a %g s still video "
+                  "at %d frames/s (--duration sets the length)",
+                  seconds, kStillFrameRate);
+    note(what);
+    return chain.hold_still(frames);
+  }
+
   // Main thread, once every stream is linked.
   bool ready(std::string *error) {
     if (!video_linked) {
       *error = "no video stream";
       return false;
     }
-    progress.set_total(source.total_time(chain.sink_pad()));
+    if (still && GST_CLOCK_TIME_IS_VALID(o.start)) {
+      *error = "--start does not apply to a still picture (--duration sets the length of its video)";
+      return false;
+    }
+    progress.set_total(still ? still_duration() : source.total_time(chain.sink_pad()));
     if (source.has_piece() && !source.seek_to_piece(chain.sink_pad())) {
       *error = "cannot seek for --start/--duration (the file is not seekable)";
       return false;
@@ -115,12 +146,23 @@ struct Job {
     return true;
   }
 
+  // "(decoder avdec_h264, CUDA memory)": what is known of the decoding;
+  // empty when nothing is (no decoder was plugged yet).
+  std::string decoding() const {
+    std::vector<std::string> parts;
+    const std::string decoder = source.video_decoder();
+    if (!decoder.empty()) parts.push_back("decoder " + decoder);
+    if (chain.on_gpu_memory()) parts.push_back("CUDA memory");
+    std::string s;
+    for (const std::string &p : parts) s += (s.empty() ? " (" : ", ") + p;
+    return s.empty() ? s : s + ")";
+  }
+
   void print_plan() {
     const int crf = o.crf >= 0 ? o.crf : default_crf(o.codec);
     std::string line = "pseudo3d-convert: " + o.input + " -> " + o.output + ": " + layout + ", " + encoder.factory +
                        " crf " + std::to_string(crf) + " preset " + (o.preset.empty() ? "medium" : o.preset) +
-                       ", 3D on the " + (processing == Processing::Gpu ? "GPU" : "CPU") + " (decoder " +
-                       source.video_decoder() + (chain.on_gpu_memory() ? ", CUDA memory" : "") + ")";
+                       ", 3D on the " + (processing == Processing::Gpu ? "GPU" : "CPU") + decoding();
     std::lock_guard<std::mutex> l(lock);
     for (const std::string &s : streams) line += "; " + s;
     std::fprintf(stderr, "%s\n", line.c_str());
@@ -213,8 +255,12 @@ bool convert_video(const Options &o, std::string *error) {
   }
   if (job.progress.frames() == 0) {
     job.progress.abandon();
+    // --start is blamed only when it was given (and is past 0): otherwise
+    // no frame means that none could be decoded.
+    const bool past_start = GST_CLOCK_TIME_IS_VALID(o.start) && o.start > 0;
     *error = o.input + ": no video frames to convert" +
-             (o.start > 0 ? std::string(" (--start is at or past the end of the video)") : std::string());
+             (past_start ? " (--start is at or past the end of the video)"
+                         : " (none could be decoded: a truncated or damaged file?)");
     return false;
   }
   // Frames are counted by where they end: a last frame a second or more

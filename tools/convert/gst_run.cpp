@@ -2,6 +2,8 @@
 
 #include <gst/pbutils/pbutils.h>
 
+#include "frame.h"
+
 namespace p3d::convert {
 
 std::string error_text(GstMessage *msg) {
@@ -28,6 +30,17 @@ void post_error(GstElement *element, const std::string &text) {
   GError *err = g_error_new_literal(GST_CORE_ERROR, GST_CORE_ERROR_FAILED, text.c_str());
   gst_element_post_message(element, gst_message_new_error(GST_OBJECT(element), err, nullptr));
   g_error_free(err);
+}
+
+bool too_large(const GstCaps *caps, std::string *message) {
+  if (!caps || gst_caps_is_empty(caps) || gst_caps_is_any(caps)) return false;
+  const GstStructure *s = gst_caps_get_structure(caps, 0);
+  int w = 0, h = 0;
+  if (!gst_structure_get_int(s, "width", &w) || !gst_structure_get_int(s, "height", &h)) return false;
+  if (w <= kMaxFrameSide && h <= kMaxFrameSide) return false;
+  *message = "the picture is " + std::to_string(w) + "x" + std::to_string(h) + " pixels, more than the " +
+             std::to_string(kMaxFrameSide) + " a side the 3D stages take";
+  return true;
 }
 
 bool run_until_eos(GstElement *pipeline, std::string *error) {

@@ -15,6 +15,14 @@ std::string error_text(GstMessage *msg);
 // Posts an error on `element`'s bus from any thread.
 void post_error(GstElement *element, const std::string &text);
 
+// Whether `caps` give a width or height beyond the kMaxFrameSide pixels the
+// 3D stages take (frame.h), with *message naming the size and the limit.
+// Caps without a size pass. Checked on the caps decodebin sees before it
+// plugs a decoder (typefind's, a parser's, a demuxer's), so a picture too
+// large is refused before it is decoded, and an opaque "not-negotiated"
+// after gigabytes of decoding becomes a line that says why.
+bool too_large(const GstCaps *caps, std::string *message);
+
 // Sets the pipeline to PLAYING and waits for EOS or an error (no main loop:
 // for short pipelines). Returns false with *error.
 bool run_until_eos(GstElement *pipeline, std::string *error);

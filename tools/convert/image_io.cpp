@@ -4,6 +4,7 @@
 #include <gst/app/gstappsrc.h>
 #include <gst/video/video.h>
 
+#include <atomic>
 #include <cstring>
 
 #include "gst_run.h"
@@ -36,6 +37,29 @@ GstElement *by_name(GstElement *pipeline, const char *name) {
   GstElement *e = gst_bin_get_by_name(GST_BIN(pipeline), name);
   if (e) gst_object_unref(e);  // the pipeline keeps it alive
   return e;
+}
+
+// decodebin's autoplug-continue: a picture larger than the 3D stages take
+// is refused from the size its typefind or parser reads in the header,
+// before a decoder is plugged (a 20000x20000 PNG would take seconds and
+// gigabytes to decode, then fail to negotiate); the pad is exposed
+// encoded, and the run ends on this error, the first one posted.
+gboolean refuse_too_large(GstElement *decodebin, GstPad *, GstCaps *caps, gpointer refused) {
+  std::string message;
+  if (!too_large(caps, &message)) return TRUE;
+  if (!static_cast<std::atomic<bool> *>(refused)->exchange(true)) post_error(decodebin, message);
+  return FALSE;
+}
+
+// decodebin's pad-added: the decoded size, where no header gave one
+// before (a decoder whose output decodebin exposes before its caps are
+// fixed). The error comes before the first frame reaches the stages.
+void refuse_too_large_pad(GstElement *decodebin, GstPad *pad, gpointer refused) {
+  GstCaps *caps = gst_pad_get_current_caps(pad);
+  std::string message;
+  if (caps && too_large(caps, &message) && !static_cast<std::atomic<bool> *>(refused)->exchange(true))
+    post_error(decodebin, message);
+  if (caps) gst_caps_unref(caps);
 }
 
 }  // namespace
@@ -128,15 +152,20 @@ GstSample *run_for_one_sample(GstElement *pipeline, GstElement *appsrc, GstBuffe
 }
 
 bool read_image(const std::string &path, int exif_orientation, Image *out, std::string *error) {
-  GstElement *p = launch(std::string("filesrc name=src ! decodebin ! videoconvert ! videoflip video-direction=") +
+  GstElement *p = launch(std::string("filesrc name=src ! decodebin name=dec ! videoconvert ! videoflip "
+                                     "video-direction=") +
                              flip_for_orientation(exif_orientation) +
                              " ! videoconvert ! video/x-raw,format=RGBA ! appsink name=sink sync=false",
                          error);
   if (!p) return false;
   g_object_set(by_name(p, "src"), "location", path.c_str(), NULL);
+  std::atomic<bool> refused{false};
+  g_signal_connect(by_name(p, "dec"), "autoplug-continue", G_CALLBACK(refuse_too_large), &refused);
+  g_signal_connect(by_name(p, "dec"), "pad-added", G_CALLBACK(refuse_too_large_pad), &refused);
   GstSample *s = run_for_one_sample(p, nullptr, nullptr, by_name(p, "sink"), error);
   const bool ok = s && image_from_sample(s, out);
   if (s && !ok) *error = "could not read the decoded picture";
+  if (!ok && !refused) *error = "not a picture GStreamer can read (" + *error + ")";
   if (s) gst_sample_unref(s);
   gst_object_unref(p);
   return ok;

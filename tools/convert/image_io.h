@@ -23,7 +23,9 @@ struct Image {
 };
 
 // The first picture of `path` as RGBA, turned upright for the EXIF
-// orientation (1-8; 1 = as stored).
+// orientation (1-8; 1 = as stored). A picture larger than the 3D stages
+// take is refused from its header (too_large(), gst_run.h). *error says
+// why, without the file's name.
 bool read_image(const std::string &path, int exif_orientation, Image *out, std::string *error);
 
 // Encodes an image. codec "jpeg" (4:2:0, or 4:4:4 with `full_chroma`,

@@ -6,7 +6,7 @@ namespace p3d::convert {
 
 namespace {
 
-constexpr uint8_t kSoi = 0xD8, kSos = 0xDA, kApp0 = 0xE0, kApp1 = 0xE1, kApp2 = 0xE2;
+constexpr uint8_t kSoi = 0xD8, kEoi = 0xD9, kSos = 0xDA, kApp0 = 0xE0, kApp1 = 0xE1, kApp2 = 0xE2;
 constexpr char kExifId[] = "Exif\0";  // 6 bytes with the implicit NUL
 constexpr size_t kExifIdSize = 6;
 constexpr uint16_t kTagOrientation = 0x0112, kTagExifIfd = 0x8769, kTagPixelX = 0xA002, kTagPixelY = 0xA003;
@@ -35,6 +35,18 @@ bool scan_segments(const Bytes &j, std::vector<Span> *spans, size_t *scan_start)
     i += 1 + len;
   }
   return false;
+}
+
+// Markers that stand alone, without a length: TEM and the restarts RST0-7.
+bool is_standalone(uint8_t marker) { return marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7); }
+
+// The offset of the marker that ends the entropy-coded data starting at
+// `i` (0xFF followed by neither a stuffed 0x00, a fill 0xFF nor a restart
+// marker); j.size() when the data run to the end of the file.
+size_t end_of_entropy_data(const Bytes &j, size_t i) {
+  for (; i + 1 < j.size(); ++i)
+    if (j[i] == 0xFF && j[i + 1] != 0x00 && j[i + 1] != 0xFF && !is_standalone(j[i + 1])) return i;
+  return j.size();
 }
 
 bool is_exif(const Bytes &j, const Span &s) {
@@ -126,6 +138,27 @@ void append_ifd_entry(Bytes *b, uint16_t tag, uint16_t type, uint32_t count, uin
   } else {
     append_u32_be(b, value);
   }
+}
+
+bool jpeg_complete(const Bytes &j) {
+  if (j.size() < 4 || j[0] != 0xFF || j[1] != kSoi) return false;
+  size_t i = 2;
+  while (i + 2 <= j.size()) {
+    if (j[i] != 0xFF) return false;
+    while (i + 2 < j.size() && j[i + 1] == 0xFF) ++i;  // fill bytes
+    const uint8_t marker = j[i + 1];
+    if (marker == kEoi) return true;
+    if (is_standalone(marker)) {
+      i += 2;
+      continue;
+    }
+    if (i + 4 > j.size()) return false;
+    const size_t len = (j[i + 2] << 8) | j[i + 3];
+    if (len < 2 || i + 2 + len > j.size()) return false;
+    i += 2 + len;
+    if (marker == kSos) i = end_of_entropy_data(j, i);
+  }
+  return false;
 }
 
 Bytes find_exif(const Bytes &jpeg) {

@@ -20,6 +20,12 @@ struct JpegSegment {
 // the file is no JPEG or has none.
 Bytes find_exif(const Bytes &jpeg);
 
+// Whether `jpeg` holds a whole picture: its markers and scans, walked from
+// SOI, reach the end-of-image marker (EOI). A file cut short (a broken
+// download or copy) does not, and jpegdec decodes it without a word,
+// leaving the missing rows grey; a damaged marker structure fails too.
+bool jpeg_complete(const Bytes &jpeg);
+
 // The EXIF Orientation tag (1-8); 1 when absent or unreadable.
 int exif_orientation(const Bytes &exif);
 

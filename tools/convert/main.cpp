@@ -19,11 +19,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
+#include <new>
 #include <string>
 
 #include "benchmark.h"
 #include "convert_photo.h"
 #include "convert_video.h"
+#include "jpeg_meta.h"
 #include "options.h"
 #include "output_file.h"
 #include "stage_settings.h"
@@ -53,6 +57,23 @@ bool input_readable(const std::string &path, std::string *error) {
     return false;
   }
   return true;
+}
+
+// A JPEG cut short decodes without a word (jpegdec ends the data itself
+// and leaves the missing rows grey): refused before any output is begun,
+// for photo and video outputs alike. Regular files only: reading a FIFO
+// here would take the data meant for the pipeline.
+bool input_complete(const std::string &path, std::string *error) {
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return true;
+  std::ifstream f(path, std::ios::binary);
+  char soi[3] = {};
+  if (!f.read(soi, 3) || soi[0] != '\xFF' || soi[1] != '\xD8' || soi[2] != '\xFF') return true;  // no JPEG
+  f.seekg(0);
+  const p3d::convert::Bytes bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (p3d::convert::jpeg_complete(bytes)) return true;
+  *error = path + ": the JPEG data end before the picture does (a truncated or damaged file)";
+  return false;
 }
 
 // Whether two paths name one file: the same inode where both exist, else
@@ -92,6 +113,31 @@ bool distinct_files(const p3d::convert::Options &o, std::string *error) {
   return true;
 }
 
+// Everything after gst_init(): the plugin, the stage values, then the
+// conversion. Returns the exit status.
+int run(const p3d::convert::Options &o) {
+  using namespace p3d::convert;
+  std::string error;
+  if (!ensure_plugin(&error)) return fail(error, 1);
+  if (!check_stage_values(o, &error)) return fail(error, 2);
+
+  bool ok;
+  // A picture within the size limit can still exceed the memory there is;
+  // the converter's own buffers then end the run with a line, not an abort.
+  try {
+    if (o.benchmark)
+      ok = run_benchmark(o, &error);
+    else if (is_photo(o.kind))
+      ok = convert_photo(o, &error);
+    else
+      ok = convert_video(o, &error);
+  } catch (const std::bad_alloc &) {
+    ok = false;
+    error = o.input + ": out of memory";
+  }
+  return ok ? 0 : fail(error, 1);
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -103,7 +149,7 @@ int main(int argc, char **argv) {
     case ParseResult::ExitUsage: return fail(error, 2);
     case ParseResult::Run: break;
   }
-  if (!input_readable(o.input, &error)) return fail(error, 1);
+  if (!input_readable(o.input, &error) || !input_complete(o.input, &error)) return fail(error, 1);
   if (!o.benchmark && !distinct_files(o, &error)) return fail(error, 2);
   // Progress and messages go to stderr; a reader that goes away (a pipe
   // into `head`) must not kill the conversion and leave its temporary file.
@@ -111,16 +157,10 @@ int main(int argc, char **argv) {
   install_interrupt_cleanup();
 
   gst_init(&argc, &argv);
-  if (!ensure_plugin(&error)) return fail(error, 1);
-  if (!check_stage_values(o, &error)) return fail(error, 2);
-
-  bool ok;
-  if (o.benchmark)
-    ok = run_benchmark(o, &error);
-  else if (is_photo(o.kind))
-    ok = convert_photo(o, &error);
-  else
-    ok = convert_video(o, &error);
-  if (!ok) return fail(error, 1);
-  return 0;
+  const int status = run(o);
+  // Every way out after gst_init() passes here, with every pipeline and
+  // element released: GStreamer is deinitialised, so that its leaks tracer
+  // (GST_TRACERS=leaks) checks what is still alive and reports it.
+  gst_deinit();
+  return status;
 }

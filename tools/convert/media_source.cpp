@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "gst_run.h"
+
 namespace p3d::convert {
 
 namespace {
@@ -38,9 +40,13 @@ GstPadProbeReturn gate_probe(GstPad *, GstPadProbeInfo *info, gpointer data) {
   return GST_PAD_PROBE_OK;
 }
 
+// Video and picture decoders: a photo converted into a video file is
+// decoded by an image decoder (jpegdec, pngdec: "Codec/Decoder/Image").
 bool is_video_decoder(GstElement *e) {
   GstElementFactory *f = gst_element_get_factory(e);
-  return f && gst_element_factory_list_is_type(f, GST_ELEMENT_FACTORY_TYPE_DECODER | GST_ELEMENT_FACTORY_TYPE_MEDIA_VIDEO);
+  const GstElementFactoryListType decoder = GST_ELEMENT_FACTORY_TYPE_DECODER;
+  return f && (gst_element_factory_list_is_type(f, decoder | GST_ELEMENT_FACTORY_TYPE_MEDIA_VIDEO) ||
+               gst_element_factory_list_is_type(f, decoder | GST_ELEMENT_FACTORY_TYPE_MEDIA_IMAGE));
 }
 
 }  // namespace
@@ -127,6 +133,11 @@ std::string MediaSource::video_decoder() const {
   return video_decoder_;
 }
 
+bool MediaSource::still_picture() const {
+  std::lock_guard<std::mutex> l(lock_);
+  return input_type_.rfind("image/", 0) == 0;
+}
+
 std::string MediaSource::missing_plugin(GstMessage *msg) {
   if (!gst_is_missing_plugin_message(msg)) return "";
   gchar *d = gst_missing_plugin_message_get_description(msg);
@@ -162,8 +173,26 @@ GstCaps *MediaSource::encoded_caps(GstPad *decoded_pad) {
   return found;
 }
 
-gboolean MediaSource::on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self) {
+gboolean MediaSource::on_autoplug_continue(GstElement *bin, GstPad *pad, GstCaps *caps, gpointer self) {
   auto *s = static_cast<MediaSource *>(self);
+  // Too large for the 3D stages: no decoder is plugged for it (the pad is
+  // exposed encoded and left unlinked), and the run ends on this error.
+  std::string message;
+  if (too_large(caps, &message)) {
+    if (!s->refused_.exchange(true)) post_error(bin, message);
+    return FALSE;
+  }
+  // The first pad decodebin looks at is its typefind's (behind the ghost
+  // pad decodebin passes): the file's type.
+  GstPad *target = GST_IS_GHOST_PAD(pad) ? gst_ghost_pad_get_target(GST_GHOST_PAD(pad)) : nullptr;
+  GstElement *parent = target ? gst_pad_get_parent_element(target) : nullptr;
+  GstElementFactory *f = parent ? gst_element_get_factory(parent) : nullptr;
+  if (f && g_strcmp0(GST_OBJECT_NAME(f), "typefind") == 0) {
+    std::lock_guard<std::mutex> l(s->lock_);
+    s->input_type_ = gst_structure_get_name(gst_caps_get_structure(caps, 0));
+  }
+  if (parent) gst_object_unref(parent);
+  if (target) gst_object_unref(target);
   return !(s->hooks_.keep_encoded && s->hooks_.keep_encoded(caps));
 }
 
@@ -187,11 +216,22 @@ gboolean MediaSource::on_autoplug_query(GstElement *, GstPad *, GstElement *elem
   return TRUE;
 }
 
-void MediaSource::on_pad_added(GstElement *, GstPad *pad, gpointer self) {
+void MediaSource::on_pad_added(GstElement *bin, GstPad *pad, gpointer self) {
   auto *s = static_cast<MediaSource *>(self);
+  if (s->refused_) return;  // the run ends on the refusal
+  // decodebin exposes a stream that ended before its first decoded frame
+  // (a file cut off there) without caps: what the pad could take stands in
+  // for them, unfixed (see Hooks::pad_added).
   GstCaps *caps = gst_pad_get_current_caps(pad);
   if (!caps) caps = gst_pad_query_caps(pad, nullptr);
-  if (s->hooks_.pad_added) s->hooks_.pad_added(pad, caps);
+  // A decoder whose output decodebin exposes before its caps are fixed
+  // (y4mdec) gives the size only here.
+  std::string message;
+  if (too_large(caps, &message)) {
+    if (!s->refused_.exchange(true)) post_error(bin, message);
+  } else if (s->hooks_.pad_added) {
+    s->hooks_.pad_added(pad, caps);
+  }
   gst_caps_unref(caps);
 }
 

@@ -4,6 +4,8 @@
 //  * video decoders told what the 3D chain takes before it is linked
 //    (autoplug-query), so NVDEC hands over CUDA memory when the GPU runs,
 //  * the decoder in use recorded, missing-plugin messages made readable,
+//  * a stream larger than the 3D stages take refused from its parsed caps,
+//    before it is decoded (too_large(), gst_run.h),
 //  * --start/--duration as one accurate seek once every stream is linked:
 //    buffers decoded before it are dropped at the branch heads (gate_pad),
 //    so only the piece reaches the encoders and the muxer.
@@ -11,6 +13,7 @@
 
 #include <gst/gst.h>
 
+#include <atomic>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -25,7 +28,8 @@ class MediaSource {
     // The caps the video chain takes (new ref), answered to video decoders'
     // caps queries while decodebin's pads are not linked yet.
     std::function<GstCaps *()> video_caps;
-    // A decodebin pad (streaming thread).
+    // A decodebin pad and its caps (streaming thread); unfixed caps when
+    // the stream ended before its first frame was decoded.
     std::function<void(GstPad *, GstCaps *)> pad_added;
     // All pads are there (streaming thread).
     std::function<void()> no_more_pads;
@@ -58,6 +62,9 @@ class MediaSource {
   GstClockTime total_time(GstPad *pad) const;
 
   std::string video_decoder() const;
+  // Whether the input is a picture (decodebin's typefind found an image/*
+  // type: a photo, not a video file), known before the first pad is added.
+  bool still_picture() const;
   // Whether build() reads a FIFO or device (fdsrc) rather than a file.
   bool reads_stream() const { return fd_ >= 0; }
   // decodebin's missing-plugin description, if one was posted ("" if not).
@@ -68,9 +75,9 @@ class MediaSource {
   static GstCaps *encoded_caps(GstPad *decoded_pad);
 
  private:
-  static gboolean on_autoplug_continue(GstElement *, GstPad *, GstCaps *caps, gpointer self);
+  static gboolean on_autoplug_continue(GstElement *bin, GstPad *pad, GstCaps *caps, gpointer self);
   static gboolean on_autoplug_query(GstElement *, GstPad *, GstElement *element, GstQuery *query, gpointer self);
-  static void on_pad_added(GstElement *, GstPad *pad, gpointer self);
+  static void on_pad_added(GstElement *bin, GstPad *pad, gpointer self);
   static void on_no_more_pads(GstElement *, gpointer self);
   static void on_element_added(GstBin *, GstElement *element, gpointer self);
 
@@ -78,6 +85,8 @@ class MediaSource {
   GstClockTime start_ = GST_CLOCK_TIME_NONE, duration_ = GST_CLOCK_TIME_NONE;
   mutable std::mutex lock_;
   std::string video_decoder_;
+  std::string input_type_;  // the media type typefind found
+  std::atomic<bool> refused_{false};  // a stream too large for the 3D stages (too_large())
   int fd_ = -1;  // a FIFO or device input, opened by build()
 };
 

@@ -136,6 +136,7 @@ void print_usage(FILE *f) {
   std::fprintf(
       f,
       "usage: pseudo3d-convert INPUT OUTPUT [options]\n"
+      "       pseudo3d-convert [options] -- INPUT OUTPUT\n"
       "       pseudo3d-convert --benchmark INPUT [--benchmark-out FILE.jsonl] [options]\n"
       "Converts a 2D video or photo into stereo 3D. OUTPUT's extension picks the result:\n"
       "  .mp4 .m4v .mov .mkv  video (H.264/H.265), audio and subtitles kept, 3D layout signalled\n"
@@ -157,6 +158,7 @@ void print_usage(FILE *f) {
       "  --crf N               constant quality, lower is better (default 20 for H.264, 24 for H.265)\n"
       "  --preset P            ultrafast ... veryslow (default: medium)\n"
       "  --start T --duration T   convert a piece only (seconds or [HH:]MM:SS[.frac])\n"
+      "  A photo into a video file becomes a still video of %d s at %d frames/s (--duration sets the length)\n"
       "General:\n"
       "  --processing auto|cpu|gpu   where the 3D conversion runs (default auto: GPU when usable)\n"
       "  --depth-out FILE.png  photos: also write the depth map used (16-bit grey, white = near)\n"
@@ -165,14 +167,27 @@ void print_usage(FILE *f) {
       "  --benchmark           time decoding alone against decoding and converting (encoder\n"
       "                        replaced by fakesink); --benchmark-out FILE appends JSON lines,\n"
       "                        --benchmark-runs N (default 2) repeats both\n"
-      "  --help, --version\n");
+      "  --help, --version\n"
+      "  --                    ends the options: what follows are file names, even ones starting with '-'\n",
+      static_cast<int>(kStillDuration / GST_SECOND), kStillFrameRate);
 }
 
 ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
   std::vector<std::string> positional;
   bool video_option_given = false;
   std::string video_option;
+  bool options_ended = false;
   for (int i = 1; i < argc; ++i) {
+    // `--` ends the options, as for every POSIX tool: a file whose name
+    // starts with '-' can then be given.
+    if (options_ended) {
+      positional.push_back(argv[i]);
+      continue;
+    }
+    if (std::strcmp(argv[i], "--") == 0) {
+      options_ended = true;
+      continue;
+    }
     std::string arg = argv[i], value;
     bool has_inline_value = false;
     if (arg.rfind("--", 0) == 0) {

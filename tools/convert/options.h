@@ -20,6 +20,12 @@ bool is_photo(OutputKind k);
 // the extension is not one the converter writes.
 bool output_kind_of(const std::string &path, OutputKind *kind);
 
+// A photo converted into a video file becomes a still video: this long
+// unless --duration says otherwise, at this frame rate (a lone frame of no
+// duration is played as nothing).
+constexpr GstClockTime kStillDuration = 5 * GST_SECOND;
+constexpr int kStillFrameRate = 25;
+
 enum class Processing { Auto, Cpu, Gpu };
 enum class Codec { H264, H265 };
 

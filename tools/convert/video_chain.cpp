@@ -68,6 +68,7 @@ GstElement *make_frame_queue(guint frames) {
 
 VideoChain::~VideoChain() {
   if (head_sink_) gst_object_unref(head_sink_);
+  if (counted_) gst_object_unref(counted_);
 }
 
 bool VideoChain::build(GstElement *bin, const Options &o, Processing processing, const std::string &raw_format,
@@ -176,9 +177,11 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   // 4:2:0 encoders refuse odd sizes (x264: "Can not initialize"), and every
   // layout of an even picture is even: the last column or row of an odd one
   // is cropped before the 3D stages (and before a rotation, whose sizes it
-  // was measured in).
+  // was measured in). A pad exposed before any frame was decoded (a file
+  // cut off in its first frame) has unfixed caps and no size: no frame
+  // follows, so there is nothing to crop.
   GstVideoInfo info;
-  const bool known = subsampled_ && gst_video_info_from_caps(&info, caps);
+  const bool known = subsampled_ && gst_caps_is_fixed(caps) && gst_video_info_from_caps(&info, caps);
   const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
   const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
   if (cuda_input_) {
@@ -227,17 +230,56 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   return true;
 }
 
-void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start) {
+gulong count_frames_at(GstPad *pad, Progress *progress, GstClockTime start) {
   auto *c = new FrameCounter{progress, start, {}};
   gst_segment_init(&c->segment, GST_FORMAT_UNDEFINED);
-  gst_pad_add_probe(pad, static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_BUFFER | GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM),
-                    count_probe, c, [](gpointer p) { delete static_cast<FrameCounter *>(p); });
+  return gst_pad_add_probe(pad,
+                           static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_BUFFER | GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM),
+                           count_probe, c, [](gpointer p) { delete static_cast<FrameCounter *>(p); });
 }
 
 void VideoChain::count_frames(Progress *progress, GstClockTime start) {
-  GstPad *src = gst_element_get_static_pad(tail_, "src");
-  count_frames_at(src, progress, start);
-  gst_object_unref(src);
+  progress_ = progress;
+  counted_ = gst_element_get_static_pad(tail_, "src");
+  count_probe_ = count_frames_at(counted_, progress, start);
+}
+
+bool VideoChain::hold_still(int frames) {
+  GstElement *freeze = gst_element_factory_make("imagefreeze", nullptr);
+  GstElement *rate = gst_element_factory_make("capsfilter", nullptr);
+  if (!freeze || !rate) {
+    if (freeze) gst_object_unref(gst_object_ref_sink(freeze));
+    if (rate) gst_object_unref(gst_object_ref_sink(rate));
+    refusal_ = "GStreamer element imagefreeze is missing (gstreamer1.0-plugins-good)";
+    return false;
+  }
+  // Set before the element starts: imagefreeze takes its count on the way
+  // to PAUSED.
+  g_object_set(freeze, "num-buffers", frames, NULL);
+  GstCaps *caps = gst_caps_new_simple("video/x-raw", "framerate", GST_TYPE_FRACTION, kStillFrameRate, 1, NULL);
+  g_object_set(rate, "caps", caps, NULL);
+  gst_caps_unref(caps);
+  gst_bin_add_many(GST_BIN(bin_), freeze, rate, NULL);
+  gst_element_sync_state_with_parent(freeze);
+  gst_element_sync_state_with_parent(rate);
+  // tail_ ! imagefreeze ! capsfilter ! (what tail_ fed: the encoder).
+  GstPad *out = gst_element_get_static_pad(tail_, "src");
+  GstPad *next = gst_pad_get_peer(out);
+  if (next) gst_pad_unlink(out, next);
+  GstPad *rate_src = gst_element_get_static_pad(rate, "src");
+  const bool linked = next && gst_element_link_many(tail_, freeze, rate, NULL) &&
+                      gst_pad_link(rate_src, next) == GST_PAD_LINK_OK;
+  gst_object_unref(out);
+  if (next) gst_object_unref(next);
+  // The frames the encoder gets are counted: the still video's.
+  if (linked && counted_) {
+    gst_pad_remove_probe(counted_, count_probe_);
+    gst_object_unref(counted_);
+    counted_ = GST_PAD(gst_object_ref(rate_src));
+    count_probe_ = count_frames_at(counted_, progress_, 0);  // the still's own time
+  }
+  gst_object_unref(rate_src);
+  return linked;
 }
 
 }  // namespace p3d::convert

@@ -37,6 +37,11 @@ class VideoChain {
   // Counts frames reaching the encoder into `progress`, with their position
   // in the piece that starts at `start` (media time).
   void count_frames(Progress *progress, GstClockTime start);
+  // Makes the one frame of a picture a still video of `frames` frames at
+  // kStillFrameRate: imagefreeze after the 3D stages repeats their frame,
+  // so they run once. Streaming thread, before attach(): nothing has
+  // passed the chain yet. False with refusal() set if imagefreeze is missing.
+  bool hold_still(int frames);
 
   GstPad *sink_pad() const { return head_sink_; }  // the first queue's sink pad
   GstElement *tail() const { return tail_; }       // links to the encoder
@@ -50,6 +55,9 @@ class VideoChain {
  private:
   GstElement *bin_ = nullptr, *head_ = nullptr, *convert_ = nullptr, *tail_ = nullptr;
   GstPad *head_sink_ = nullptr;
+  GstPad *counted_ = nullptr;  // where count_frames() counts, and its probe
+  gulong count_probe_ = 0;
+  Progress *progress_ = nullptr;
   Processing processing_ = Processing::Cpu;
   bool subsampled_ = false;  // the encoder takes 4:2:0, which needs even sizes
   bool cuda_input_ = false, cropped_ = false;
@@ -65,6 +73,7 @@ GstElement *make_frame_queue(guint frames);
 
 // Counts the buffers passing `pad` into `progress`, with their media time
 // from `start` (the segment's stream time, so a seek's piece counts from 0).
-void count_frames_at(GstPad *pad, Progress *progress, GstClockTime start);
+// Returns the probe's id.
+gulong count_frames_at(GstPad *pad, Progress *progress, GstClockTime start);
 
 }  // namespace p3d::convert
