@@ -60,6 +60,7 @@
 #pragma once
 
 #include "frame.h"
+#include "enum_name.h"
 
 namespace p3d {
 
@@ -67,6 +68,12 @@ constexpr int kMaxBilateralRadius = 16;
 constexpr int kBilateralRangeTableSize = 256;  // |guide difference| 0..255
 
 enum class BilateralMode : int { Exact = 0, Separable = 1 };
+
+inline constexpr EnumName<BilateralMode> kFilterModeNames[] = {
+    {BilateralMode::Exact, "exact", "Every pixel of the (2r+1) x (2r+1) window"},
+    {BilateralMode::Separable, "separable", "A row pass, then a column pass: 2 (2r+1) taps"},
+};
+P3D_CHECK_ENUM_NAMES(kFilterModeNames);
 
 // The mode pseudo3dfilter and the tools run by default. Separable: a few
 // times faster than Exact on the CPU and the GPU (docs/benchmarks.md,

@@ -56,6 +56,7 @@
 #include <vector>
 
 #include "frame.h"
+#include "enum_name.h"
 
 namespace p3d {
 
@@ -65,6 +66,14 @@ enum class Hypothesis : int {
   CenterNear = 2,  // near in the centre: h = 1 - min(1, dist(c, centre) / sqrt(0.5))
   Flat = 3,        // h = 0.5 everywhere
 };
+
+inline constexpr EnumName<Hypothesis> kHypothesisNames[] = {
+    {Hypothesis::TopBottom, "top-bottom", "Far at the top, near at the bottom"},
+    {Hypothesis::LeftRight, "left-right", "Far at the left, near at the right"},
+    {Hypothesis::CenterNear, "center-near", "Near in the centre, far at the edges"},
+    {Hypothesis::Flat, "flat", "No gradient (regions only)"},
+};
+P3D_CHECK_ENUM_NAMES(kHypothesisNames);
 
 struct DepthParams {
   Hypothesis hypothesis = Hypothesis::TopBottom;

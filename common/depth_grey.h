@@ -25,10 +25,21 @@
 #include <cstdint>
 
 #include "p3d_defs.h"
+#include "enum_name.h"
 
 namespace p3d {
 
 enum class DepthConvention : int { NearWhite = 0, NearDark = 1, Metric = 2 };
+
+inline constexpr EnumName<DepthConvention> kDepthConventionNames[] = {
+    {DepthConvention::NearWhite, "near-white",
+     "Larger is nearer (white = near: most depth maps, Depth-Anything)"},
+    {DepthConvention::NearDark, "near-dark", "Larger is farther (dark = near: a Z-buffer)"},
+    {DepthConvention::Metric, "metric",
+     "Distance in any unit (a depth camera's millimetres), near..far mapped linearly in 1/distance; 0 = not seen, "
+     "taken as far"},
+};
+P3D_CHECK_ENUM_NAMES(kDepthConventionNames);
 
 struct DepthImportParams {
   DepthConvention convention = DepthConvention::NearWhite;

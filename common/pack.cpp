@@ -178,12 +178,9 @@ bool pack_is_identity(const PackParams &params) {
 }
 
 bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameView &out) {
-  const int layout = static_cast<int>(params.layout), glasses = static_cast<int>(params.glasses),
-            method = static_cast<int>(params.method), input = static_cast<int>(params.input);
-  if (layout < 0 || layout > static_cast<int>(PackLayout::Right)) return false;
-  if (glasses < 0 || glasses > static_cast<int>(AnaglyphGlasses::AmberBlue)) return false;
-  if (method < 0 || method > static_cast<int>(AnaglyphMethod::DuboisLinear)) return false;
-  if (input < 0 || input > static_cast<int>(StereoInput::Checkerboard)) return false;
+  if (!enum_valid(kPackLayoutNames, params.layout) || !enum_valid(kGlassesNames, params.glasses) ||
+      !enum_valid(kAnaglyphMethodNames, params.method) || !enum_valid(kStereoInputNames, params.input))
+    return false;
   if (!packed_rgb_valid(in)) return false;
   if (!(packed_rgb_valid(out) && in.format == out.format) && !yuv420_valid(out)) return false;
   int vw = 0, vh = 0, w = 0, h = 0;

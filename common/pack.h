@@ -86,6 +86,7 @@
 // as RGB or 4:4:4 (4:2:0 smears the red channel over two pixels).
 #pragma once
 
+#include "enum_name.h"
 #include "frame.h"
 
 namespace p3d {
@@ -114,6 +115,52 @@ enum class StereoInput : int {
   ColumnInterleaved,
   Checkerboard,
 };
+
+inline constexpr EnumName<PackLayout> kPackLayoutNames[] = {
+    {PackLayout::Anaglyph, "anaglyph", "Anaglyph (see glasses and anaglyph-method)"},
+    {PackLayout::SideBySide, "side-by-side", "Side by side, full resolution (2W x H)"},
+    {PackLayout::SideBySideHalf, "side-by-side-half", "Side by side, half width (anamorphic)"},
+    {PackLayout::TopBottom, "top-bottom", "Top and bottom, full resolution (W x 2H)"},
+    {PackLayout::TopBottomHalf, "top-bottom-half", "Top and bottom, half height (anamorphic)"},
+    {PackLayout::RowInterleaved, "row-interleaved", "Even rows left view, odd rows right view"},
+    {PackLayout::ColumnInterleaved, "column-interleaved", "Even columns left, odd columns right"},
+    {PackLayout::Checkerboard, "checkerboard", "Checkerboard of the two views"},
+    {PackLayout::Left, "left", "Left view only"},
+    {PackLayout::Right, "right", "Right view only"},
+};
+P3D_CHECK_ENUM_NAMES(kPackLayoutNames);
+
+inline constexpr EnumName<AnaglyphGlasses> kGlassesNames[] = {
+    {AnaglyphGlasses::RedCyan, "red-cyan", "Red (left) / cyan (right)"},
+    {AnaglyphGlasses::GreenMagenta, "green-magenta", "Green (left) / magenta (right)"},
+    {AnaglyphGlasses::AmberBlue, "amber-blue", "Amber (left) / blue (right)"},
+};
+P3D_CHECK_ENUM_NAMES(kGlassesNames);
+
+inline constexpr EnumName<AnaglyphMethod> kAnaglyphMethodNames[] = {
+    {AnaglyphMethod::Dubois, "dubois",
+     "Dubois least squares, the first published matrices, on gamma-encoded values (least ghosting)"},
+    {AnaglyphMethod::Color, "color", "Full colour through the filters"},
+    {AnaglyphMethod::HalfColor, "half-color", "Half colour (luma behind the single-colour filter)"},
+    {AnaglyphMethod::Gray, "gray", "Grey (luma for both eyes)"},
+    {AnaglyphMethod::DuboisFfmpeg, "dubois-ffmpeg",
+     "Dubois, the revised matrices of ffmpeg's and mpv's stereo3d (arcd, agmd, aybd)"},
+    {AnaglyphMethod::DuboisLinear, "dubois-linear", "Dubois in linear light (sRGB decoded, mixed, clipped, encoded)"},
+};
+P3D_CHECK_ENUM_NAMES(kAnaglyphMethodNames);
+
+// How input frames hold a pair (pseudo3dpack's input-layout, whose GStreamer
+// enum adds "from-caps" before these).
+inline constexpr EnumName<StereoInput> kStereoInputNames[] = {
+    {StereoInput::SideBySide, "side-by-side", "Side by side, full resolution"},
+    {StereoInput::SideBySideHalf, "side-by-side-half", "Side by side, each view squeezed to half width"},
+    {StereoInput::TopBottom, "top-bottom", "Top and bottom, full resolution"},
+    {StereoInput::TopBottomHalf, "top-bottom-half", "Top and bottom, each view squeezed to half height"},
+    {StereoInput::RowInterleaved, "row-interleaved", "Rows alternate between the views"},
+    {StereoInput::ColumnInterleaved, "column-interleaved", "Columns alternate between the views"},
+    {StereoInput::Checkerboard, "checkerboard", "Checkerboard of the two views"},
+};
+P3D_CHECK_ENUM_NAMES(kStereoInputNames);
 
 struct PackParams {
   PackLayout layout = PackLayout::Anaglyph;

@@ -104,11 +104,30 @@
 #include <vector>
 
 #include "frame.h"
+#include "enum_name.h"
 
 namespace p3d {
 
 enum class StereoView : int { Both = 0, Left = 1, Right = 2 };
 enum class HoleFill : int { Background = 0, NeighborAverage = 1, None = 2, BackgroundSmooth = 3 };
+
+inline constexpr EnumName<StereoView> kStereoViewNames[] = {
+    {StereoView::Both, "both", "Synthesize both views, half the parallax each"},
+    {StereoView::Left, "left", "Input is the right view; synthesize the left"},
+    {StereoView::Right, "right", "Input is the left view; synthesize the right"},
+};
+P3D_CHECK_ENUM_NAMES(kStereoViewNames);
+
+inline constexpr EnumName<HoleFill> kHoleFillNames[] = {
+    {HoleFill::Background, "background",
+     "Extend the background side of each row (depth-aware; cheapest, streaks along rows)"},
+    {HoleFill::NeighborAverage, "neighbor-average", "Iterative neighbour-average inpainting"},
+    {HoleFill::None, "none", "Leave holes, painted magenta (diagnostics)"},
+    {HoleFill::BackgroundSmooth, "background-smooth",
+     "Background side of each row, averaged across rows (depth-aware; best quality; costs more than background: "
+     "docs/benchmarks.md)"},
+};
+P3D_CHECK_ENUM_NAMES(kHoleFillNames);
 
 constexpr float kMaxStretch = 2.f;  // a gap wider than 1 + this many pixels is a disocclusion
 constexpr Rgba kHoleColour = {255, 0, 255, 255};

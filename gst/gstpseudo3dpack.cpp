@@ -166,8 +166,8 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
     if (from_yuv) gst_pseudo3d_set_formats(open, P3D_PACKED_FORMATS);
     caps = gst_caps_merge_structure(caps, open);
     if (declared) continue;
-    for (int a = 0; a <= static_cast<int>(p3d::StereoInput::Checkerboard); ++a) {
-      const auto arrangement = static_cast<p3d::StereoInput>(a);
+    for (const auto &name : p3d::kStereoInputNames) {
+      const p3d::StereoInput arrangement = name.value;
       GstStructure *s = transformed(in, way, arrangement, g);
       if (from_yuv) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
       p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),

@@ -39,6 +39,7 @@
 #include "build_version.h"
 #include "bench_gpu.h"  // types only unless P3D_BENCH_GPU
 #include "cli_args.h"
+#include "pack.h"
 #include "json_line.h"
 
 namespace p3d::bench {
@@ -72,31 +73,15 @@ const std::map<std::string, PixelFormat> kFormats = {
     {"NV12", PixelFormat::NV12}, {"I420", PixelFormat::I420}, {"RGBA", PixelFormat::RGBA},
     {"BGRA", PixelFormat::BGRA}, {"RGBx", PixelFormat::RGBx}, {"BGRx", PixelFormat::BGRx}};
 
-const std::map<std::string, PackLayout> kLayouts = {
-    {"anaglyph", PackLayout::Anaglyph},
-    {"side-by-side", PackLayout::SideBySide},
-    {"side-by-side-half", PackLayout::SideBySideHalf},
-    {"top-bottom", PackLayout::TopBottom},
-    {"top-bottom-half", PackLayout::TopBottomHalf},
-    {"row-interleaved", PackLayout::RowInterleaved},
-    {"column-interleaved", PackLayout::ColumnInterleaved},
-    {"checkerboard", PackLayout::Checkerboard},
-    {"left", PackLayout::Left},
-    {"right", PackLayout::Right}};
-
-const std::map<std::string, HoleFill> kFills = {{"background-smooth", HoleFill::BackgroundSmooth},
-                                                {"background", HoleFill::Background},
-                                                {"neighbor-average", HoleFill::NeighborAverage},
-                                                {"none", HoleFill::None}};
-
-const std::map<std::string, BilateralMode> kFilterModes = {{"exact", BilateralMode::Exact},
-                                                           {"separable", BilateralMode::Separable}};
-
 template <typename T>
 std::string name_of(const std::map<std::string, T> &table, T value) {
   for (const auto &kv : table)
     if (kv.second == value) return kv.first;
   return "?";
+}
+template <typename E, std::size_t N>
+std::string name_of(const p3d::EnumName<E> (&table)[N], E value) {
+  return p3d::enum_nick(table, value);
 }
 
 const std::vector<Size> kDefaultSizes = {{1280, 720}, {1920, 1080}, {3840, 2160}, {7680, 4320}};
@@ -107,16 +92,16 @@ void print_usage(std::ostream &os) {
         "  --size WxH              one frame size (repeatable or comma separated; default\n"
         "                          1280x720,1920x1080,3840x2160,7680x4320)\n"
         "  --format F              input format: NV12 (default), I420, RGBA, BGRA, RGBx, BGRx\n"
-        "  --layout L              pack layout (default anaglyph): side-by-side, side-by-side-half,\n"
-        "                          top-bottom, top-bottom-half, row-interleaved, column-interleaved,\n"
-        "                          checkerboard, left, right\n"
-        "  --radius N              bilateral radius (default 5)\n"
+        "  --layout L              pack layout (default anaglyph): "
+     << p3d::enum_nicks(kPackLayoutNames) << "\n"
+     << "  --radius N              bilateral radius (default 5)\n"
         "  --filter-mode M         separable (default, as pseudo3dfilter) or exact\n"
         "  --filter-scale N        the filter's grid step: 0 automatic (default, as pseudo3dfilter:\n"
         "                          4 from 2160 rows up), 1 every pixel, up to 8\n"
         "  --max-disparity P       percent of width (default 3)\n"
-        "  --fill F                background-smooth (default), background, neighbor-average, none\n"
-        "  --depth-handoff H       GPU depth between the stages: grid (default, as the elements on\n"
+        "  --fill F                "
+     << p3d::enum_nicks(kHoleFillNames) << " (default background-smooth)\n"
+     << "  --depth-handoff H       GPU depth between the stages: grid (default, as the elements on\n"
         "                          CUDA memory: block and cell values) or full (full-size maps)\n"
         "  --iterations N          timed iterations (default GPU 50; CPU 10, 5 from 4K up)\n"
         "  --warmup N              GPU warm-up iterations (default 10; CPU always 1)\n"
@@ -154,6 +139,13 @@ T parse_name(const std::string &opt, const std::string &v, const std::map<std::s
   if (it == table.end()) usage_error("unknown " + opt + " '" + v + "'");
   return it->second;
 }
+template <typename E, std::size_t N>
+E parse_name(const std::string &opt, const std::string &v, const p3d::EnumName<E> (&table)[N]) {
+  E value{};
+  if (!p3d::enum_from_nick(table, v, &value))
+    usage_error("unknown " + opt + " '" + v + "' (" + p3d::enum_nicks(table) + ")");
+  return value;
+}
 
 Options parse_args(int argc, char **argv) {
   Options o;
@@ -170,17 +162,17 @@ Options parse_args(int argc, char **argv) {
     } else if (a == "--format") {
       o.format = parse_name(a, v, kFormats);
     } else if (a == "--layout") {
-      o.params.pack.layout = parse_name(a, v, kLayouts);
+      o.params.pack.layout = parse_name(a, v, kPackLayoutNames);
     } else if (a == "--radius") {
       o.params.filter.radius = parse_int(a, v, 0, kMaxBilateralRadius);
     } else if (a == "--filter-mode") {
-      o.params.filter.mode = parse_name(a, v, kFilterModes);
+      o.params.filter.mode = parse_name(a, v, kFilterModeNames);
     } else if (a == "--filter-scale") {
       o.params.filter.scale = parse_int(a, v, 0, kMaxBilateralScale);
     } else if (a == "--max-disparity") {
       o.params.warp.max_disparity = parse_float(a, v);
     } else if (a == "--fill") {
-      o.params.warp.fill = parse_name(a, v, kFills);
+      o.params.warp.fill = parse_name(a, v, kHoleFillNames);
     } else if (a == "--depth-handoff") {
       if (v != "grid" && v != "full") usage_error("--depth-handoff wants grid or full");
       o.params.depth_grids = v == "grid";
@@ -368,8 +360,8 @@ class Reporter {
     j.str("run", run_id_).str("stage", m.stage).integer("width", m.size.width).integer("height", m.size.height);
     j.str("device", m.device).str("gpu_name", m.gpu_name);
     if (m.device == "cpu") j.integer("cpu_threads", cv::getNumThreads());
-    j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kLayouts, o_.params.pack.layout));
-    j.str("filter_mode", name_of(kFilterModes, o_.params.filter.mode)).str("fill", name_of(kFills, o_.params.warp.fill));
+    j.str("format", name_of(kFormats, o_.format)).str("layout", name_of(kPackLayoutNames, o_.params.pack.layout));
+    j.str("filter_mode", name_of(kFilterModeNames, o_.params.filter.mode)).str("fill", name_of(kHoleFillNames, o_.params.warp.fill));
     j.integer("filter_scale", filter_step(o_.params.filter, m.size));
     if (m.device == "gpu") j.str("depth_handoff", o_.params.depth_grids ? "grid" : "full");
     j.integer("iterations", m.iterations);

@@ -28,27 +28,13 @@ struct Options {
 
 void usage(FILE *f) {
   std::fprintf(f,
-               "usage: pseudo3d-depthmap IN OUT.png [--hypothesis top-bottom|left-right|center-near|flat] "
-               "[--radius N]\n"
+               "usage: pseudo3d-depthmap IN OUT.png [--hypothesis %s] [--radius N]\n"
                "  Estimates depth from IN (any image OpenCV reads) as pseudo3ddepth ! pseudo3dfilter do with\n"
-               "  their defaults, and writes it as 8-bit grey (white = near). --radius 0 skips the filter.\n");
+               "  their defaults, and writes it as 8-bit grey (white = near). --radius 0 skips the filter.\n",
+               p3d::enum_nicks(p3d::kHypothesisNames, "|").c_str());
 }
 
-bool parse_hypothesis(const char *s, p3d::Hypothesis &h) {
-  static const struct {
-    const char *name;
-    p3d::Hypothesis value;
-  } names[] = {{"top-bottom", p3d::Hypothesis::TopBottom},
-               {"left-right", p3d::Hypothesis::LeftRight},
-               {"center-near", p3d::Hypothesis::CenterNear},
-               {"flat", p3d::Hypothesis::Flat}};
-  for (const auto &n : names)
-    if (std::strcmp(s, n.name) == 0) {
-      h = n.value;
-      return true;
-    }
-  return false;
-}
+bool parse_hypothesis(const char *s, p3d::Hypothesis &h) { return p3d::enum_from_nick(p3d::kHypothesisNames, s, &h); }
 
 bool parse_radius(const char *s, int &radius) {
   char *end = nullptr;

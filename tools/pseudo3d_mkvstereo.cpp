@@ -15,30 +15,14 @@ void usage(FILE *f) {
                "usage: pseudo3d-mkvstereo FILE.mkv LAYOUT [--right-first]\n"
                "  Writes StereoMode (plus DisplayWidth/DisplayHeight = the pixel size and DisplayUnit 4)\n"
                "  into the first video track of a finished Matroska/WebM file, in place; nothing else moves.\n"
-               "  LAYOUT: mono, side-by-side, top-bottom, row-interleaved, column-interleaved, checkerboard.\n"
+               "  LAYOUT: mono, or a layout as pseudo3dpack names it: %s\n"
+               "  (half layouts as the full ones, the anaglyph and single views as mono).\n"
                "  --right-first: the first view (left half, top half, first row/column/pixel) is the right eye.\n"
                "  Half or full views is not a Matroska property (players guess it from the aspect ratio),\n"
                "  so side-by-side and top-bottom cover both.\n"
                "  column-interleaved left-first writes no StereoMode: its value 9 is read by GStreamer as\n"
-               "  side-by-side right-first; the H.264 SEI (pseudo3dsignal) carries the layout instead.\n");
-}
-
-bool parse_layout(const char *s, p3d::MkvStereoLayout *layout) {
-  static const struct {
-    const char *name;
-    p3d::MkvStereoLayout value;
-  } names[] = {{"mono", p3d::MkvStereoLayout::Mono},
-               {"side-by-side", p3d::MkvStereoLayout::SideBySide},
-               {"top-bottom", p3d::MkvStereoLayout::TopBottom},
-               {"row-interleaved", p3d::MkvStereoLayout::RowInterleaved},
-               {"column-interleaved", p3d::MkvStereoLayout::ColumnInterleaved},
-               {"checkerboard", p3d::MkvStereoLayout::Checkerboard}};
-  for (const auto &n : names)
-    if (std::strcmp(s, n.name) == 0) {
-      *layout = n.value;
-      return true;
-    }
-  return false;
+               "  side-by-side right-first; the H.264 SEI (pseudo3dsignal) carries the layout instead.\n",
+               p3d::enum_nicks(p3d::kPackLayoutNames).c_str());
 }
 
 }  // namespace
@@ -70,7 +54,7 @@ int main(int argc, char **argv) {
     return 2;
   }
   p3d::MkvStereoLayout layout;
-  if (!parse_layout(positional[1], &layout)) {
+  if (!p3d::mkv_stereo_layout_from_name(positional[1], &layout)) {
     std::fprintf(stderr, "pseudo3d-mkvstereo: %s: unknown layout '%s' (see --help)\n", positional[0], positional[1]);
     return 2;
   }

@@ -13,6 +13,8 @@
 
 #include "bilateral.h"
 #include "depth_estimate.h"
+#include "depth_grey.h"
+#include "pack.h"
 #include "warp.h"
 
 using namespace p3d;
@@ -585,4 +587,38 @@ TEST(Convert, ForwardsProperties) {
   gst_object_unref(warp);
   gst_object_unref(filter);
   gst_object_unref(bin);
+}
+
+// The GStreamer enum types are the names tables of common/ (enum_name.h):
+// the same values and nicks, in order; input-layout adds from-caps before
+// the table's values.
+template <typename E, std::size_t N>
+static void expect_enum_is_table(const char *type_name, const p3d::EnumName<E> (&table)[N], int extra_first = 0) {
+  GEnumClass *klass = G_ENUM_CLASS(g_type_class_ref(g_type_from_name(type_name)));
+  ASSERT_NE(klass, nullptr) << type_name;
+  ASSERT_EQ(klass->n_values, N + extra_first) << type_name;
+  for (std::size_t i = 0; i < N; ++i) {
+    const GEnumValue &v = klass->values[i + extra_first];
+    EXPECT_EQ(v.value, static_cast<int>(table[i].value) + extra_first) << type_name;
+    EXPECT_STREQ(v.value_nick, table[i].nick) << type_name;
+  }
+  g_type_class_unref(klass);
+}
+
+TEST(Properties, EnumTypesAreTheNamesTables) {
+  // The elements' classes register the types.
+  for (const char *factory : {"pseudo3dconvert", "pseudo3dpack", "pseudo3ddepthmux"}) {
+    GstElement *e = gst_element_factory_make(factory, nullptr);
+    ASSERT_NE(e, nullptr) << factory;
+    gst_object_unref(gst_object_ref_sink(e));
+  }
+  expect_enum_is_table("GstPseudo3DHypothesis", p3d::kHypothesisNames);
+  expect_enum_is_table("GstPseudo3DFilterMode", p3d::kFilterModeNames);
+  expect_enum_is_table("GstPseudo3DDepthConvention", p3d::kDepthConventionNames);
+  expect_enum_is_table("GstPseudo3DView", p3d::kStereoViewNames);
+  expect_enum_is_table("GstPseudo3DFill", p3d::kHoleFillNames);
+  expect_enum_is_table("GstPseudo3DLayout", p3d::kPackLayoutNames);
+  expect_enum_is_table("GstPseudo3DGlasses", p3d::kGlassesNames);
+  expect_enum_is_table("GstPseudo3DAnaglyphMethod", p3d::kAnaglyphMethodNames);
+  expect_enum_is_table("GstPseudo3DInputLayout", p3d::kStereoInputNames, 1);
 }

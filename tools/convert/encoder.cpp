@@ -1,5 +1,7 @@
 #include "encoder.h"
 
+#include "mkv_stereo.h"
+
 #include <cstring>
 
 namespace p3d::convert {
@@ -55,7 +57,8 @@ const char *nvenc_preset(const std::string &p) {
 int default_crf(Codec codec) { return codec == Codec::H264 ? 20 : 24; }
 
 bool is_stereo_layout(const std::string &layout) {
-  return layout != "anaglyph" && layout != "left" && layout != "right";
+  MkvStereoLayout arrangement;
+  return mkv_stereo_layout_from_name(layout, &arrangement) && arrangement != MkvStereoLayout::Mono;
 }
 
 bool choose_encoder(const Options &o, Processing processing, const std::string &layout, EncoderChoice *c,

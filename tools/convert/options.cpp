@@ -9,6 +9,8 @@
 #include <iterator>
 
 #include "config.h"
+#include "depth_estimate.h"
+#include "pack.h"
 
 namespace p3d::convert {
 
@@ -144,15 +146,14 @@ void print_usage(FILE *f) {
       "  .mpo                 two-image MPO (left, right) for 3D cameras, TVs and viewers\n"
       "  .jps                 cross-eyed side-by-side JPEG (right view on the left)\n"
       "3D options (the plugin's properties; see docs/elements.md):\n"
-      "  --layout L            anaglyph, side-by-side, side-by-side-half, top-bottom, top-bottom-half,\n"
-      "                        row-interleaved, column-interleaved, checkerboard, left, right\n"
+      "  --layout L            %s\n"
       "                        (default: side-by-side-half for video, side-by-side for photos)\n"
-      "  --glasses G           red-cyan, green-magenta, amber-blue (anaglyph)\n"
-      "  --anaglyph-method M   dubois, color, half-color, gray, dubois-ffmpeg, dubois-linear\n"
+      "  --glasses G           %s (anaglyph)\n"
+      "  --anaglyph-method M   %s\n"
       "  --swap-eyes           right view first\n"
       "  --max-disparity P     parallax in percent of the width (default 3)\n"
       "  --convergence C       depth on the screen plane, 0 (far) to 1 (near) (default 0.5)\n"
-      "  --hypothesis H        top-bottom, left-right, center-near, flat\n"
+      "  --hypothesis H        %s\n"
       "Video options:\n"
       "  --codec h264|h265     (default h264)\n"
       "  --crf N               constant quality, lower is better (default 20 for H.264, 24 for H.265)\n"
@@ -169,6 +170,8 @@ void print_usage(FILE *f) {
       "                        --benchmark-runs N (default 2) repeats both\n"
       "  --help, --version\n"
       "  --                    ends the options: what follows are file names, even ones starting with '-'\n",
+      enum_nicks(kPackLayoutNames).c_str(), enum_nicks(kGlassesNames).c_str(),
+      enum_nicks(kAnaglyphMethodNames).c_str(), enum_nicks(kHypothesisNames).c_str(),
       static_cast<int>(kStillDuration / GST_SECOND), kStillFrameRate);
 }
 

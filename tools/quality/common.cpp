@@ -266,22 +266,8 @@ cv::Mat estimated_depth(const DepthParams &dp, const FrameView &frame) {
   return depth;
 }
 
-const char *fill_name(HoleFill f) {
-  switch (f) {
-    case HoleFill::BackgroundSmooth: return "background-smooth";
-    case HoleFill::Background: return "background";
-    case HoleFill::NeighborAverage: return "neighbor-average";
-    default: return "none";
-  }
-}
+const char *fill_name(HoleFill f) { return enum_nick(kHoleFillNames, f); }
 
-const char *hypothesis_name(Hypothesis h) {
-  switch (h) {
-    case Hypothesis::TopBottom: return "top-bottom";
-    case Hypothesis::LeftRight: return "left-right";
-    case Hypothesis::CenterNear: return "center-near";
-    default: return "flat";
-  }
-}
+const char *hypothesis_name(Hypothesis h) { return enum_nick(kHypothesisNames, h); }
 
 }  // namespace p3d::quality

@@ -440,6 +440,34 @@ Fit rebuild_tracks(const Bytes &buf, const Element &tracks, const Element &video
 
 }  // namespace
 
+MkvStereoLayout mkv_stereo_layout_of(PackLayout layout) {
+  switch (layout) {
+    case PackLayout::SideBySide:
+    case PackLayout::SideBySideHalf: return MkvStereoLayout::SideBySide;
+    case PackLayout::TopBottom:
+    case PackLayout::TopBottomHalf: return MkvStereoLayout::TopBottom;
+    case PackLayout::RowInterleaved: return MkvStereoLayout::RowInterleaved;
+    case PackLayout::ColumnInterleaved: return MkvStereoLayout::ColumnInterleaved;
+    case PackLayout::Checkerboard: return MkvStereoLayout::Checkerboard;
+    case PackLayout::Anaglyph:
+    case PackLayout::Left:
+    case PackLayout::Right: return MkvStereoLayout::Mono;
+  }
+  return MkvStereoLayout::Mono;
+}
+
+bool mkv_stereo_layout_from_name(const std::string &name, MkvStereoLayout *layout) {
+  PackLayout packed;
+  if (name == "mono") {
+    *layout = MkvStereoLayout::Mono;
+  } else if (enum_from_nick(kPackLayoutNames, name, &packed)) {
+    *layout = mkv_stereo_layout_of(packed);
+  } else {
+    return false;
+  }
+  return true;
+}
+
 int mkv_stereo_mode_value(MkvStereoLayout layout, bool right_first) {
   switch (layout) {
     case MkvStereoLayout::Mono:

@@ -12,11 +12,21 @@
 
 #include <string>
 
+#include "pack.h"
+
 namespace p3d {
 
 // Half vs full views is not a Matroska property (no field carries it;
 // readers guess it from the display aspect ratio), hence no "half" layouts.
 enum class MkvStereoLayout { Mono, SideBySide, TopBottom, RowInterleaved, ColumnInterleaved, Checkerboard };
+
+// The Matroska arrangement of a packed layout: side by side and top-bottom
+// (full or half) to theirs, interleaved and checkerboard to theirs, the
+// anaglyph and single views to mono.
+MkvStereoLayout mkv_stereo_layout_of(PackLayout layout);
+// A layout named as the plugin names it (kPackLayoutNames), or "mono";
+// false for any other name.
+bool mkv_stereo_layout_from_name(const std::string &name, MkvStereoLayout *layout);
 
 // The Matroska StereoMode value (RFC 9559 / ebml_matroska.xml): 0 mono,
 // 1/11 side by side left/right eye first, 3/2 top-bottom left/right eye
