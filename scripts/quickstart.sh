@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # From a fresh Debian 12 checkout to 3D files you can open: installs the
 # packages (setup-debian.sh asks for sudo itself when not root), fetches the
-# sample data, builds into build/ (arguments are meson options for the
+# sample data, builds the plugin and the tools into build/ (the test suites
+# are left for scripts/run-tests.sh; arguments are meson options for the
 # build, e.g. -Dgpu_arch=86 or -Dcuda=disabled), then converts the samples
 # into out/ with pseudo3d-convert:
 #   vtest-sbs.mp4      data/vtest-audio.mkv (a street scene with a ticking
@@ -17,7 +18,7 @@ cd "$top"
 
 scripts/setup-debian.sh
 scripts/get-test-data.sh
-scripts/build.sh "$@"
+scripts/build.sh -Dtests=disabled "$@"
 
 mkdir -p out
 convert=build/tools/pseudo3d-convert
