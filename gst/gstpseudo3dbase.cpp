@@ -373,9 +373,9 @@ static GstFlowReturn renegotiate_running_stream(GstPseudo3DBase *self) {
   const bool change = self->staged && self->staged->pending();
   GST_OBJECT_UNLOCK(self);
   const gint flushes = g_atomic_int_get(&self->flush_starts);
-  self->live_thread = g_thread_self();  // refusals collected, the parent's bare warning dropped
+  g_atomic_pointer_set(&self->live_thread, g_thread_self());  // refusals collected, the bare warning dropped
   const gboolean ok = gst_base_transform_reconfigure(trans);
-  self->live_thread = nullptr;
+  g_atomic_pointer_set(&self->live_thread, nullptr);
   gchar *refusal = self->live_refusal, *debug = self->live_refusal_debug;
   self->live_refusal = self->live_refusal_debug = nullptr;
   GstFlowReturn ret = GST_FLOW_OK;
@@ -408,7 +408,7 @@ static GstFlowReturn renegotiate_running_stream(GstPseudo3DBase *self) {
 static gboolean gst_pseudo3d_base_post_message(GstElement *element, GstMessage *msg) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(element);
   if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_WARNING && GST_MESSAGE_SRC(msg) == GST_OBJECT(element) &&
-      self->live_thread == g_thread_self()) {
+      g_atomic_pointer_get(&self->live_thread) == g_thread_self()) {
     GError *err = nullptr;
     gst_message_parse_warning(msg, &err, nullptr);
     const bool bare = err && g_error_matches(err, GST_STREAM_ERROR, GST_STREAM_ERROR_FORMAT) &&
@@ -526,7 +526,7 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
 }
 
 gboolean gst_pseudo3d_base_refuse_caps(GstPseudo3DBase *self, const char *text, const char *debug_format, ...) {
-  if (self->live_thread == g_thread_self()) {
+  if (g_atomic_pointer_get(&self->live_thread) == g_thread_self()) {
     // A live property change: the stream keeps its caps, the caller warns.
     va_list args;
     va_start(args, debug_format);

@@ -66,8 +66,9 @@ struct _GstPseudo3DBase {
   /* The stage's caps-deciding properties (staged_geometry.h), owned by the
    * stage; null when no property changes the caps. Object lock. */
   p3d::gst::StagedGeometryBase *staged;
-  /* Streaming thread: a renegotiation for a live property change is under
-   * way in this thread; refusals are collected, not posted. */
+  /* The thread in which a renegotiation of the running stream is under way
+   * (atomic; null when none): its refusals are collected, not posted, and
+   * GstBaseTransform's bare warning from it is dropped. */
   GThread *live_thread;
   gchar *live_refusal, *live_refusal_debug;
   gint flush_starts; /* atomic: FLUSH_START events seen */
