@@ -17,14 +17,26 @@ bool have_program(const char *name) {
   return found;
 }
 
-int run_program(const std::vector<std::string> &argv, std::string *out, std::string *err) {
+int run_program(const std::vector<std::string> &argv, std::string *out, std::string *err, const std::string &cwd,
+                const std::vector<std::string> &env) {
   std::vector<char *> args;
   for (const std::string &a : argv) args.push_back(const_cast<char *>(a.c_str()));
   args.push_back(nullptr);
+  gchar **envp = nullptr;  // null: this process's environment as it is
+  if (!env.empty()) {
+    envp = g_get_environ();
+    for (const std::string &entry : env) {
+      const size_t eq = entry.find('=');
+      envp = g_environ_setenv(envp, entry.substr(0, eq).c_str(), entry.substr(eq + 1).c_str(), TRUE);
+    }
+  }
   gchar *o = nullptr, *e = nullptr;
   gint status = 0;
   GError *error = nullptr;
-  if (!g_spawn_sync(nullptr, args.data(), nullptr, G_SPAWN_SEARCH_PATH, nullptr, nullptr, &o, &e, &status, &error)) {
+  const gboolean ran = g_spawn_sync(cwd.empty() ? nullptr : cwd.c_str(), args.data(), envp, G_SPAWN_SEARCH_PATH,
+                                    nullptr, nullptr, &o, &e, &status, &error);
+  g_strfreev(envp);
+  if (!ran) {
     if (err) *err = error ? error->message : "spawn failed";
     g_clear_error(&error);
     return -1;

@@ -11,9 +11,12 @@ namespace p3d::test {
 
 // True when `name` is found in PATH.
 bool have_program(const char *name);
-// Runs argv (no shell; PATH searched); returns the exit status, 128 + the
-// signal that killed it, or -1 if it could not run (*err says why).
-int run_program(const std::vector<std::string> &argv, std::string *out, std::string *err = nullptr);
+// Runs argv (no shell; PATH searched) in folder `cwd` ("" for this
+// process's) with the `env` entries ("NAME=value") added to this process's
+// environment; returns the exit status, 128 + the signal that killed it, or
+// -1 if it could not run (*err says why).
+int run_program(const std::vector<std::string> &argv, std::string *out, std::string *err = nullptr,
+                const std::string &cwd = "", const std::vector<std::string> &env = {});
 
 // Caps after the demuxer (h264parse's sink) and after h264parse, where
 // decodebin and playbin take the layout from. The demuxer follows the file

@@ -1,7 +1,6 @@
 #include "convert_helpers.h"
 
 #include <dirent.h>
-#include <sys/wait.h>
 
 #include <cstring>
 #include <fstream>
@@ -27,30 +26,8 @@ ToolRun run_convert_in(const std::string &cwd, const std::vector<std::string> &a
                        const std::vector<std::string> &env) {
   std::vector<std::string> argv{convert_program()};
   argv.insert(argv.end(), args.begin(), args.end());
-  std::vector<char *> argp;
-  for (const std::string &a : argv) argp.push_back(const_cast<char *>(a.c_str()));
-  argp.push_back(nullptr);
-  gchar **envp = g_get_environ();
-  for (const std::string &e : env) {
-    const size_t eq = e.find('=');
-    envp = g_environ_setenv(envp, e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), TRUE);
-  }
   ToolRun r;
-  gchar *out = nullptr, *err = nullptr;
-  gint status = 0;
-  GError *error = nullptr;
-  if (g_spawn_sync(cwd.empty() ? nullptr : cwd.c_str(), argp.data(), envp, G_SPAWN_SEARCH_PATH, nullptr, nullptr, &out,
-                   &err, &status, &error)) {
-    r.out = out ? out : "";
-    r.err = err ? err : "";
-    r.status = WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  } else {
-    r.err = error ? error->message : "spawn failed";
-    g_clear_error(&error);
-  }
-  g_free(out);
-  g_free(err);
-  g_strfreev(envp);
+  r.status = run_program(argv, &r.out, &r.err, cwd, env);
   return r;
 }
 
