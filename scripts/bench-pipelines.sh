@@ -27,6 +27,7 @@ run_case() {  # name width height mode
     cpu) chain=${stages//%P/cpu} ;;
     gpu-staged) chain=${stages//%P/gpu} ;;
     gpu-resident) chain="cudaupload ! video/x-raw(memory:CUDAMemory) ! ${stages//%P/gpu} ! cudadownload" ;;
+    bin) chain="pseudo3dconvert layout=side-by-side-half" ;;  # system memory in and out
   esac
   local n=$frames
   [ "$mode" = cpu ] && n=$(( w > 2000 ? 10 : 30 ))  # the CPU reference is slow
@@ -71,6 +72,7 @@ for size in 1920x1080 3840x2160; do
   if [ $have_gpu = 1 ]; then
     run_case chain "$w" "$h" gpu-staged
     run_case chain "$w" "$h" gpu-resident
+    run_case chain "$w" "$h" bin
   fi
 done
 
