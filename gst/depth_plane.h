@@ -30,7 +30,7 @@ struct DepthPlane {
   // (p3d_defs.h DepthGrid): the GPU stages hand on the estimator's block
   // depths and the filter's coarse-grid results as they are, not copied to
   // every pixel. Host planes are always full-size (shift 0): the CPU
-  // stages, the staged GPU path and the meta's scaling read them per pixel.
+  // stages and the meta's scaling read them per pixel.
   int shift = 0;
   bool on_device = false;
   std::vector<float> host;  // row-major, pitch = width * 4, when !on_device

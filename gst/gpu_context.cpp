@@ -60,7 +60,6 @@ void GpuContext::release_on_context(const std::function<void()> &release_stage) 
     return;
   }
   release_stage();
-  staging_.release();
   if (stream_) {
     const cudaError_t err = cudaStreamDestroy(stream_);
     if (err != cudaSuccess) GST_WARNING("cudaStreamDestroy failed: %s", cudaGetErrorName(err));

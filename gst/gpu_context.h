@@ -1,7 +1,6 @@
 // The CUDA side of an element, in one place: the GstCudaContext (shared with
-// the rest of the pipeline through GstContext), the element's stream, the
-// staging buffers for system-memory frames, and the rules for getting,
-// switching and releasing them. The element base owns one GpuContext; the
+// the rest of the pipeline through GstContext), the element's stream, and
+// the rules for getting, switching and releasing them. The element base owns one GpuContext; the
 // stages never touch a context or a stream directly.
 //
 // Without CUDA in the build the class is empty and every GPU question
@@ -19,7 +18,6 @@
 #include <gst/cuda/gstcudacontext.h>
 
 #include "cuda_check.h"
-#include "gpu_staging.h"
 #endif
 
 namespace p3d::gst {
@@ -37,7 +35,7 @@ class GpuContext {
   // element on the CPU, when there is no usable CUDA device; *why says why.
   bool acquire(GstElement *element, int device_id, const char **why);
   // Calls `release_stage` (with the context current, if there is one), then
-  // frees the staging buffers and the stream and drops the context.
+  // frees the stream and drops the context.
   void release(const std::function<void()> &release_stage);
   // Switches to `other` (the context of an upstream buffer): frees what
   // lives on the old context as release() does and makes a stream on the
@@ -55,7 +53,6 @@ class GpuContext {
   bool usable() const { return context_ && stream_; }
   GstCudaContext *context() const { return context_; }
   cudaStream_t stream() const { return stream_; }
-  GpuStaging &staging() { return staging_; }
 
   // Waits for the stream (1.22's CUDA memory has no stream tracking, so a
   // buffer may only leave once the work on it is done).
@@ -67,7 +64,6 @@ class GpuContext {
 
   GstCudaContext *context_ = nullptr;
   cudaStream_t stream_ = nullptr;
-  GpuStaging staging_;
 };
 
 // Makes a context current on this thread for the scope (no-op for null).

@@ -61,8 +61,7 @@ static gboolean gpu_in_use(GstPseudo3DBase *self) {
 }
 
 GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self) {
-  if (!gpu_in_use(self)) return GST_PSEUDO3D_PATH_CPU;
-  return self->cuda_caps ? GST_PSEUDO3D_PATH_GPU : GST_PSEUDO3D_PATH_STAGED;
+  return self->cuda_caps && gpu_in_use(self) ? GST_PSEUDO3D_PATH_GPU : GST_PSEUDO3D_PATH_CPU;
 }
 
 static void release_stage(GstPseudo3DBase *self) {
@@ -76,44 +75,6 @@ GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::Cud
                     ("%s", st.message().c_str()));
   return GST_FLOW_ERROR;
 }
-
-namespace p3d::gst {
-
-CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, const FrameView &frame,
-                        bool read, FrameView *dev) {
-  if (path == GST_PSEUDO3D_PATH_GPU) {
-    *dev = frame;
-    return {};
-  }
-  GpuStaging &staging = self->gpu->staging();
-  return read ? staging.upload(slot, frame, dev, self->gpu->stream()) : staging.allocate(slot, frame, dev);
-}
-
-CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, DepthGrid<float> depth,
-                        bool read, DepthGrid<float> *dev) {
-  if (path == GST_PSEUDO3D_PATH_GPU) {
-    *dev = depth;
-    return {};
-  }
-  // A host plane: full-size (shift 0), staged as it is.
-  GpuStaging &staging = self->gpu->staging();
-  *dev = depth;
-  return read ? staging.upload_depth(slot, as_const(depth.cells), &dev->cells, self->gpu->stream())
-              : staging.allocate_depth(slot, depth.cells.width, depth.cells.height, &dev->cells);
-}
-
-CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host) {
-  if (path != GST_PSEUDO3D_PATH_STAGED) return {};
-  return self->gpu->staging().download(dev, host, self->gpu->stream());
-}
-
-CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, DepthGrid<const float> dev,
-                         DepthGrid<float> host) {
-  if (path != GST_PSEUDO3D_PATH_STAGED) return {};
-  return self->gpu->staging().download_depth(dev.cells, host.cells, self->gpu->stream());
-}
-
-}  // namespace p3d::gst
 
 static void gst_pseudo3d_base_set_context(GstElement *element, GstContext *context) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(element);
@@ -157,7 +118,6 @@ static gboolean check_memory_context(GstPseudo3DBase *self, GstBuffer *buf) {
 
 static gboolean gst_pseudo3d_base_start(GstBaseTransform *trans) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
-  self->staged_warned = FALSE;
   self->history_reset_pending = TRUE;
   const char *why = "built without CUDA";
 #if HAVE_CUDA
@@ -445,7 +405,7 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
   if (!answered) return FALSE;
 #if HAVE_CUDA
   // With a GPU in use, ask neighbours for CUDA memory first: without it,
-  // `cudaupload ! pseudo3d...` would negotiate system memory and run staged.
+  // `cudaupload ! pseudo3d...` would negotiate system memory and run on the CPU.
   if (GST_QUERY_TYPE(query) == GST_QUERY_CAPS && gpu_in_use(self)) {
     GstCaps *result = nullptr;
     gst_query_parse_caps_result(query, &result);
@@ -496,6 +456,13 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
                                              "interlace-mode %s; put deinterlace before %s",
                                              gst_video_interlace_mode_to_string(GST_VIDEO_INFO_INTERLACE_MODE(&in)),
                                              placed_element_name(GST_ELEMENT(self)));
+  else if (!cuda_caps && self->processing == GST_PSEUDO3D_PROCESSING_GPU)
+    // System memory runs on the CPU (see GstPseudo3DPath): "gpu" cannot be kept.
+    accepted = gst_pseudo3d_base_refuse_caps(
+        self, "processing=gpu needs video in CUDA memory",
+        "the input is system memory; put cudaupload ! \"video/x-raw(memory:CUDAMemory)\" before %s and "
+        "cudadownload after the stages, use pseudo3dconvert, or set processing=auto to run on the CPU",
+        placed_element_name(GST_ELEMENT(self)));
   else
     accepted = !klass->set_info || klass->set_info(self, incaps, &in, outcaps, &out);
   self->negotiating_caps = nullptr;
@@ -510,18 +477,10 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
   const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
   if (cuda_caps && path == GST_PSEUDO3D_PATH_CPU)
     GST_WARNING_OBJECT(self, "CUDA memory negotiated but processing on the CPU through mapped memory (slow)");
-  if (path == GST_PSEUDO3D_PATH_STAGED && !self->staged_warned) {
-    self->staged_warned = TRUE;
-    if (self->processing == GST_PSEUDO3D_PROCESSING_GPU)
-      GST_ELEMENT_WARNING(self, STREAM, FORMAT, ("processing=gpu on system memory: every frame is copied to the GPU and back"),
-                          ("negotiate video/x-raw(memory:CUDAMemory) for a resident stream, e.g. cudaupload ! "
-                           "\"video/x-raw(memory:CUDAMemory)\" before the element, or use pseudo3dconvert"));
-    else
-      GST_WARNING_OBJECT(self, "system memory on the GPU: every frame is copied to the GPU and back (staged)");
-  }
-  static const char *const path_names[] = {"CPU", "GPU", "GPU (staged through system memory)"};
+  if (!cuda_caps && gpu_in_use(self))
+    GST_INFO_OBJECT(self, "system memory: processing on the CPU (CUDA memory, e.g. from cudaupload, runs on the GPU)");
   GST_INFO_OBJECT(self, "negotiated %dx%d -> %dx%d, processing on the %s", in.width, in.height, out.width, out.height,
-                  path_names[path]);
+                  path == GST_PSEUDO3D_PATH_GPU ? "GPU" : "CPU");
   return TRUE;
 }
 
@@ -915,16 +874,17 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
   /**
    * GstPseudo3DBase:processing:
    *
-   * auto: the GPU when a CUDA device is usable (memory:CUDAMemory caps in
-   * place; system-memory caps through an upload and a download per frame),
-   * else the CPU. cpu: always the CPU. gpu: fail to start without a GPU.
+   * auto: the GPU for memory:CUDAMemory caps when a CUDA device is usable
+   * (kernels on the frames in place), else the CPU; system-memory caps run
+   * on the CPU. cpu: always the CPU. gpu: fail to start without a GPU, and
+   * refuse system-memory caps with an error that says what to insert.
    */
   g_object_class_install_property(
       gobject_class, PROP_PROCESSING,
       g_param_spec_enum("processing", "Processing",
-                        "Where frames are processed: auto = GPU when a CUDA device is usable (system-memory frames "
-                        "are uploaded and downloaded per frame), else CPU; cpu; gpu = an error without a GPU. "
-                        "Set it in the NULL or READY state",
+                        "Where frames are processed: auto = GPU for video in CUDA memory when a CUDA device is "
+                        "usable, else CPU (system memory always runs on the CPU); cpu; gpu = GPU, an error "
+                        "without a GPU or on system memory. Set it in the NULL or READY state",
                         GST_TYPE_PSEUDO3D_PROCESSING, DEFAULT_PROCESSING,
                         (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
   /**

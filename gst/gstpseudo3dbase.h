@@ -3,7 +3,7 @@
 //  * the processing and cuda-device-id properties (refused while PAUSED or
 //    PLAYING, with a warning on the bus);
 //  * the GPU: a GpuContext (gpu_context.h), the path a negotiated stream
-//    runs on (CPU, GPU in place, GPU staged through system memory),
+//    runs on (the GPU on CUDA memory, the CPU on system memory),
 //    adoption of an upstream buffer's CUDA context when cuda-device-id is
 //    -1, and the "launch, check, wait" block of every GPU frame;
 //  * caps: sizes and multiview fields through the stage's transform_geometry,
@@ -34,11 +34,14 @@ G_BEGIN_DECLS
 #define GST_PSEUDO3D_BASE_GET_CLASS(obj) \
   (G_TYPE_INSTANCE_GET_CLASS((obj), GST_TYPE_PSEUDO3D_BASE, GstPseudo3DBaseClass))
 
-/* Where a negotiated stream is processed. */
+/* Where a negotiated stream is processed. System memory always runs on the
+ * CPU: copying every frame to the GPU and back at each stage costs more than
+ * the kernels save (docs/benchmarks.md, "Real pipelines"), so a GPU is used
+ * on memory:CUDAMemory only (cudaupload before, cudadownload after, as
+ * pseudo3dconvert arranges). */
 typedef enum {
-  GST_PSEUDO3D_PATH_CPU = 0,    /* CPU references on mapped memory */
-  GST_PSEUDO3D_PATH_GPU = 1,    /* memory:CUDAMemory: kernels on the frames in place */
-  GST_PSEUDO3D_PATH_STAGED = 2, /* system memory, GPU present: upload, kernels, download */
+  GST_PSEUDO3D_PATH_CPU = 0, /* CPU references on mapped memory */
+  GST_PSEUDO3D_PATH_GPU = 1, /* memory:CUDAMemory: kernels on the frames in place */
 } GstPseudo3DPath;
 
 typedef struct _GstPseudo3DBase GstPseudo3DBase;
@@ -60,7 +63,6 @@ struct _GstPseudo3DBase {
   p3d::gst::GpuContext *gpu;
   gboolean history_reset_pending; /* object lock */
   gboolean cpu_notice_logged;
-  gboolean staged_warned;
   GstCaps *negotiating_caps; /* input caps of the set_info call in progress */
   GstCaps *refused_caps;     /* input caps whose refusal was posted */
   /* The stage's caps-deciding properties (staged_geometry.h), owned by the
@@ -173,18 +175,6 @@ G_END_DECLS
 GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::CudaStatus &st, const char *what);
 
 namespace p3d::gst {
-/* The device view of a frame or depth map a stage reads (read = true: a
- * staged frame is uploaded) or writes: the mapped memory itself on
- * GST_PSEUDO3D_PATH_GPU, a staging buffer on GST_PSEUDO3D_PATH_STAGED. */
-CudaStatus device_frame(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, const FrameView &frame,
-                        bool read, FrameView *dev);
-CudaStatus device_depth(GstPseudo3DBase *self, GstPseudo3DPath path, GpuStaging::Slot slot, DepthGrid<float> depth,
-                        bool read, DepthGrid<float> *dev);
-/* After the kernels: a staged result goes back to host memory (no-op on the GPU path). */
-CudaStatus frame_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, const FrameView &dev, const FrameView &host);
-CudaStatus depth_to_host(GstPseudo3DBase *self, GstPseudo3DPath path, DepthGrid<const float> dev,
-                         DepthGrid<float> host);
-
 /* The GPU part of one frame, the same for every stage: `launch` queues the
  * work on the element's stream (returning the first failure), then the
  * stream is waited for, so the buffer leaves with its work done. A failure

@@ -151,15 +151,9 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
                                                               p3d::block_grid_shift(params, view.width, view.height));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
-  if (path != GST_PSEUDO3D_PATH_CPU) {
-    using p3d::gst::GpuStaging;
-    const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&]() -> p3d::CudaStatus {
-      p3d::FrameView f;
-      p3d::DepthGrid<float> d;
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, view, true, &f));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, plane->grid(), false, &d));
-      P3D_CUDA_TRY_STATUS(self->state->gpu.estimate(params, f, d, base->gpu->stream()));
-      return p3d::gst::depth_to_host(base, path, p3d::as_const(d), plane->grid());
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&] {
+      return self->state->gpu.estimate(params, view, plane->grid(), base->gpu->stream());
     });
     if (ret != GST_FLOW_OK) return ret;
   } else

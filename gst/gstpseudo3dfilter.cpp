@@ -63,16 +63,9 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
       gst_pseudo3d_base_new_depth(base, self->state->pool, path, depth->width, depth->height, shift);
   if (!out) return GST_FLOW_ERROR;
 #if HAVE_CUDA
-  if (path != GST_PSEUDO3D_PATH_CPU) {
-    using p3d::gst::GpuStaging;
-    const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&]() -> p3d::CudaStatus {
-      p3d::FrameView g;
-      p3d::DepthGrid<float> din, dout;
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, guide, true, &g));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->grid(), true, &din));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kOutput, out->grid(), false, &dout));
-      P3D_CUDA_TRY_STATUS(self->state->gpu.run(params, g, p3d::as_const(din), dout, base->gpu->stream()));
-      return p3d::gst::depth_to_host(base, path, p3d::as_const(dout), out->grid());
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&] {
+      return self->state->gpu.run(params, guide, p3d::as_const(depth->grid()), out->grid(), base->gpu->stream());
     });
     if (ret != GST_FLOW_OK) return ret;
   } else

@@ -276,16 +276,10 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   GST_OBJECT_UNLOCK(self);
   const p3d::FrameView src = p3d::gst::frame_view(in), dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
-  if (path != GST_PSEUDO3D_PATH_CPU) {
-    using p3d::gst::GpuStaging;
-    return p3d::gst::run_gpu(base, "packing the stereo pair", [&]() -> p3d::CudaStatus {
-      p3d::FrameView fin, fout;
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
-      P3D_CUDA_TRY_STATUS(p3d::pack_gpu(params, fin, fout, base->gpu->stream()));
-      return p3d::gst::frame_to_host(base, path, fout, dst);
+  if (path == GST_PSEUDO3D_PATH_GPU)
+    return p3d::gst::run_gpu(base, "packing the stereo pair", [&] {
+      return p3d::pack_gpu(params, src, dst, base->gpu->stream());
     });
-  }
 #else
   (void)path;
 #endif

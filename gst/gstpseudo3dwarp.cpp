@@ -203,17 +203,10 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   const p3d::FrameView dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
-  if (path != GST_PSEUDO3D_PATH_CPU) {
-    using p3d::gst::GpuStaging;
-    return p3d::gst::run_gpu(base, "rendering the views", [&]() -> p3d::CudaStatus {
-      p3d::FrameView fin, fout;
-      p3d::DepthGrid<float> d;
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kInput, src, true, &fin));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_depth(base, path, GpuStaging::kInput, depth->grid(), true, &d));
-      P3D_CUDA_TRY_STATUS(p3d::gst::device_frame(base, path, GpuStaging::kOutput, dst, false, &fout));
-      P3D_CUDA_TRY_STATUS(
-          self->state->gpu.render_packed(params, pack, fin, yuv, p3d::as_const(d), fout, base->gpu->stream()));
-      return p3d::gst::frame_to_host(base, path, fout, dst);
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    return p3d::gst::run_gpu(base, "rendering the views", [&] {
+      return self->state->gpu.render_packed(params, pack, src, yuv, p3d::as_const(depth->grid()), dst,
+                                            base->gpu->stream());
     });
   }
 #endif

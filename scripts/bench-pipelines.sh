@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # End-to-end pipeline benchmarks: frames/s and added latency (GStreamer's
 # latency tracer) of the whole chain in real pipelines, at 1080p and 4K, on
-# the CPU, on the GPU staged through system memory, and on the GPU with
-# CUDA memory between the stages; then a 4K H.264 clip decoded by nvh264dec,
+# the CPU, with processing=auto on system memory (which runs on the CPU), on
+# the GPU with CUDA memory between the stages, and through pseudo3dconvert
+# on system memory (which uploads once and downloads once); then a 4K H.264 clip decoded by nvh264dec,
 # converted, encoded by x264 and muxed, with wall time against the clip's
 # duration. Writes JSON lines to OUTDIR/pipelines.jsonl and prints a table.
 #
@@ -25,7 +26,7 @@ run_case() {  # name width height mode
   local name=$1 w=$2 h=$3 mode=$4 chain
   case $mode in
     cpu) chain=${stages//%P/cpu} ;;
-    gpu-staged) chain=${stages//%P/gpu} ;;
+    auto) chain=${stages//%P/auto} ;;  # system memory: the CPU, GPU or not
     gpu-resident) chain="cudaupload ! video/x-raw(memory:CUDAMemory) ! ${stages//%P/gpu} ! cudadownload" ;;
     bin) chain="pseudo3dconvert layout=side-by-side-half" ;;  # system memory in and out
   esac
@@ -70,7 +71,7 @@ for size in 1920x1080 3840x2160; do
   w=${size%x*}; h=${size#*x}
   run_case chain "$w" "$h" cpu
   if [ $have_gpu = 1 ]; then
-    run_case chain "$w" "$h" gpu-staged
+    run_case chain "$w" "$h" auto
     run_case chain "$w" "$h" gpu-resident
     run_case chain "$w" "$h" bin
   fi

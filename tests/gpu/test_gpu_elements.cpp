@@ -33,13 +33,13 @@ const char *kStages =
     "pseudo3ddepth processing=%1$s ! pseudo3dfilter processing=%1$s ! pseudo3dwarp max-disparity=4 processing=%1$s ! "
     "pseudo3dpack layout=%2$s processing=%1$s";
 
-// The stages on CUDA memory (kDevice), on system memory with internal
-// upload/download (kStaged), or on the CPU.
-enum Where { kDevice, kStaged, kCpu };
+// The stages on CUDA memory (kDevice), with processing=auto on system memory
+// (kAuto, which runs on the CPU although a GPU is usable), or on the CPU.
+enum Where { kDevice, kAuto, kCpu };
 
 std::string chain(Where where, const char *layout, const char *out_format) {
   char stages[512];
-  snprintf(stages, sizeof stages, kStages, where == kCpu ? "cpu" : "gpu", layout);
+  snprintf(stages, sizeof stages, kStages, where == kCpu ? "cpu" : where == kAuto ? "auto" : "gpu", layout);
   std::string s = where == kDevice ? std::string("cudaupload ! video/x-raw(memory:CUDAMemory) ! ") + stages +
                                          " ! cudadownload"
                                    : std::string(stages);
@@ -126,13 +126,15 @@ TEST_P(GpuChain, MatchesCpuChain) {
   std::vector<HostFrame> frames;
   for (uint32_t s = 0; s < 3; ++s) frames.push_back(picture(c.format, c.w, c.h, 100 + s));
   for (const char *layout : {"anaglyph", "side-by-side-half"}) {
-    std::string caps;
+    std::string caps, auto_caps;
     const auto gpu = run_chain(chain(kDevice, layout, "BGRA"), c.format, c.w, c.h, frames, &caps);
-    const auto staged = run_chain(chain(kStaged, layout, "BGRA"), c.format, c.w, c.h, frames);
+    const auto on_system = run_chain(chain(kAuto, layout, "BGRA"), c.format, c.w, c.h, frames, &auto_caps);
     const auto cpu = run_chain(chain(kCpu, layout, "BGRA"), c.format, c.w, c.h, frames);
     EXPECT_NE(caps.find("memory:CUDAMemory"), std::string::npos) << "warp did not run on CUDA memory: " << caps;
+    EXPECT_EQ(auto_caps.find("memory:CUDAMemory"), std::string::npos) << "system memory became CUDA memory: "
+                                                                      << auto_caps;
     expect_same(gpu, cpu, std::string(format_name(c.format)) + " " + layout + " on CUDA memory");
-    expect_same(staged, cpu, std::string(format_name(c.format)) + " " + layout + " staged through system memory");
+    expect_same(on_system, cpu, std::string(format_name(c.format)) + " " + layout + " processing=auto on system memory");
   }
 }
 
@@ -653,8 +655,9 @@ TEST(GpuContext, StagesAdoptTheUpstreamContext) {
 
 // processing=gpu asks upstream for CUDA memory: after a plain cudaupload
 // (which prefers passing system memory through) the stage negotiates
-// memory:CUDAMemory. On system memory it runs staged, with one warning.
-TEST(GpuNegotiation, ProcessingGpuNegotiatesCudaMemoryAndWarnsOnceWhenStaged) {
+// memory:CUDAMemory. System memory, which runs on the CPU, is refused with
+// one error that says what to insert.
+TEST(GpuNegotiation, ProcessingGpuNegotiatesCudaMemoryAndRefusesSystemMemory) {
   GstElement *p = gst_parse_launch("videotestsrc num-buffers=3 ! video/x-raw,format=NV12,width=64,height=48 ! "
                                    "cudaupload ! pseudo3ddepth name=d processing=gpu ! cudadownload ! fakesink",
                                    nullptr);
@@ -672,14 +675,12 @@ TEST(GpuNegotiation, ProcessingGpuNegotiatesCudaMemoryAndWarnsOnceWhenStaged) {
   GstHarness *h = gst_harness_new_parse("pseudo3ddepth processing=gpu ! pseudo3dfilter processing=gpu");
   BusMessages bus(h->element);
   gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::NV12, 64, 48).c_str());
-  for (int i = 0; i < 3; ++i) {
-    GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(picture(PixelFormat::NV12, 64, 48, i)));
-    ASSERT_NE(b, nullptr);
-    gst_buffer_unref(b);
-  }
-  const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
-  EXPECT_EQ(warnings.size(), 2u) << "one per element, once";
-  for (const std::string &w : warnings) EXPECT_NE(w.find("copied to the GPU and back"), std::string::npos) << w;
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NE(gst_harness_push(h, buffer_from_frame(picture(PixelFormat::NV12, 64, 48, i))), GST_FLOW_OK);
+  const std::vector<std::string> errors = bus.take(GST_MESSAGE_ERROR);
+  ASSERT_EQ(errors.size(), 1u) << "one error, from the first stage, not one a buffer";
+  EXPECT_NE(errors[0].find("processing=gpu needs video in CUDA memory"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("cudaupload"), std::string::npos) << errors[0];
   gst_harness_teardown(h);
 }
 
