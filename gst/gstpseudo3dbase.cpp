@@ -6,17 +6,18 @@
 #include <new>
 #include <string>
 
+#include "caps_geometry.h"
 #include "depth_meta.h"
 #include "host_allocator.h"
 #include "property_guard.h"
+#include "stage_gpu.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
-#include <gst/cuda/gstcudabufferpool.h>
 #include <gst/cuda/gstcudamemory.h>
 #endif
 
-GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_base_debug);
+GST_DEBUG_CATEGORY(gst_pseudo3d_base_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_base_debug
 
 enum { PROP_0, PROP_DEVICE_ID, PROP_PROCESSING };
@@ -55,65 +56,21 @@ static void gst_pseudo3d_base_get_property(GObject *object, guint prop_id, GValu
 
 /* ---- the GPU ---- */
 
-// Whether the GPU runs this element's frames (processing is fixed from start() to stop()).
-static gboolean gpu_in_use(GstPseudo3DBase *self) {
-  return self->processing != GST_PSEUDO3D_PROCESSING_CPU && self->gpu->usable();
-}
+using p3d::gst::caps_are_cuda;
+using p3d::gst::gpu_in_use;
+using p3d::gst::release_stage;
 
 GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self) {
   return self->cuda_caps && gpu_in_use(self) ? GST_PSEUDO3D_PATH_GPU : GST_PSEUDO3D_PATH_CPU;
 }
 
-static void release_stage(GstPseudo3DBase *self) {
-  GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
-  if (klass->release) klass->release(self);
-}
-
 #if HAVE_CUDA
-GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::CudaStatus &st, const char *what) {
-  GST_ELEMENT_ERROR(self, RESOURCE, FAILED, ("CUDA failure while %s: %s", what, cudaGetErrorName(st.code)),
-                    ("%s", st.message().c_str()));
-  return GST_FLOW_ERROR;
-}
-
 static void gst_pseudo3d_base_set_context(GstElement *element, GstContext *context) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(element);
   self->gpu->handle_set_context(element, context, self->device_id);
   GST_ELEMENT_CLASS(parent_class)->set_context(element, context);
 }
 
-// An upstream CUDA buffer on another context: with cuda-device-id -1 (or
-// that context's device) the element switches to it, as nvcodec's filters
-// do, and renegotiates so that its pools move too. Runs before the base
-// class checks for renegotiation, so the switch is complete for this frame.
-static void adopt_buffer_context(GstPseudo3DBase *self, GstBuffer *buf) {
-  if (gst_pseudo3d_base_path(self) != GST_PSEUDO3D_PATH_GPU || gst_buffer_n_memory(buf) == 0) return;
-  GstMemory *mem = gst_buffer_peek_memory(buf, 0);
-  if (!gst_is_cuda_memory(mem)) return;
-  GstCudaContext *ctx = GST_CUDA_MEMORY_CAST(mem)->context;
-  if (!self->gpu->should_adopt(ctx, self->device_id)) return;
-  if (!self->gpu->adopt(GST_ELEMENT(self), ctx, [self] { release_stage(self); })) {
-    GST_ELEMENT_WARNING(self, RESOURCE, FAILED, ("Could not switch to the CUDA context of the incoming frames"),
-                        ("processing on the CPU from now on"));
-  }
-  gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
-}
-
-// Memory of another context (another device) must not be launched on.
-static gboolean check_memory_context(GstPseudo3DBase *self, GstBuffer *buf) {
-  if (gst_pseudo3d_base_path(self) != GST_PSEUDO3D_PATH_GPU) return TRUE;
-  for (guint i = 0; i < gst_buffer_n_memory(buf); ++i) {
-    GstMemory *mem = gst_buffer_peek_memory(buf, i);
-    if (!gst_is_cuda_memory(mem) || GST_CUDA_MEMORY_CAST(mem)->context != self->gpu->context()) {
-      GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Input buffer is not CUDA memory of this element's CUDA context"),
-                        ("cuda-device-id is %d; set it to -1 or to the upstream element's device, or insert "
-                         "cudadownload ! cudaupload",
-                         self->device_id));
-      return FALSE;
-    }
-  }
-  return TRUE;
-}
 #endif
 
 static gboolean gst_pseudo3d_base_start(GstBaseTransform *trans) {
@@ -149,103 +106,6 @@ static gboolean gst_pseudo3d_base_stop(GstBaseTransform *trans) {
 
 /* ---- caps ---- */
 
-// The int range lo..hi (an int: lo == hi) into `out`: an int when one value
-// is left, else a range.
-static void set_int_range(GValue *out, gint64 lo, gint64 hi) {
-  if (lo == hi) {
-    g_value_init(out, G_TYPE_INT);
-    g_value_set_int(out, (gint)lo);
-  } else {
-    g_value_init(out, GST_TYPE_INT_RANGE);
-    gst_value_set_int_range(out, (gint)lo, (gint)hi);
-  }
-}
-
-// Maps a caps field's value through map(lo, hi, out): an int as the range
-// v..v, an int range, or a list of them, item by item; other values are
-// copied.
-template <typename RangeMap>
-static void map_value(const GValue *in, GValue *out, const RangeMap &map) {
-  if (G_VALUE_HOLDS_INT(in)) {
-    map(g_value_get_int(in), g_value_get_int(in), out);
-  } else if (GST_VALUE_HOLDS_INT_RANGE(in)) {
-    map(gst_value_get_int_range_min(in), gst_value_get_int_range_max(in), out);
-  } else if (GST_VALUE_HOLDS_LIST(in)) {
-    g_value_init(out, GST_TYPE_LIST);
-    for (guint i = 0; i < gst_value_list_get_size(in); ++i) {
-      GValue item = G_VALUE_INIT;
-      map_value(gst_value_list_get_value(in, i), &item, map);
-      gst_value_list_append_and_take_value(out, &item);
-    }
-  } else {
-    g_value_init(out, G_VALUE_TYPE(in));
-    g_value_copy(in, out);
-  }
-}
-
-template <typename RangeMap>
-static void map_field(GstStructure *s, const char *field, const RangeMap &map) {
-  const GValue *v = gst_structure_get_value(s, field);
-  if (!v) return;
-  GValue mapped = G_VALUE_INIT;
-  map_value(v, &mapped, map);
-  gst_structure_take_value(s, field, &mapped);
-}
-
-void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den) {
-  if (num == den) return;
-  auto scale = [&](gint v) -> gint64 { return CLAMP((gint64)v * num / den, 1, G_MAXINT); };
-  map_field(s, field, [&](gint lo, gint hi, GValue *out) {
-    if (lo == hi) return set_int_range(out, scale(lo), scale(lo));
-    const gint64 a = scale(lo);  // a range stays a range (but for G_MAXINT itself)
-    set_int_range(out, a, std::max(scale(hi), std::min<gint64>(a + 1, G_MAXINT)));
-  });
-}
-
-// The values x >= 1 with lo <= x * num / den <= hi (floor): ceil(lo * den /
-// num) .. floor(((hi + 1) * den - 1) / num). None (an odd size, doubled):
-// the smallest x above, whose image the caps then refuse.
-void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den) {
-  if (num == den) return;
-  map_field(s, field, [&](gint lo, gint hi, GValue *out) {
-    const gint64 a = CLAMP(((gint64)lo * den + num - 1) / num, 1, G_MAXINT);
-    const gint64 b = CLAMP((((gint64)hi + 1) * den - 1) / num, 1, G_MAXINT);
-    set_int_range(out, a, std::max(a, b));
-  });
-}
-
-GstStructure *gst_pseudo3d_sizes_forward(const GstStructure *in, gint wn, gint wd, gint hn, gint hd) {
-  GstStructure *s = gst_structure_copy(in);
-  gst_pseudo3d_scale_field(s, "width", wn, wd);
-  gst_pseudo3d_scale_field(s, "height", hn, hd);
-  return s;
-}
-
-GstStructure *gst_pseudo3d_sizes_back(const GstStructure *in, gint wn, gint wd, gint hn, gint hd, gboolean rounded) {
-  if (!rounded) return gst_pseudo3d_sizes_forward(in, wd, wn, hd, hn);  // the exact inverse
-  GstStructure *s = gst_structure_copy(in);
-  gst_pseudo3d_unscale_field(s, "width", wn, wd);
-  gst_pseudo3d_unscale_field(s, "height", hn, hd);
-  return s;
-}
-
-GstCaps *gst_pseudo3d_caps_of(GstStructure *s) {
-  GstCaps *caps = gst_caps_new_empty();
-  gst_caps_append_structure(caps, s);
-  return caps;
-}
-
-void gst_pseudo3d_set_formats(GstStructure *s, const gchar *formats) {
-  // formats is "{ A, B }": parse it through a throwaway caps string.
-  gchar *str = g_strdup_printf("x, format=(string)%s", formats);
-  GstStructure *tmp = gst_structure_from_string(str, NULL);
-  g_free(str);
-  gst_structure_set_value(s, "format", gst_structure_get_value(tmp, "format"));
-  gst_structure_free(tmp);
-  // Colorimetry belongs to the format family: let it be re-derived.
-  gst_structure_remove_fields(s, "colorimetry", "chroma-site", NULL);
-}
-
 static GstCaps *gst_pseudo3d_base_transform_caps(GstBaseTransform *trans, GstPadDirection direction, GstCaps *caps,
                                                  GstCaps *filter) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
@@ -274,27 +134,6 @@ static GstCaps *gst_pseudo3d_base_transform_caps(GstBaseTransform *trans, GstPad
   GST_DEBUG_OBJECT(self, "%s caps %" GST_PTR_FORMAT " -> %" GST_PTR_FORMAT, to_src ? "sink" : "src", caps, out);
   return out;
 }
-
-#if HAVE_CUDA
-// The same caps with the memory:CUDAMemory structures first: peers fixate on
-// the first structure, and a caps query's filter (cudaupload offers system
-// memory first) would otherwise decide the order.
-static GstCaps *cuda_first(GstCaps *caps) {
-  GstCaps *cuda = gst_caps_new_empty(), *rest = gst_caps_new_empty();
-  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
-    GstCapsFeatures *f = gst_caps_get_features(caps, i);
-    const bool is_cuda = f && gst_caps_features_contains(f, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
-    GstCaps *to = is_cuda ? cuda : rest;
-    to = gst_caps_merge_structure_full(to, gst_structure_copy(gst_caps_get_structure(caps, i)),
-                                       f ? gst_caps_features_copy(f) : nullptr);
-    if (is_cuda)
-      cuda = to;
-    else
-      rest = to;
-  }
-  return gst_caps_merge(cuda, rest);
-}
-#endif
 
 // Brackets each negotiation (a CAPS event, the renegotiation before a
 // buffer, a caps, accept-caps or allocation query; from any thread,
@@ -410,7 +249,7 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
     GstCaps *result = nullptr;
     gst_query_parse_caps_result(query, &result);
     if (result && !gst_caps_is_any(result)) {
-      GstCaps *ordered = cuda_first(result);
+      GstCaps *ordered = p3d::gst::cuda_first(result);
       gst_query_set_caps_result(query, ordered);
       gst_caps_unref(ordered);
     }
@@ -419,15 +258,14 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
   return TRUE;
 }
 
-// The element the user placed: a stage inside pseudo3dconvert is known to
-// the user by the bin's name, not by its hidden child's ("depth").
-static const gchar *placed_element_name(GstElement *e) {
-  GstObject *parent = GST_OBJECT_PARENT(e);
-  if (parent && GST_IS_ELEMENT(parent)) {
-    GstElementFactory *f = gst_element_get_factory(GST_ELEMENT(parent));
-    if (f && g_strcmp0(GST_OBJECT_NAME(f), "pseudo3dconvert") == 0) return GST_ELEMENT_NAME(parent);
-  }
-  return GST_ELEMENT_NAME(e);
+void gst_pseudo3d_base_set_hidden_in_parent(GstPseudo3DBase *self, gboolean hidden) { self->hidden_in_parent = hidden; }
+
+// The element the user placed: a stage hidden in a bin is known to the user
+// by the bin's name, not by its own ("depth").
+static const gchar *placed_element_name(GstPseudo3DBase *self) {
+  GstObject *parent = GST_OBJECT_PARENT(self);
+  if (self->hidden_in_parent && parent && GST_IS_ELEMENT(parent)) return GST_ELEMENT_NAME(parent);
+  return GST_ELEMENT_NAME(self);
 }
 
 static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *incaps, GstCaps *outcaps) {
@@ -440,8 +278,7 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
   }
   gboolean cuda_caps = FALSE;
 #if HAVE_CUDA
-  GstCapsFeatures *features = gst_caps_get_features(incaps, 0);
-  cuda_caps = features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
+  cuda_caps = caps_are_cuda(incaps);
   if (cuda_caps && self->processing != GST_PSEUDO3D_PROCESSING_CPU) {
     const char *why = nullptr;
     self->gpu->acquire(GST_ELEMENT(self), self->device_id, &why);
@@ -455,14 +292,14 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
     accepted = gst_pseudo3d_base_refuse_caps(self, "Interlaced video is not supported",
                                              "interlace-mode %s; put deinterlace before %s",
                                              gst_video_interlace_mode_to_string(GST_VIDEO_INFO_INTERLACE_MODE(&in)),
-                                             placed_element_name(GST_ELEMENT(self)));
+                                             placed_element_name(self));
   else if (!cuda_caps && self->processing == GST_PSEUDO3D_PROCESSING_GPU)
     // System memory runs on the CPU (see GstPseudo3DPath): "gpu" cannot be kept.
     accepted = gst_pseudo3d_base_refuse_caps(
         self, "processing=gpu needs video in CUDA memory",
         "the input is system memory; put cudaupload ! \"video/x-raw(memory:CUDAMemory)\" before %s and "
-        "cudadownload after the stages, use pseudo3dconvert, or set processing=auto to run on the CPU",
-        placed_element_name(GST_ELEMENT(self)));
+        "cudadownload after the stages, or set processing=auto to run on the CPU",
+        placed_element_name(self));
   else
     accepted = !klass->set_info || klass->set_info(self, incaps, &in, outcaps, &out);
   self->negotiating_caps = nullptr;
@@ -523,52 +360,13 @@ static gboolean gst_pseudo3d_base_transform_size(GstBaseTransform *, GstPadDirec
 
 /* ---- allocation ---- */
 
-static gboolean caps_are_cuda(GstCaps *caps) {
-#if HAVE_CUDA
-  GstCapsFeatures *features = caps && gst_caps_get_size(caps) > 0 ? gst_caps_get_features(caps, 0) : nullptr;
-  return features && gst_caps_features_contains(features, GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY);
-#else
-  (void)caps;
-  return FALSE;
-#endif
-}
-
-#if HAVE_CUDA
-static GstBufferPool *new_cuda_pool(GstPseudo3DBase *self, GstCaps *caps, guint *size, guint min, guint max) {
-  GstVideoInfo info;
-  if (!gst_video_info_from_caps(&info, caps)) return nullptr;
-  GstBufferPool *pool = gst_cuda_buffer_pool_new(self->gpu->context());
-  GstStructure *config = gst_buffer_pool_get_config(pool);
-  gst_buffer_pool_config_add_option(config, GST_BUFFER_POOL_OPTION_VIDEO_META);
-  gst_buffer_pool_config_set_params(config, caps, GST_VIDEO_INFO_SIZE(&info), min, max);
-  if (!gst_buffer_pool_set_config(pool, config)) {
-    GST_ERROR_OBJECT(self, "CUDA buffer pool rejected its configuration");
-    gst_object_unref(pool);
-    return nullptr;
-  }
-  // The pool rewrites the size (pitch alignment): read it back.
-  config = gst_buffer_pool_get_config(pool);
-  gst_buffer_pool_config_get_params(config, nullptr, size, nullptr, nullptr);
-  gst_structure_free(config);
-  return pool;
-}
-#endif
-
 static gboolean gst_pseudo3d_base_propose_allocation(GstBaseTransform *trans, GstQuery *decide_query,
                                                      GstQuery *query) {
   if (!GST_BASE_TRANSFORM_CLASS(parent_class)->propose_allocation(trans, decide_query, query)) return FALSE;
   if (decide_query == nullptr) return TRUE; /* passthrough: downstream answered */
   gst_query_add_allocation_meta(query, GST_VIDEO_META_API_TYPE, nullptr);
 #if HAVE_CUDA
-  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
-  GstCaps *caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  if (!caps_are_cuda(caps) || !self->gpu->usable() || gst_query_get_n_allocation_pools(query) > 0) return TRUE;
-  guint size = 0;
-  GstBufferPool *pool = new_cuda_pool(self, caps, &size, 0, 0);
-  if (!pool) return FALSE;
-  gst_query_add_allocation_pool(query, pool, size, 0, 0);
-  gst_object_unref(pool);
+  if (!p3d::gst::propose_cuda_pool(GST_PSEUDO3D_BASE(trans), query)) return FALSE;
 #endif
   return TRUE;
 }
@@ -595,28 +393,9 @@ static gboolean gst_pseudo3d_base_decide_allocation(GstBaseTransform *trans, Gst
   GstCaps *outcaps = nullptr;
   gst_query_parse_allocation(query, &outcaps, nullptr);
 #if HAVE_CUDA
-  GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
-  if (self->gpu->usable() && caps_are_cuda(outcaps)) {
-    GstBufferPool *pool = nullptr;
-    guint size = 0, min = 0, max = 0;
-    const gboolean update = gst_query_get_n_allocation_pools(query) > 0;
-    if (update) {
-      gst_query_parse_nth_allocation_pool(query, 0, &pool, &size, &min, &max);
-      // Only a CUDA pool on our own context will do: never launch on memory of another context.
-      if (pool && (!GST_IS_CUDA_BUFFER_POOL(pool) || GST_CUDA_BUFFER_POOL_CAST(pool)->context != self->gpu->context()))
-        gst_clear_object(&pool);
-    }
-    if (!pool) {
-      pool = new_cuda_pool(self, outcaps, &size, min, max);
-      if (!pool) return FALSE;
-    }
-    if (update)
-      gst_query_set_nth_allocation_pool(query, 0, pool, size, min, max);
-    else
-      gst_query_add_allocation_pool(query, pool, size, min, max);
-    gst_object_unref(pool);
-    return GST_BASE_TRANSFORM_CLASS(parent_class)->decide_allocation(trans, query);
-  }
+  bool cuda = false;
+  if (!p3d::gst::decide_cuda_pool(GST_PSEUDO3D_BASE(trans), query, &cuda)) return FALSE;
+  if (cuda) return GST_BASE_TRANSFORM_CLASS(parent_class)->decide_allocation(trans, query);
 #endif
   if (!caps_are_cuda(outcaps) && gst_query_get_n_allocation_pools(query) == 0) use_host_allocator(query);
   return GST_BASE_TRANSFORM_CLASS(parent_class)->decide_allocation(trans, query);
@@ -685,7 +464,7 @@ static GstFlowReturn gst_pseudo3d_base_submit_input_buffer(GstBaseTransform *tra
   // QoS drops, which must not cost the history.
   if (GST_BUFFER_FLAG_IS_SET(input, GST_BUFFER_FLAG_DISCONT)) request_history_reset(self, "discont");
 #if HAVE_CUDA
-  adopt_buffer_context(self, input);
+  p3d::gst::adopt_buffer_context(self, input);
 #endif
   // The parent renegotiates if a property asked for it, then applies QoS;
   // a renegotiation of a running stream is done here first, so that its
@@ -711,70 +490,6 @@ static void gst_pseudo3d_base_before_transform(GstBaseTransform *trans, GstBuffe
 
 /* ---- frames ---- */
 
-gboolean gst_pseudo3d_base_depth_fits(GstPseudo3DBase *self, const p3d::gst::DepthPlane *plane, GstPseudo3DPath path,
-                                      int width, int height) {
-  if (!plane || plane->width != width || plane->height != height) return FALSE;
-  const bool device = path == GST_PSEUDO3D_PATH_GPU;
-  if (plane->on_device != device) return FALSE;
-#if HAVE_CUDA
-  if (device && plane->context != self->gpu->context()) return FALSE;
-#else
-  (void)self;
-#endif
-  return TRUE;
-}
-
-p3d::gst::DepthPlane *gst_pseudo3d_base_frame_depth(GstPseudo3DBase *self, GstBuffer *buf, GstPseudo3DPath path,
-                                                    int width, int height) {
-  p3d::gst::DepthPlane *depth = pseudo3d_buffer_get_depth(buf);
-  const char *name = GST_ELEMENT_NAME(gst_element_get_factory(GST_ELEMENT(self)));
-  if (!depth) {
-    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("%s needs a depth map, and this frame carries none", name),
-                      ("put pseudo3ddepth before %s; elements that change the frame between them (scaling, flipping, "
-                       "cropping, videoconvert, cudaupload/cudadownload) drop the depth, so put those before "
-                       "pseudo3ddepth",
-                       name));
-    return nullptr;
-  }
-  if (!gst_pseudo3d_base_depth_fits(self, depth, path, width, height)) {
-    GST_ELEMENT_ERROR(self, STREAM, FORMAT, ("The frame's depth map does not fit the frame"),
-                      ("depth %dx%d in %s memory, frame %dx%d in %s memory; put pseudo3ddepth right before %s",
-                       depth->width, depth->height, depth->on_device ? "device" : "host", width, height,
-                       path == GST_PSEUDO3D_PATH_GPU ? "device" : "host", name));
-    return nullptr;
-  }
-  return depth;
-}
-
-p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::gst::DepthPlanePool &pool,
-                                                    GstPseudo3DPath path, int width, int height, int shift) {
-  std::string error;
-#if HAVE_CUDA
-  if (path != GST_PSEUDO3D_PATH_GPU) shift = 0;  // host planes are full-size
-  p3d::gst::DepthPlanePtr plane =
-      pool.acquire(width, height, shift, path == GST_PSEUDO3D_PATH_GPU ? self->gpu->context() : nullptr, &error);
-#else
-  (void)path;
-  shift = 0;
-  p3d::gst::DepthPlanePtr plane = pool.acquire(width, height, 0, nullptr, &error);
-#endif
-  if (!plane)
-    GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,
-                      ("Could not allocate a %dx%d depth map (%" G_GSIZE_FORMAT " bytes)", width, height,
-                       static_cast<gsize>(p3d::grid_cells(width, shift)) * p3d::grid_cells(height, shift) *
-                           sizeof(float)),
-                      ("%s", error.c_str()));
-  return plane;
-}
-
-static GstMapFlags map_flags(GstPseudo3DBase *self, GstMapFlags base) {
-#if HAVE_CUDA
-  if (gst_pseudo3d_base_path(self) == GST_PSEUDO3D_PATH_GPU) return (GstMapFlags)(base | GST_MAP_CUDA);
-#else
-  (void)self;
-#endif
-  return base;
-}
 
 // The CPU references report bad arguments and allocation failures by
 // exceptions; none may unwind through GStreamer's C frames.
@@ -798,16 +513,16 @@ static GstFlowReturn gst_pseudo3d_base_transform(GstBaseTransform *trans, GstBuf
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
   const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
 #if HAVE_CUDA
-  if (!check_memory_context(self, inbuf)) return GST_FLOW_ERROR;
+  if (!p3d::gst::check_memory_context(self, inbuf)) return GST_FLOW_ERROR;
 #endif
   GstVideoFrame in, out;
   // NO_REF: stages attach metas to outbuf, which a held ref would make unwritable.
   const auto no_ref = static_cast<GstMapFlags>(GST_VIDEO_FRAME_MAP_FLAG_NO_REF);
-  if (!gst_video_frame_map(&in, &self->in_info, inbuf, (GstMapFlags)(map_flags(self, GST_MAP_READ) | no_ref))) {
+  if (!gst_video_frame_map(&in, &self->in_info, inbuf, (GstMapFlags)(p3d::gst::frame_map_flags(self, GST_MAP_READ) | no_ref))) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Could not map the input frame"), (nullptr));
     return GST_FLOW_ERROR;
   }
-  if (!gst_video_frame_map(&out, &self->out_info, outbuf, (GstMapFlags)(map_flags(self, GST_MAP_WRITE) | no_ref))) {
+  if (!gst_video_frame_map(&out, &self->out_info, outbuf, (GstMapFlags)(p3d::gst::frame_map_flags(self, GST_MAP_WRITE) | no_ref))) {
     gst_video_frame_unmap(&in);
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Could not map the output frame"), (nullptr));
     return GST_FLOW_ERROR;
@@ -829,13 +544,13 @@ static GstFlowReturn gst_pseudo3d_base_transform_ip(GstBaseTransform *trans, Gst
   GstPseudo3DBaseClass *klass = GST_PSEUDO3D_BASE_GET_CLASS(self);
   const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
 #if HAVE_CUDA
-  if (!check_memory_context(self, buf)) return GST_FLOW_ERROR;
+  if (!p3d::gst::check_memory_context(self, buf)) return GST_FLOW_ERROR;
 #endif
   GstVideoFrame frame;
   // NO_REF: a mapped frame holding a ref would make buf unwritable, and the
   // stage must attach its meta to buf.
   if (!gst_video_frame_map(&frame, &self->in_info, buf,
-                           (GstMapFlags)(map_flags(self, GST_MAP_READ) | GST_VIDEO_FRAME_MAP_FLAG_NO_REF))) {
+                           (GstMapFlags)(p3d::gst::frame_map_flags(self, GST_MAP_READ) | GST_VIDEO_FRAME_MAP_FLAG_NO_REF))) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Could not map the frame"), (nullptr));
     return GST_FLOW_ERROR;
   }

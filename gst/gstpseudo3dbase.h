@@ -1,26 +1,27 @@
-// GstPseudo3DBase: the abstract base of every pseudo3d stage. It owns what
-// the stages share, written once:
+// GstPseudo3DBase: the abstract base of every pseudo3d stage, the
+// GstBaseTransform glue the stages share, written once:
 //  * the processing and cuda-device-id properties (refused while PAUSED or
-//    PLAYING, with a warning on the bus);
-//  * the GPU: a GpuContext (gpu_context.h), the path a negotiated stream
-//    runs on (the GPU on CUDA memory, the CPU on system memory),
-//    adoption of an upstream buffer's CUDA context when cuda-device-id is
-//    -1, and the "launch, check, wait" block of every GPU frame;
-//  * caps: sizes and multiview fields through the stage's transform_geometry,
-//    formats, CUDA memory preferred when a GPU is usable;
-//  * allocation: CUDA pools on the element's context, host buffers that fail
-//    with an element error instead of aborting the process;
+//    PLAYING, with a warning on the bus) and the path a negotiated stream
+//    runs on (the GPU on CUDA memory, the CPU on system memory);
+//  * caps: sizes and multiview fields through the stage's
+//    transform_geometry, formats, CUDA memory preferred when a GPU is
+//    usable; refusals posted once per caps; live renegotiation of the
+//    caps-deciding properties (staged_geometry.h);
+//  * allocation: CUDA pools, host buffers that fail with an element error
+//    instead of aborting the process;
 //  * stream events: the temporal-history reset on FLUSH_STOP, STREAM_START,
 //    SEGMENT and DISCONT buffers; QoS (late frames are dropped);
-//  * frames: mapping, the depth-meta check, one element error per failure.
-// A stage implements set_info plus process (or process_ip for in-place).
+//  * frames: mapping, one element error per failure, C++ exceptions caught.
+// What a stage calls beside it: caps_geometry.h (size arithmetic for
+// transform_geometry), stage_gpu.h (the GPU side: context, pools, run_gpu)
+// and stage_depth.h (the depth meta). A stage implements set_info plus
+// process (or process_ip for in-place).
 #pragma once
 
 #include <gst/base/gstbasetransform.h>
 #include <gst/video/video.h>
 
 #include "config.h"
-#include "depth_plane.h"
 #include "enums.h"
 #include "frame.h"
 #include "gpu_context.h"
@@ -63,6 +64,7 @@ struct _GstPseudo3DBase {
   p3d::gst::GpuContext *gpu;
   gboolean history_reset_pending; /* object lock */
   gboolean cpu_notice_logged;
+  gboolean hidden_in_parent; /* gst_pseudo3d_base_set_hidden_in_parent */
   GstCaps *negotiating_caps; /* input caps of the set_info call in progress */
   GstCaps *refused_caps;     /* input caps whose refusal was posted */
   /* The stage's caps-deciding properties (staged_geometry.h), owned by the
@@ -121,69 +123,15 @@ GstPseudo3DPath gst_pseudo3d_base_path(GstPseudo3DBase *self);
 gboolean gst_pseudo3d_base_refuse_caps(GstPseudo3DBase *self, const char *text, const char *debug_format, ...)
     G_GNUC_PRINTF(3, 4);
 
+/* A stage that a bin creates as a hidden part of itself: messages that tell
+ * the user where to insert an element name the bin, which the user placed,
+ * instead of the stage. Call it before the element leaves NULL. */
+void gst_pseudo3d_base_set_hidden_in_parent(GstPseudo3DBase *self, gboolean hidden);
+
 /* TRUE once after a seek, a flush, a new stream or a discontinuity: a stage
  * with temporal state forgets its history before the frame it processes. */
 gboolean gst_pseudo3d_base_take_history_reset(GstPseudo3DBase *self);
 
-/* The frame's depth map, checked to fit the frame (size, memory domain,
- * CUDA context). Otherwise posts one element error that names pseudo3ddepth
- * and says why, and returns null. */
-p3d::gst::DepthPlane *gst_pseudo3d_base_frame_depth(GstPseudo3DBase *self, GstBuffer *buf, GstPseudo3DPath path,
-                                                    int width, int height);
-/* Whether a plane fits a width x height frame on `path` (no error posted). */
-gboolean gst_pseudo3d_base_depth_fits(GstPseudo3DBase *self, const p3d::gst::DepthPlane *plane, GstPseudo3DPath path,
-                                      int width, int height);
-/* A depth plane for a frame of `path` from `pool`; posts an element error
- * with the size on failure and returns null. shift: on GST_PSEUDO3D_PATH_GPU
- * the plane holds a value a 2^shift x 2^shift cell (depth_plane.h); host
- * planes are full-size whatever it says. */
-p3d::gst::DepthPlanePtr gst_pseudo3d_base_new_depth(GstPseudo3DBase *self, p3d::gst::DepthPlanePool &pool,
-                                                    GstPseudo3DPath path, int width, int height, int shift = 0);
-
-/* Caps helpers for transform_geometry: value * num / den for an int, an int
- * range or a list of them (clamped to 1..G_MAXINT); caps holding one copy
- * of a structure. */
-void gst_pseudo3d_scale_field(GstStructure *s, const char *field, gint num, gint den);
-/* The way back through gst_pseudo3d_scale_field(s, field, num, den): every
- * value v with v * num / den (rounded down) among the field's values, so
- * that a size whose forward image is rounded (an odd width halved) still
- * passes the caps query, and set_info() can refuse it with its reason
- * instead of a bare not-negotiated. */
-void gst_pseudo3d_unscale_field(GstStructure *s, const char *field, gint num, gint den);
-/* A copy of structure `in` (input sizes) with the output sizes of an
- * element whose output width and height are input * wn / wd and
- * input * hn / hd (gst_pseudo3d_scale_field). */
-GstStructure *gst_pseudo3d_sizes_forward(const GstStructure *in, gint wn, gint wd, gint hn, gint hd);
-/* A copy of sink-side-bound structure `in` (output sizes) with the input
- * sizes that give them, for an element whose output width and height are
- * input * wn / wd and input * hn / hd: the exact inverse, or (`rounded`)
- * every size whose rounded image they are. A transform towards the sink
- * offers the exact structures first, so that a free upstream fixates a size
- * that works, and the rounded ones after them. */
-GstStructure *gst_pseudo3d_sizes_back(const GstStructure *in, gint wn, gint wd, gint hn, gint hd, gboolean rounded);
-GstCaps *gst_pseudo3d_caps_of(GstStructure *s); /* takes s */
-/* Sets the format field to `formats` ("{ A, B }" or one name) and drops the
- * colorimetry and chroma-site, which belong to the old format family. */
-void gst_pseudo3d_set_formats(GstStructure *s, const gchar *formats);
-
 G_DEFINE_AUTOPTR_CLEANUP_FUNC(GstPseudo3DBase, gst_object_unref)
 
 G_END_DECLS
-
-#if HAVE_CUDA
-/* Posts a GST_ELEMENT_ERROR naming the failed CUDA call; returns GST_FLOW_ERROR. */
-GstFlowReturn gst_pseudo3d_base_cuda_error(GstPseudo3DBase *self, const p3d::CudaStatus &st, const char *what);
-
-namespace p3d::gst {
-/* The GPU part of one frame, the same for every stage: `launch` queues the
- * work on the element's stream (returning the first failure), then the
- * stream is waited for, so the buffer leaves with its work done. A failure
- * posts one element error naming `what` and the failed call. */
-template <typename Launch>
-GstFlowReturn run_gpu(GstPseudo3DBase *self, const char *what, Launch &&launch) {
-  CudaStatus st = launch();
-  if (st.ok()) st = self->gpu->sync();
-  return st.ok() ? GST_FLOW_OK : gst_pseudo3d_base_cuda_error(self, st, what);
-}
-}  // namespace p3d::gst
-#endif

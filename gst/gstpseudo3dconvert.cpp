@@ -236,6 +236,7 @@ static void gst_pseudo3d_convert_init(GstPseudo3DConvert *self) {
   const char *factories[N_STAGES] = {"pseudo3ddepth", "pseudo3dfilter", "pseudo3dwarp"};
   for (int i = 0; i < N_STAGES; ++i) {
     self->stage[i] = gst_element_factory_make(factories[i], factories[i] + 8);  // "depth", "filter", ...
+    gst_pseudo3d_base_set_hidden_in_parent(GST_PSEUDO3D_BASE(self->stage[i]), TRUE);
     gst_bin_add(GST_BIN(self), self->stage[i]);
   }
   gst_element_link_many(self->stage[0], self->stage[1], self->stage[2], NULL);

@@ -21,10 +21,13 @@
 #include <cstring>
 #include <memory>
 
+#include "caps_geometry.h"
 #include "depth_estimate.h"
 #include "depth_meta.h"
 #include "depth_plane.h"
 #include "enums.h"
+#include "stage_depth.h"
+#include "stage_gpu.h"
 #include "staged_geometry.h"
 #include "video_util.h"
 
@@ -142,12 +145,12 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   const p3d::FrameView view = p3d::gst::frame_view(frame);
   // Depth supplied upstream for this very frame is kept; one that no longer
   // fits (another size or memory) is replaced by a fresh estimate.
-  if (gst_pseudo3d_base_depth_fits(base, pseudo3d_buffer_get_depth(buf), path, view.width, view.height))
+  if (p3d::gst::depth_fits(base, pseudo3d_buffer_get_depth(buf), path, view.width, view.height))
     return GST_FLOW_OK;
   const p3d::DepthParams params = frame_params(self);
   // On CUDA memory the plane holds a value a block (no full-size copy;
   // depth_plane.h) where the block is a power of two.
-  p3d::gst::DepthPlanePtr plane = gst_pseudo3d_base_new_depth(base, self->state->pool, path, view.width, view.height,
+  p3d::gst::DepthPlanePtr plane = p3d::gst::new_depth(base, self->state->pool, path, view.width, view.height,
                                                               p3d::block_grid_shift(params, view.width, view.height));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
@@ -193,7 +196,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   const p3d::FrameView grey = right_half(p3d::gst::frame_view(in), half);
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   p3d::gst::DepthPlanePtr plane =
-      gst_pseudo3d_base_new_depth(base, self->state->pool, path, half, GST_VIDEO_FRAME_HEIGHT(out));
+      p3d::gst::new_depth(base, self->state->pool, path, half, GST_VIDEO_FRAME_HEIGHT(out));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {

@@ -19,6 +19,8 @@
 #include "bilateral.h"
 #include "depth_meta.h"
 #include "enums.h"
+#include "stage_depth.h"
+#include "stage_gpu.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
@@ -51,7 +53,7 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
                                 GstVideoFrame *frame) {
   GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(base);
   const p3d::FrameView guide = p3d::gst::frame_view(frame);
-  p3d::gst::DepthPlane *depth = gst_pseudo3d_base_frame_depth(base, buf, path, guide.width, guide.height);
+  p3d::gst::DepthPlane *depth = p3d::gst::frame_depth(base, buf, path, guide.width, guide.height);
   if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
   const p3d::BilateralParams params = self->params;
@@ -60,7 +62,7 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   // full-size copy; depth_plane.h) where the grid step is a power of two.
   const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), depth->width, depth->height);
   p3d::gst::DepthPlanePtr out =
-      gst_pseudo3d_base_new_depth(base, self->state->pool, path, depth->width, depth->height, shift);
+      p3d::gst::new_depth(base, self->state->pool, path, depth->width, depth->height, shift);
   if (!out) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {

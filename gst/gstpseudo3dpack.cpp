@@ -40,8 +40,10 @@
  */
 #include "gstpseudo3dpack.h"
 
+#include "caps_geometry.h"
 #include "enums.h"
 #include "pack.h"
+#include "stage_gpu.h"
 #include "staged_geometry.h"
 #include "stereo_caps.h"
 #include "video_util.h"

@@ -35,10 +35,13 @@
 
 #include <vector>
 
+#include "caps_geometry.h"
 #include "depth_meta.h"
 #include "enums.h"
 #include "pack.h"
 #include "pspec_clone.h"
+#include "stage_depth.h"
+#include "stage_gpu.h"
 #include "staged_geometry.h"
 #include "stereo_caps.h"
 #include "video_util.h"
@@ -192,7 +195,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
                              GstVideoFrame *out) {
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
   const p3d::FrameView src = p3d::gst::frame_view(in);
-  p3d::gst::DepthPlane *depth = gst_pseudo3d_base_frame_depth(base, inbuf, path, src.width, src.height);
+  p3d::gst::DepthPlane *depth = p3d::gst::frame_depth(base, inbuf, path, src.width, src.height);
   if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
   const p3d::WarpParams params = self->params;

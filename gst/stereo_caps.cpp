@@ -1,6 +1,6 @@
 #include "stereo_caps.h"
 
-#include "gstpseudo3dbase.h"
+#include "caps_geometry.h"
 #include "video_util.h"
 
 namespace p3d::gst {
