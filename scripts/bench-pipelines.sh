@@ -82,10 +82,9 @@ done
 # nvh264dec ! pseudo3dconvert ! fakesink), one 4K stream and 16 1080p streams
 # in one process, so the table shows the conversion's share of the decode
 # rate; then the 4K clip converted, encoded by x264 and muxed. The rate of
-# 16 streams in one process swings by about 5 % from one launch to the next
-# (an H100, 2026-11-23: decode-only 1067-1150 frames/s in three launches),
-# so each decode-only / convert pair runs P3D_BENCH_REPEATS times (default
-# 3), alternating, and the share is taken between the medians.
+# 16 streams in one process swings by a few percent from one launch to the
+# next, so each decode-only / convert pair runs P3D_BENCH_REPEATS times
+# (default 3), alternating, and the share is taken between the medians.
 time_launch() {  # case streams frames-per-stream clip_s launch...
   local name=$1 streams=$2 n=$3 clip_s=$4
   shift 4
