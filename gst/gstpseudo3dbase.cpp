@@ -1,21 +1,14 @@
 #include "gstpseudo3dbase.h"
 
-#include <algorithm>
 #include <cstdarg>
 #include <exception>
 #include <new>
-#include <string>
 
 #include "caps_geometry.h"
-#include "depth_meta.h"
 #include "host_allocator.h"
 #include "property_guard.h"
 #include "stage_gpu.h"
 #include "video_util.h"
-
-#if HAVE_CUDA
-#include <gst/cuda/gstcudamemory.h>
-#endif
 
 GST_DEBUG_CATEGORY(gst_pseudo3d_base_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_base_debug
@@ -70,7 +63,6 @@ static void gst_pseudo3d_base_set_context(GstElement *element, GstContext *conte
   self->gpu->handle_set_context(element, context, self->device_id);
   GST_ELEMENT_CLASS(parent_class)->set_context(element, context);
 }
-
 #endif
 
 static gboolean gst_pseudo3d_base_start(GstBaseTransform *trans) {
