@@ -37,10 +37,10 @@
 
 #include "gstpseudo3ddepth.h"
 #include "gstpseudo3dfilter.h"
-#include "gstpseudo3dpack.h"
 #include "gstpseudo3dwarp.h"
 #include "property_guard.h"
 #include "pspec_clone.h"
+#include "stereo_packing.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_convert_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_convert_debug
@@ -188,19 +188,18 @@ static void gst_pseudo3d_convert_class_init(GstPseudo3DConvertClass *klass) {
   gobject_class->get_property = gst_pseudo3d_convert_get_property;
 
   const GType stage_types[N_STAGES] = {GST_TYPE_PSEUDO3D_DEPTH, GST_TYPE_PSEUDO3D_FILTER, GST_TYPE_PSEUDO3D_WARP};
-  auto *pack_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_PACK));
   for (guint i = 0; i < G_N_ELEMENTS(kProxied); ++i) {
     // The pack's properties, which the warp takes, keep pseudo3dpack's
     // documentation and defaults (layout: anaglyph, where the warp's own
     // default is the pair itself); the stage gets them at init.
-    GParamSpec *p = kProxied[i].stage == STAGE_WARP ? g_object_class_find_property(pack_class, kProxied[i].name)
-                                                     : nullptr;
-    auto *stage_class = static_cast<GObjectClass *>(g_type_class_ref(stage_types[kProxied[i].stage]));
-    if (!p) p = g_object_class_find_property(stage_class, kProxied[i].name);
-    g_object_class_install_property(gobject_class, i + 1, p3d::gst::clone_pspec(p));
-    g_type_class_unref(stage_class);
+    GParamSpec *p = kProxied[i].stage == STAGE_WARP ? p3d::gst::pack_property_spec(kProxied[i].name) : nullptr;
+    if (!p) {
+      auto *stage_class = static_cast<GObjectClass *>(g_type_class_ref(stage_types[kProxied[i].stage]));
+      p = p3d::gst::clone_pspec(g_object_class_find_property(stage_class, kProxied[i].name));
+      g_type_class_unref(stage_class);
+    }
+    g_object_class_install_property(gobject_class, i + 1, p);
   }
-  g_type_class_unref(pack_class);
   auto *depth_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_DEPTH));
   g_object_class_install_property(gobject_class, PROP_CUDA_DEVICE_ID,
                                   p3d::gst::clone_pspec(g_object_class_find_property(depth_class, "cuda-device-id")));

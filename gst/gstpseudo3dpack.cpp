@@ -42,10 +42,9 @@
 
 #include "caps_geometry.h"
 #include "enums.h"
-#include "pack.h"
 #include "stage_gpu.h"
-#include "staged_geometry.h"
 #include "stereo_caps.h"
+#include "stereo_packing.h"
 #include "video_util.h"
 
 #if HAVE_CUDA
@@ -57,99 +56,29 @@ GST_DEBUG_CATEGORY_STATIC(gst_pseudo3d_pack_debug);
 
 enum {
   PROP_0,
-  PROP_LAYOUT,
-  PROP_GLASSES,
-  PROP_ANAGLYPH_METHOD,
-  PROP_SWAP_EYES,
-  PROP_INPUT_LAYOUT,
+  PROP_PACK,  // the pack's properties: N_PACK_PROPERTIES ids from here (stereo_packing.h)
+  PROP_INPUT_LAYOUT = PROP_PACK + p3d::gst::N_PACK_PROPERTIES,
   PROP_INPUT_RIGHT_FIRST,
-};
-
-// The properties that decide the output caps (see staged_geometry.h).
-struct PackGeometry {
-  p3d::PackLayout layout = p3d::PackLayout::Anaglyph;
-  bool swap_eyes = false;
-  GstPseudo3DInputLayout input = GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS;
-  bool input_right_first = false;
-  bool operator==(const PackGeometry &o) const {
-    return layout == o.layout && swap_eyes == o.swap_eyes && input == o.input &&
-           input_right_first == o.input_right_first;
-  }
 };
 
 struct _GstPseudo3DPack {
   GstPseudo3DBase parent;
-  /* object lock */
-  p3d::PackParams params;  // glasses and method are read per frame; the rest through geometry
-  p3d::gst::StagedGeometry<PackGeometry> *geometry;
-  p3d::PackParams active;  // the geometry of the negotiated caps, resolved against the input caps
+  p3d::gst::StereoPacking *packing;
 };
 
 #define gst_pseudo3d_pack_parent_class parent_class
 G_DEFINE_TYPE(GstPseudo3DPack, gst_pseudo3d_pack, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dpack, "pseudo3dpack", GST_RANK_NONE, GST_TYPE_PSEUDO3D_PACK);
 
-// A declared input layout, or none (from-caps).
-static bool declared_input(const PackGeometry &g, p3d::StereoInput *arrangement) {
-  if (g.input == GST_PSEUDO3D_INPUT_LAYOUT_FROM_CAPS) return false;
-  *arrangement = static_cast<p3d::StereoInput>(g.input - 1);
-  return true;
-}
-
-// The parameters a frame of this input is packed with: the geometry plus the
-// input arrangement (declared, or read from the input's multiview signal).
-// False, with *why, when the input holds no stereo pair pseudo3dpack reads.
-static bool resolve(const PackGeometry &g, GstVideoMultiviewMode mode, GstVideoMultiviewFlags flags,
-                    p3d::PackParams *p, const char **why) {
-  p->layout = g.layout;
-  p->swap_eyes = g.swap_eyes;
-  if (declared_input(g, &p->input)) {
-    p->input_right_first = g.input_right_first;
-    return true;
-  }
-  return p3d::gst::arrangement_from_multiview(mode, flags, &p->input, &p->input_right_first, why);
-}
-
-// Output size over input size per axis, as a ratio, for views of `input`.
-static void size_ratio(p3d::StereoInput input, p3d::PackLayout layout, gint *wn, gint *wd, gint *hn, gint *hd) {
-  p3d::pack_size(layout, 1, 1, wn, hn);  // the layout's frame of views of 1 x 1
-  *wd = input == p3d::StereoInput::SideBySide ? 2 : 1;
-  *hd = input == p3d::StereoInput::TopBottom ? 2 : 1;
-}
-
-// How a size goes through the element: towards the source, or back to the
-// input size that gives it exactly, or back to every input size whose
-// rounded image it is (gst_pseudo3d_sizes_back()).
-enum class SizeWay { ToSrc, BackExact, BackRounded };
-
-// One input arrangement's variant of a caps structure.
-static GstStructure *transformed(const GstStructure *in, SizeWay way, p3d::StereoInput input,
-                                 const PackGeometry &g) {
-  gint wn, wd, hn, hd;
-  size_ratio(input, g.layout, &wn, &wd, &hn, &hd);
-  if (way == SizeWay::ToSrc) return gst_pseudo3d_sizes_forward(in, wn, wd, hn, hd);
-  return gst_pseudo3d_sizes_back(in, wn, wd, hn, hd, way == SizeWay::BackRounded);
-}
-
 static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
-  GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
-  GST_OBJECT_LOCK(self);
-  const PackGeometry g = self->geometry->negotiating();
-  GST_OBJECT_UNLOCK(self);
-  p3d::StereoInput input;
-  const bool declared = declared_input(g, &input);
+  p3d::gst::StereoPacking *packing = GST_PSEUDO3D_PACK(base)->packing;
+  const p3d::gst::PackingGeometry g = packing->negotiating();
+  // Input that holds no pair still gets output caps: set_info then refuses
+  // it with a message that says how to declare the layout.
+  if (from == GST_PAD_SINK) return packing->output_caps(in, g);  // the input's own format, then 4:2:0
 
-  if (from == GST_PAD_SINK) {
-    bool right_first = false;
-    const char *why = nullptr;
-    // Input that holds no pair still gets output caps: set_info then refuses
-    // it with a message that says how to declare the layout.
-    if (!declared && !p3d::gst::arrangement_from_structure(in, &input, &right_first, &why))
-      input = p3d::StereoInput::SideBySide;
-    GstStructure *s = transformed(in, SizeWay::ToSrc, input, g);
-    p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
-    return p3d::gst::packed_output_caps(s);  // the input's own format, then 4:2:0
-  }
+  p3d::StereoInput input;
+  const bool declared = p3d::gst::declared_input(g, &input);
   // Towards the sink, 4:2:0 output comes from any packed RGB input.
   const bool from_yuv = p3d::gst::names_yuv420(in);
 
@@ -162,15 +91,15 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   // pseudo3dpack reads follow (either eye first).
   // The exact sizes first, then the rounded ones (gst_pseudo3d_sizes_back()).
   GstCaps *caps = gst_caps_new_empty();
-  for (const SizeWay way : {SizeWay::BackExact, SizeWay::BackRounded}) {
-    GstStructure *open = transformed(in, way, declared ? input : p3d::StereoInput::SideBySide, g);
+  for (const auto way : {p3d::gst::SizeWay::BackExact, p3d::gst::SizeWay::BackRounded}) {
+    GstStructure *open = packing->through(in, way, g.layout, declared ? input : p3d::StereoInput::SideBySide);
     gst_structure_remove_fields(open, "multiview-mode", "multiview-flags", "views", NULL);
     if (from_yuv) gst_pseudo3d_set_formats(open, P3D_PACKED_FORMATS);
     caps = gst_caps_merge_structure(caps, open);
     if (declared) continue;
     for (const auto &name : p3d::kStereoInputNames) {
       const p3d::StereoInput arrangement = name.value;
-      GstStructure *s = transformed(in, way, arrangement, g);
+      GstStructure *s = packing->through(in, way, g.layout, arrangement);
       if (from_yuv) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
       p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),
                                      GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
@@ -180,18 +109,6 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   return caps;
 }
 
-// The output frame the parameters give for this input, or false with *why.
-static bool output_for(const p3d::PackParams &p, const GstVideoInfo *in, int *w, int *h, const char **why) {
-  int vw = 0, vh = 0;
-  if (!p3d::input_view_size(p.input, GST_VIDEO_INFO_WIDTH(in), GST_VIDEO_INFO_HEIGHT(in), &vw, &vh)) {
-    *why = p.input == p3d::StereoInput::TopBottom ? "a full top-bottom pair needs an even height"
-                                                  : "a full side-by-side pair needs an even width";
-    return false;
-  }
-  p3d::pack_size(p.layout, vw, vh, w, h);
-  return true;
-}
-
 // Output equal to the input: same arrangement, eye order and format.
 static bool passes_through(const p3d::PackParams &p, const GstVideoInfo *in, const GstVideoInfo *out) {
   return p3d::pack_is_identity(p) && GST_VIDEO_INFO_FORMAT(in) == GST_VIDEO_INFO_FORMAT(out);
@@ -199,12 +116,10 @@ static bool passes_through(const p3d::PackParams &p, const GstVideoInfo *in, con
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
-  GST_OBJECT_LOCK(self);
-  const PackGeometry g = self->geometry->commit();
-  GST_OBJECT_UNLOCK(self);
-  p3d::PackParams p;
+  p3d::gst::PackedFrame f;
   const char *why = nullptr;
-  if (!resolve(g, GST_VIDEO_INFO_MULTIVIEW_MODE(in), GST_VIDEO_INFO_MULTIVIEW_FLAGS(in), &p, &why)) {
+  const p3d::gst::InputFit fit = self->packing->frame_for(self->packing->commit(), in, &f, &why);
+  if (fit == p3d::gst::InputFit::NoPair) {
     gchar *text = g_strdup_printf("pseudo3dpack needs a stereo pair, and its input is %s", why);
     gst_pseudo3d_base_refuse_caps(
         base, text, "%s",
@@ -215,67 +130,39 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
     g_free(text);
     return FALSE;
   }
-  int w = 0, h = 0;
-  if (!output_for(p, in, &w, &h, &why) || w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out)) {
+  if (fit != p3d::gst::InputFit::Fits || f.width != GST_VIDEO_INFO_WIDTH(out) ||
+      f.height != GST_VIDEO_INFO_HEIGHT(out)) {
     return gst_pseudo3d_base_refuse_caps(base, "The input frame does not hold a stereo pair of the declared kind",
                                          "input %dx%d, output %dx%d: %s", GST_VIDEO_INFO_WIDTH(in),
                                          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
                                          GST_VIDEO_INFO_HEIGHT(out), why ? why : "the output size does not fit the layout");
   }
-  if (!GST_VIDEO_INFO_IS_RGB(out)) p.yuv = p3d::gst::rgb_to_yuv(out);
-  GST_OBJECT_LOCK(self);
-  p.glasses = self->params.glasses;
-  p.method = self->params.method;
-  self->active = p;
-  GST_OBJECT_UNLOCK(self);
-  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), passes_through(p, in, out));
+  self->packing->set_negotiated(f.params, out);
+  gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), passes_through(f.params, in, out));
   return TRUE;
 }
 
-// A request whose output caps equal the negotiated ones (swap-eyes of an
-// anaglyph, or a declared input layout that the caps already said) takes
-// effect at once; any other asks for renegotiation.
+// A geometry applied at once may start or end the pass-through (a declared
+// input layout that the caps already said, with the output in its
+// arrangement): the allocation is then redone.
 static gboolean frame_boundary(GstPseudo3DBase *base) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
-  GST_OBJECT_LOCK(self);
-  const bool pending = self->geometry->pending();
-  const PackGeometry want = self->geometry->requested();
-  GST_OBJECT_UNLOCK(self);
-  if (!pending) return FALSE;
-  const GstVideoInfo *in = &base->in_info, *out = &base->out_info;
-  p3d::PackParams p;
-  const char *why = nullptr;
-  int w = 0, h = 0;
-  if (!resolve(want, GST_VIDEO_INFO_MULTIVIEW_MODE(in), GST_VIDEO_INFO_MULTIVIEW_FLAGS(in), &p, &why) ||
-      !output_for(p, in, &w, &h, &why))
-    return TRUE;  // renegotiation will say why
-  const p3d::gst::MultiviewSignal sig = p3d::gst::layout_signal(p.layout, p.swap_eyes);
-  if (w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out) ||
-      sig.mode != GST_VIDEO_INFO_MULTIVIEW_MODE(out) || sig.flags != GST_VIDEO_INFO_MULTIVIEW_FLAGS(out))
-    return TRUE;
-  GST_OBJECT_LOCK(self);
-  self->geometry->activate(want);
-  p.glasses = self->params.glasses;
-  p.method = self->params.method;
-  p.yuv = self->active.yuv;
-  const bool was_identity = passes_through(self->active, in, out);
-  self->active = p;
-  GST_OBJECT_UNLOCK(self);
-  if (was_identity != passes_through(p, in, out)) {
-    gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), passes_through(p, in, out));
-    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));  // redo the allocation
+  GstBaseTransform *trans = GST_BASE_TRANSFORM(self);
+  const auto boundary = self->packing->frame_boundary(&base->in_info, &base->out_info);
+  if (boundary == p3d::gst::StereoPacking::Boundary::Applied) {
+    const bool through = passes_through(self->packing->frame_params(), &base->in_info, &base->out_info);
+    if (through != static_cast<bool>(gst_base_transform_is_passthrough(trans))) {
+      gst_base_transform_set_passthrough(trans, through);
+      gst_base_transform_reconfigure_src(trans);
+    }
   }
-  return FALSE;
+  return boundary == p3d::gst::StereoPacking::Boundary::Renegotiate;
 }
 
 static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *, GstVideoFrame *in,
                              GstVideoFrame *out) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
-  GST_OBJECT_LOCK(self);
-  p3d::PackParams params = self->active;
-  params.glasses = self->params.glasses;
-  params.method = self->params.method;
-  GST_OBJECT_UNLOCK(self);
+  const p3d::PackParams params = self->packing->frame_params();
   const p3d::FrameView src = p3d::gst::frame_view(in), dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU)
@@ -285,56 +172,40 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
 #else
   (void)path;
 #endif
-  p3d::pack_cpu(params, src, dst);
+  if (!p3d::gst::StereoPacking::pack_cpu(params, src, dst)) {
+    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the layout"),
+                      ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
+    return GST_FLOW_ERROR;
+  }
   return GST_FLOW_OK;
 }
 
 static void gst_pseudo3d_pack_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(object);
-  GST_OBJECT_LOCK(self);
-  PackGeometry g = self->geometry->requested();
-  bool geometry = true;
+  if (self->packing->set_property(prop_id, value)) return;
   switch (prop_id) {
-    case PROP_LAYOUT: g.layout = static_cast<p3d::PackLayout>(g_value_get_enum(value)); break;
-    case PROP_SWAP_EYES: g.swap_eyes = g_value_get_boolean(value); break;
-    case PROP_INPUT_LAYOUT: g.input = g_value_get_enum(value); break;
-    case PROP_INPUT_RIGHT_FIRST: g.input_right_first = g_value_get_boolean(value); break;
-    case PROP_GLASSES:
-      self->params.glasses = static_cast<p3d::AnaglyphGlasses>(g_value_get_enum(value));
-      geometry = false;
+    case PROP_INPUT_LAYOUT:
+      self->packing->request([&](p3d::gst::PackingGeometry &g) { g.input = g_value_get_enum(value); });
       break;
-    case PROP_ANAGLYPH_METHOD:
-      self->params.method = static_cast<p3d::AnaglyphMethod>(g_value_get_enum(value));
-      geometry = false;
+    case PROP_INPUT_RIGHT_FIRST:
+      self->packing->request([&](p3d::gst::PackingGeometry &g) { g.input_right_first = g_value_get_boolean(value); });
       break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      geometry = false;
-      break;
+    default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
-  const bool reconfigure = geometry && self->geometry->request(g);
-  GST_OBJECT_UNLOCK(self);
-  if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_pseudo3d_pack_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(object);
-  GST_OBJECT_LOCK(self);
-  const PackGeometry g = self->geometry->requested();
+  if (self->packing->get_property(prop_id, value)) return;
   switch (prop_id) {
-    case PROP_LAYOUT: g_value_set_enum(value, static_cast<gint>(g.layout)); break;
-    case PROP_SWAP_EYES: g_value_set_boolean(value, g.swap_eyes); break;
-    case PROP_INPUT_LAYOUT: g_value_set_enum(value, g.input); break;
-    case PROP_INPUT_RIGHT_FIRST: g_value_set_boolean(value, g.input_right_first); break;
-    case PROP_GLASSES: g_value_set_enum(value, static_cast<gint>(self->params.glasses)); break;
-    case PROP_ANAGLYPH_METHOD: g_value_set_enum(value, static_cast<gint>(self->params.method)); break;
+    case PROP_INPUT_LAYOUT: g_value_set_enum(value, self->packing->requested().input); break;
+    case PROP_INPUT_RIGHT_FIRST: g_value_set_boolean(value, self->packing->requested().input_right_first); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pseudo3d_pack_finalize(GObject *object) {
-  delete GST_PSEUDO3D_PACK(object)->geometry;
+  delete GST_PSEUDO3D_PACK(object)->packing;
   G_OBJECT_CLASS(parent_class)->finalize(object);
 }
 
@@ -342,37 +213,14 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
   GObjectClass *gobject_class = G_OBJECT_CLASS(klass);
   GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
   GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
-  const p3d::PackParams d;
-  const PackGeometry dg;
+  const p3d::gst::PackingGeometry dg;
   const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
 
   gobject_class->set_property = gst_pseudo3d_pack_set_property;
   gobject_class->get_property = gst_pseudo3d_pack_get_property;
   gobject_class->finalize = gst_pseudo3d_pack_finalize;
 
-  g_object_class_install_property(
-      gobject_class, PROP_LAYOUT,
-      g_param_spec_enum("layout", "Layout",
-                        "Stereo format of the output (a change while playing renegotiates the output caps before "
-                        "the next frame)",
-                        GST_TYPE_PSEUDO3D_LAYOUT, static_cast<gint>(dg.layout), flags));
-  g_object_class_install_property(
-      gobject_class, PROP_GLASSES,
-      g_param_spec_enum("glasses", "Anaglyph glasses", "Colour filters of the glasses (layout=anaglyph)",
-                        GST_TYPE_PSEUDO3D_GLASSES, static_cast<gint>(d.glasses), flags));
-  g_object_class_install_property(
-      gobject_class, PROP_ANAGLYPH_METHOD,
-      g_param_spec_enum("anaglyph-method", "Anaglyph method",
-                        "How colours are mixed for the glasses (layout=anaglyph): Dubois least squares ghosts "
-                        "least; colour keeps most colour; grey is the most comfortable. Encode anaglyphs as RGB or "
-                        "4:4:4: 4:2:0 chroma smears the red channel",
-                        GST_TYPE_PSEUDO3D_ANAGLYPH_METHOD, static_cast<gint>(d.method), flags));
-  g_object_class_install_property(
-      gobject_class, PROP_SWAP_EYES,
-      g_param_spec_boolean("swap-eyes", "Swap eyes",
-                           "Exchange the left and right views (cross-eyed viewing, reversed glasses); the output "
-                           "caps then say right-view-first",
-                           dg.swap_eyes, flags));
+  p3d::gst::install_pack_properties(gobject_class, PROP_PACK, p3d::gst::kPackDefaultLayout);
   g_object_class_install_property(
       gobject_class, PROP_INPUT_LAYOUT,
       g_param_spec_enum("input-layout", "Input layout",
@@ -406,16 +254,12 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
   base_class->process = process;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_pack_debug, "pseudo3dpack", 0, "pseudo3d stereo packing");
-  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_LAYOUT, (GstPluginAPIFlags)0);
-  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_GLASSES, (GstPluginAPIFlags)0);
-  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_ANAGLYPH_METHOD, (GstPluginAPIFlags)0);
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_INPUT_LAYOUT, (GstPluginAPIFlags)0);
 }
 
 static void gst_pseudo3d_pack_init(GstPseudo3DPack *self) {
-  self->params = p3d::PackParams();
-  self->geometry = new p3d::gst::StagedGeometry<PackGeometry>();
-  GST_PSEUDO3D_BASE(self)->staged = self->geometry;
-  self->active = p3d::PackParams();
+  self->packing = new p3d::gst::StereoPacking(GST_BASE_TRANSFORM(self), PROP_PACK, p3d::gst::PairSource::InputFrame,
+                                              p3d::gst::kPackDefaultLayout);
+  GST_PSEUDO3D_BASE(self)->staged = self->packing->staged();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
 }

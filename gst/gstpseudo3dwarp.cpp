@@ -31,19 +31,12 @@
  */
 #include "gstpseudo3dwarp.h"
 
-#include "gstpseudo3dpack.h"
-
-#include <vector>
-
 #include "caps_geometry.h"
 #include "depth_meta.h"
 #include "enums.h"
-#include "pack.h"
-#include "pspec_clone.h"
 #include "stage_depth.h"
 #include "stage_gpu.h"
-#include "staged_geometry.h"
-#include "stereo_caps.h"
+#include "stereo_packing.h"
 #include "video_util.h"
 #include "warp.h"
 
@@ -60,22 +53,14 @@ enum {
   PROP_CONVERGENCE,
   PROP_VIEW,
   PROP_FILL,
-  PROP_LAYOUT,
-  PROP_GLASSES,
-  PROP_ANAGLYPH_METHOD,
-  PROP_SWAP_EYES,
+  PROP_PACK,  // the pack's properties: N_PACK_PROPERTIES ids from here (stereo_packing.h)
 };
 
-// The properties that decide the output caps (see staged_geometry.h).
-struct WarpGeometry {
-  p3d::PackLayout layout = p3d::PackLayout::SideBySide;  // the pair itself
-  bool swap_eyes = false;
-  bool operator==(const WarpGeometry &o) const { return layout == o.layout && swap_eyes == o.swap_eyes; }
-};
+// The default layout: the rendered pair itself.
+constexpr p3d::PackLayout kDefaultLayout = p3d::PackLayout::SideBySide;
 
 struct WarpState {
   p3d::WarpCpuScratch cpu;  // the CPU path's planes, reused frame to frame (streaming thread only)
-  std::vector<uint8_t> pair;  // the CPU path's pair before it is packed (any layout but the pair itself)
 #if HAVE_CUDA
   p3d::WarpRendererGpu gpu;
 #endif
@@ -83,11 +68,8 @@ struct WarpState {
 
 struct _GstPseudo3DWarp {
   GstPseudo3DBase parent;
-  /* object lock */
-  p3d::WarpParams params;
-  p3d::PackParams pack;  // glasses and method are read per frame; layout and swap-eyes through geometry
-  p3d::gst::StagedGeometry<WarpGeometry> *geometry;
-  p3d::PackParams active;  // the geometry of the negotiated caps, with the output's 4:2:0 conversion
+  p3d::WarpParams params;  // object lock
+  p3d::gst::StereoPacking *packing;
   WarpState *state;
 };
 
@@ -100,21 +82,13 @@ GST_ELEMENT_REGISTER_DEFINE(pseudo3dwarp, "pseudo3dwarp", GST_RANK_NONE, GST_TYP
 // format or, for encoders, NV12/I420; the pixel aspect ratio is the
 // input's. Towards the sink: the input sizes that give it, in any format.
 static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
-  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
-  GST_OBJECT_LOCK(self);
-  const WarpGeometry g = self->geometry->negotiating();
-  GST_OBJECT_UNLOCK(self);
-  gint wn, hn;  // output size over input size per axis: the layout's frame of views of 1 x 1
-  p3d::pack_size(g.layout, 1, 1, &wn, &hn);
-  if (from == GST_PAD_SINK) {
-    GstStructure *s = gst_pseudo3d_sizes_forward(in, wn, 1, hn, 1);
-    gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
-    p3d::gst::set_multiview_fields(s, p3d::gst::layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
-    return p3d::gst::packed_output_caps(s);
-  }
+  p3d::gst::StereoPacking *packing = GST_PSEUDO3D_WARP(base)->packing;
+  const p3d::gst::PackingGeometry g = packing->negotiating();
+  if (from == GST_PAD_SINK) return packing->output_caps(in, g);
   GstCaps *caps = gst_caps_new_empty();
-  for (const bool rounded : {false, true}) {  // the exact sizes first (gst_pseudo3d_sizes_back())
-    GstStructure *s = gst_pseudo3d_sizes_back(in, wn, 1, hn, 1, rounded);
+  // The exact sizes first (gst_pseudo3d_sizes_back()).
+  for (const auto way : {p3d::gst::SizeWay::BackExact, p3d::gst::SizeWay::BackRounded}) {
+    GstStructure *s = packing->through(in, way, g.layout);
     gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
     gst_pseudo3d_set_formats(s, P3D_ALL_FORMATS);
     caps = gst_caps_merge_structure(caps, s);
@@ -123,72 +97,23 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
 }
 
 static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, GstCaps *, GstVideoInfo *out) {
-  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
-  GST_OBJECT_LOCK(self);
-  const WarpGeometry g = self->geometry->commit();
-  GST_OBJECT_UNLOCK(self);
-  int w = 0, h = 0;
-  p3d::pack_size(g.layout, GST_VIDEO_INFO_WIDTH(in), GST_VIDEO_INFO_HEIGHT(in), &w, &h);
-  if (GST_VIDEO_INFO_WIDTH(out) != w || GST_VIDEO_INFO_HEIGHT(out) != h) {
+  p3d::gst::StereoPacking *packing = GST_PSEUDO3D_WARP(base)->packing;
+  p3d::gst::PackedFrame f;
+  const char *why = nullptr;
+  packing->frame_for(packing->commit(), in, &f, &why);  // a rendered pair always fits
+  if (GST_VIDEO_INFO_WIDTH(out) != f.width || GST_VIDEO_INFO_HEIGHT(out) != f.height) {
     return gst_pseudo3d_base_refuse_caps(base, "The output does not have the size of the layout's frame",
                                          "input %dx%d, output %dx%d, layout's frame %dx%d", GST_VIDEO_INFO_WIDTH(in),
                                          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
-                                         GST_VIDEO_INFO_HEIGHT(out), w, h);
+                                         GST_VIDEO_INFO_HEIGHT(out), f.width, f.height);
   }
-  p3d::PackParams p;
-  p.layout = g.layout;
-  p.swap_eyes = g.swap_eyes;
-  if (!GST_VIDEO_INFO_IS_RGB(out)) p.yuv = p3d::gst::rgb_to_yuv(out);
-  GST_OBJECT_LOCK(self);
-  self->active = p;
-  GST_OBJECT_UNLOCK(self);
+  packing->set_negotiated(f.params, out);
   return TRUE;
 }
 
-// A request whose output caps equal the negotiated ones (swap-eyes of an
-// anaglyph) takes effect at once; any other asks for renegotiation.
 static gboolean frame_boundary(GstPseudo3DBase *base) {
-  GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
-  GST_OBJECT_LOCK(self);
-  const bool pending = self->geometry->pending();
-  const WarpGeometry want = self->geometry->requested();
-  GST_OBJECT_UNLOCK(self);
-  if (!pending) return FALSE;
-  const GstVideoInfo *in = &base->in_info, *out = &base->out_info;
-  int w = 0, h = 0;
-  p3d::pack_size(want.layout, GST_VIDEO_INFO_WIDTH(in), GST_VIDEO_INFO_HEIGHT(in), &w, &h);
-  const p3d::gst::MultiviewSignal sig = p3d::gst::layout_signal(want.layout, want.swap_eyes);
-  if (w != GST_VIDEO_INFO_WIDTH(out) || h != GST_VIDEO_INFO_HEIGHT(out) ||
-      sig.mode != GST_VIDEO_INFO_MULTIVIEW_MODE(out) || sig.flags != GST_VIDEO_INFO_MULTIVIEW_FLAGS(out))
-    return TRUE;
-  GST_OBJECT_LOCK(self);
-  self->geometry->activate(want);
-  self->active.layout = want.layout;
-  self->active.swap_eyes = want.swap_eyes;
-  GST_OBJECT_UNLOCK(self);
-  return FALSE;
-}
-
-// The CPU path: the pair straight into the output where the layout is the
-// pair itself, else into the element's pair buffer (in the output's packed
-// format, RGBA for 4:2:0), then packed by pack_cpu. The hole count, or -1
-// when the frames do not fit.
-static long long render_cpu(WarpState *state, const p3d::WarpParams &params, const p3d::PackParams &pack,
-                            const p3d::FrameView &src, const p3d::YuvToRgb &yuv, p3d::ImageView<const float> depth,
-                            const p3d::FrameView &dst) {
-  if (p3d::pack_is_identity(pack) && p3d::is_packed_rgb(dst.format))
-    return p3d::warp_render_cpu(params, src, yuv, depth, dst, state->cpu);
-  p3d::FrameView pair;
-  pair.format = p3d::is_packed_rgb(dst.format) ? dst.format : p3d::PixelFormat::RGBA;
-  pair.width = 2 * src.width;
-  pair.height = src.height;
-  pair.stride[0] = 4 * pair.width;
-  state->pair.resize(static_cast<size_t>(pair.stride[0]) * pair.height);
-  pair.plane[0] = state->pair.data();
-  const long long holes = p3d::warp_render_cpu(params, src, yuv, depth, pair, state->cpu);
-  if (holes < 0 || !p3d::pack_args_valid(pack, pair, dst)) return -1;
-  p3d::pack_cpu(pack, pair, dst);
-  return holes;
+  return GST_PSEUDO3D_WARP(base)->packing->frame_boundary(&base->in_info, &base->out_info) ==
+         p3d::gst::StereoPacking::Boundary::Renegotiate;
 }
 
 static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
@@ -199,10 +124,8 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
   const p3d::WarpParams params = self->params;
-  p3d::PackParams pack = self->active;
-  pack.glasses = self->pack.glasses;
-  pack.method = self->pack.method;
   GST_OBJECT_UNLOCK(self);
+  const p3d::PackParams pack = self->packing->frame_params();
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   const p3d::FrameView dst = p3d::gst::frame_view(out);
 #if HAVE_CUDA
@@ -213,8 +136,11 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
     });
   }
 #endif
-  const long long holes = render_cpu(self->state, params, pack, src, yuv, p3d::as_const(depth->view()), dst);
-  if (holes < 0) {
+  // The CPU path: the pair into the output where the layout is the pair
+  // itself, else into the pair buffer, then packed.
+  const p3d::FrameView pair = self->packing->pair_target(pack, src.width, src.height, dst);
+  const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), pair, self->state->cpu);
+  if (holes < 0 || !p3d::gst::StereoPacking::pack_cpu(pack, pair, dst)) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
@@ -233,50 +159,34 @@ static void release(GstPseudo3DBase *base) {
 
 static void gst_pseudo3d_warp_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(object);
-  bool reconfigure = false;
+  if (self->packing->set_property(prop_id, value)) return;
   GST_OBJECT_LOCK(self);
   switch (prop_id) {
     case PROP_MAX_DISPARITY: self->params.max_disparity = g_value_get_float(value); break;
     case PROP_CONVERGENCE: self->params.convergence = g_value_get_float(value); break;
     case PROP_VIEW: self->params.view = static_cast<p3d::StereoView>(g_value_get_enum(value)); break;
     case PROP_FILL: self->params.fill = static_cast<p3d::HoleFill>(g_value_get_enum(value)); break;
-    case PROP_GLASSES: self->pack.glasses = static_cast<p3d::AnaglyphGlasses>(g_value_get_enum(value)); break;
-    case PROP_ANAGLYPH_METHOD: self->pack.method = static_cast<p3d::AnaglyphMethod>(g_value_get_enum(value)); break;
-    case PROP_LAYOUT:
-    case PROP_SWAP_EYES: {
-      WarpGeometry g = self->geometry->requested();
-      if (prop_id == PROP_LAYOUT)
-        g.layout = static_cast<p3d::PackLayout>(g_value_get_enum(value));
-      else
-        g.swap_eyes = g_value_get_boolean(value);
-      reconfigure = self->geometry->request(g);
-      break;
-    }
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
-  if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_pseudo3d_warp_get_property(GObject *object, guint prop_id, GValue *value, GParamSpec *pspec) {
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(object);
+  if (self->packing->get_property(prop_id, value)) return;
   GST_OBJECT_LOCK(self);
   switch (prop_id) {
     case PROP_MAX_DISPARITY: g_value_set_float(value, self->params.max_disparity); break;
     case PROP_CONVERGENCE: g_value_set_float(value, self->params.convergence); break;
     case PROP_VIEW: g_value_set_enum(value, static_cast<gint>(self->params.view)); break;
     case PROP_FILL: g_value_set_enum(value, static_cast<gint>(self->params.fill)); break;
-    case PROP_LAYOUT: g_value_set_enum(value, static_cast<gint>(self->geometry->requested().layout)); break;
-    case PROP_SWAP_EYES: g_value_set_boolean(value, self->geometry->requested().swap_eyes); break;
-    case PROP_GLASSES: g_value_set_enum(value, static_cast<gint>(self->pack.glasses)); break;
-    case PROP_ANAGLYPH_METHOD: g_value_set_enum(value, static_cast<gint>(self->pack.method)); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pseudo3d_warp_finalize(GObject *object) {
-  delete GST_PSEUDO3D_WARP(object)->geometry;
+  delete GST_PSEUDO3D_WARP(object)->packing;
   delete GST_PSEUDO3D_WARP(object)->state;
   G_OBJECT_CLASS(parent_class)->finalize(object);
 }
@@ -286,7 +196,6 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
   GstElementClass *element_class = GST_ELEMENT_CLASS(klass);
   GstPseudo3DBaseClass *base_class = GST_PSEUDO3D_BASE_CLASS(klass);
   const p3d::WarpParams d;
-  const WarpGeometry dg;
   const auto flags = (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING);
 
   gobject_class->set_property = gst_pseudo3d_warp_set_property;
@@ -316,26 +225,12 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
       g_param_spec_enum("fill", "Hole filling",
                         "How disocclusion holes are filled", GST_TYPE_PSEUDO3D_FILL, static_cast<gint>(d.fill), flags));
 
-  // The pack's properties, as pseudo3dpack has them (its blurbs), but for
-  // layout, whose default here is the pair itself.
-  g_object_class_install_property(
-      gobject_class, PROP_LAYOUT,
-      g_param_spec_enum("layout", "Layout",
-                        "Stereo format of the output: side-by-side (default) is the rendered pair itself, for "
-                        "pseudo3dpack; any other packs it here, as pseudo3dpack would (on the GPU an anaglyph in one "
-                        "pass with the views). A change while playing renegotiates the output caps before the next "
-                        "frame",
-                        GST_TYPE_PSEUDO3D_LAYOUT, static_cast<gint>(dg.layout), flags));
-  auto *pack_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_PACK));
-  const struct {
-    guint id;
-    const char *name;
-  } kPackProperties[] = {{PROP_GLASSES, "glasses"}, {PROP_ANAGLYPH_METHOD, "anaglyph-method"},
-                         {PROP_SWAP_EYES, "swap-eyes"}};
-  for (const auto &pp : kPackProperties)
-    g_object_class_install_property(gobject_class, pp.id,
-                                    p3d::gst::clone_pspec(g_object_class_find_property(pack_class, pp.name)));
-  g_type_class_unref(pack_class);
+  // The pack's properties; layout's default here is the pair itself.
+  p3d::gst::install_pack_properties(
+      gobject_class, PROP_PACK, kDefaultLayout,
+      "Stereo format of the output: side-by-side (default) is the rendered pair itself, for pseudo3dpack; any other "
+      "packs it here, as pseudo3dpack would (on the GPU an anaglyph in one pass with the views). A change while "
+      "playing renegotiates the output caps before the next frame");
 
   gst_element_class_set_static_metadata(element_class, "pseudo3d DIBR view synthesis", "Filter/Effect/Video",
                                         "Renders left and right views from a frame and its depth map, side by "
@@ -361,11 +256,9 @@ static void gst_pseudo3d_warp_class_init(GstPseudo3DWarpClass *klass) {
 
 static void gst_pseudo3d_warp_init(GstPseudo3DWarp *self) {
   self->params = p3d::WarpParams();
-  self->pack = p3d::PackParams();
-  self->geometry = new p3d::gst::StagedGeometry<WarpGeometry>();
-  GST_PSEUDO3D_BASE(self)->staged = self->geometry;
-  self->active = p3d::PackParams();
-  self->active.layout = WarpGeometry().layout;
+  self->packing = new p3d::gst::StereoPacking(GST_BASE_TRANSFORM(self), PROP_PACK, p3d::gst::PairSource::Rendered,
+                                              kDefaultLayout);
+  GST_PSEUDO3D_BASE(self)->staged = self->packing->staged();
   self->state = new WarpState();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
 }

@@ -1,6 +1,6 @@
 // A property of one element offered by another under the same name, range,
-// default and blurb: pseudo3dconvert offers its stages' properties, and
-// pseudo3dwarp pseudo3dpack's glasses, anaglyph-method and swap-eyes.
+// default and blurb: pseudo3dconvert offers its stages' properties (the
+// pack's through stereo_packing.h, which makes their specs).
 #pragma once
 
 #include <gst/gst.h>
