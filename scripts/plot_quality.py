@@ -10,6 +10,7 @@ first in PATH may lack matplotlib. scripts/quality-report.sh calls this.
 import json
 import math
 import os
+import re
 import sys
 
 import matplotlib
@@ -28,13 +29,51 @@ VARIANT_STYLE = {"exact": ("black", "o"), "stride2": ("tab:orange", "s"), "separ
 
 
 def load(path):
-    rows = []
+    """The file's rows, each measurement tagged (key "_run") with the run line
+    before it: a study measured again is merged by replacing its rows with
+    the new file's, run line first, so every row keeps its provenance."""
+    rows, run = [], {}
     with open(path) as f:
         for line in f:
             line = line.strip()
-            if line:
-                rows.append(json.loads(line))
+            if not line:
+                continue
+            r = json.loads(line)
+            if r.get("kind") == "run":
+                run = r
+            else:
+                r["_run"] = run
+            rows.append(r)
     return rows
+
+
+def run_of(rows):
+    """The run line of a study's rows (its first row's)."""
+    return rows[0].get("_run", {}) if rows else {}
+
+
+def provenance(run):
+    """Machine, date, commit and command of one run, for a table's header."""
+    git = run.get("git") or "?"
+    commit = f"`{git[:-6]}` (with uncommitted changes)" if git.endswith("-dirty") else f"`{git}`"
+    runs = run.get("runs")
+    timing = "one run per configuration" if runs == 1 else f"medians of {runs or '?'} runs"
+    return (f"Measured on {cpu_name(run)} with {threads(run)}, OpenCV {run.get('opencv', '?')}, "
+            f"{run.get('date', '?')[:10]}, commit {commit}, {timing}: `{run.get('args', '?')}`.")
+
+
+# Settings that tools/quality/ (flicker.cpp, depth_rank.cpp) labels by a date
+# or as "previous": the report names them by what they set.
+SETTING_NAMES = {
+    "2026-11-22": "4-pixel blocks, no feature smoothing",
+    "previous": "4-pixel blocks, no feature smoothing, no ground contact",
+}
+CUE_NAMES = {"previous": "no ground contact"}
+
+
+def setting_name(r):
+    label = r.get("setting", "defaults")
+    return SETTING_NAMES.get(label, label)
 
 
 def of_kind(rows, kind):
@@ -50,6 +89,16 @@ def fmt(v, digits=2):
 def threads(run):
     n = run.get("cpu_threads")
     return f"{n} OpenCV thread{'' if n == 1 else 's'}" if n is not None else "? OpenCV threads"
+
+
+def cpu_name(run):
+    """The run's CPU model without trademark marks."""
+    return " ".join(re.sub(r"\((R|TM)\)", "", run.get("cpu") or "?").split())
+
+
+def machine(run):
+    """A run's CPU, threads and date, for a plot's panel."""
+    return f"{cpu_name(run)}, {threads(run)}, {run.get('date', '?')[:10]}"
 
 
 def sfmt(v, digits=2):
@@ -87,7 +136,8 @@ def plot(rows, png):
     ax1.set_xscale("log")
     ax1.set_xlabel("filter + warp time per frame, ms (CPU, log scale)")
     ax1.set_ylabel("PSNR against aloeR, dB")
-    ax1.set_title("Aloe right view: fill x filter radius (r0 = GT depth as is)", fontsize=9)
+    ax1.set_title(f"Aloe right view: fill x filter radius (r0 = GT depth as is)\n{machine(run_of(synth))}",
+                  fontsize=9)
     ax1.grid(True, which="both", alpha=0.3)
     ax1.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
 
@@ -106,13 +156,12 @@ def plot(rows, png):
     ax2.set_xscale("log")
     ax2.set_xlabel("filter time per frame, ms (CPU, log scale)")
     ax2.set_ylabel("mean |error| against the exact filter, 8-bit levels")
-    ax2.set_title("Cross-bilateral filter: exact window vs faster variants", fontsize=9)
+    ax2.set_title(f"Cross-bilateral filter: exact window vs faster variants\n{machine(run_of(variants))}",
+                  fontsize=9)
     ax2.grid(True, which="both", alpha=0.3)
     ax2.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
 
-    run = next((r for r in rows if r.get("kind") == "run"), {})
-    fig.suptitle(f"pseudo3d quality vs run time, 1282x1110 Aloe, {run.get('cpu', 'CPU')} "
-                 f"({threads(run)}), {run.get('date', '')[:10]}", fontsize=10)
+    fig.suptitle("pseudo3d quality vs run time, 1282x1110 Aloe, CPU reference", fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.dirname(png) or ".", exist_ok=True)
     fig.savefig(png, dpi=90)
@@ -126,6 +175,11 @@ def outside_share(r):
     """Share of the squared error outside the known-correspondence mask: PSNR
     is 10 log10(peak^2 / MSE), so MSE_mask / MSE_all = 10^((psnr - psnr_masked) / 10)."""
     return 1 - r["mask_fraction"] * 10 ** ((r["psnr"] - r["psnr_masked"]) / 10)
+
+
+def lowers(a, b):
+    """'lowers' where going from a to b lowers the figure, else 'raises'."""
+    return "lowers" if b < a else "raises"
 
 
 def synthesis_section(rows):
@@ -143,7 +197,8 @@ def synthesis_section(rows):
         b = base[0]
         lines.append(["(no warp: aloeL as is)", "-", fmt(b["psnr"]), fmt(b["ssim"], 4), fmt(b["psnr_masked"]),
                       "-", "-", "-", "-", "-"])
-    out = [table(["depth filter", "fill", "PSNR dB", "SSIM", "PSNR dB, known corr.", "PSNR dB, holes", "holes %",
+    out = [provenance(run_of(synth)) + " The bounds below come from the same run.", "",
+           table(["depth filter", "fill", "PSNR dB", "SSIM", "PSNR dB, known corr.", "PSNR dB, holes", "holes %",
                   "filter ms", "warp ms", "total ms"], lines)]
     get = {(r["radius"], r["fill"]): r for r in synth}
     notes = []
@@ -152,11 +207,11 @@ def synthesis_section(rows):
     na0 = get.get((0, "neighbor-average"))
     if sm0 and bg0 and base:
         notes.append(f"The warp with the true depth scores {fmt(sm0['psnr'])} dB / SSIM {fmt(sm0['ssim'], 3)} with "
-                     f"fill=background-smooth, against {fmt(bg0['psnr'])} dB / {fmt(bg0['ssim'], 3)} with "
-                     f"background ({sfmt(sm0['psnr'] - bg0['psnr'])} dB, {sfmt(sm0['ssim'] - bg0['ssim'], 4)} SSIM). "
-                     f"background-smooth is the default since 2026-11-23: on an H100 it costs 0.100 ms per 4K frame "
-                     f"over fill=none, 0.08 ms more than background ([benchmarks.md](benchmarks.md)). "
-                     f"It scores "
+                     f"fill=background-smooth, the default, against {fmt(bg0['psnr'])} dB / {fmt(bg0['ssim'], 3)} "
+                     f"with background ({sfmt(sm0['psnr'] - bg0['psnr'])} dB, {sfmt(sm0['ssim'] - bg0['ssim'], 4)} "
+                     f"SSIM), for {fmt(sm0['warp_ms'] - bg0['warp_ms'], 1)} ms more warp time here; that gain is "
+                     f"why it is the default (its GPU cost: [benchmarks.md](benchmarks.md#default-fill), "
+                     f"\"Default fill\"). It scores "
                      f"{fmt(sm0['psnr'] - base[0]['psnr'])} dB over the unwarped left view. On the pixels with a known "
                      f"correspondence it reaches {fmt(sm0['psnr_masked'])} dB; "
                      f"{fmt(100 * outside_share(sm0), 0)} % of the squared error lies in the other "
@@ -164,7 +219,7 @@ def synthesis_section(rows):
                      f"{fmt(100 * sm0['hole_fraction'], 1)} % the warp leaves as holes (disocclusions, the right border "
                      f"band, the gaps beside unknown-GT pixels), where it scores {fmt(sm0['psnr_holes'])} dB against "
                      f"{fmt(bg0['psnr_holes'])} dB for background.")
-    if sm0 and na0:
+    if sm0 and bg0 and na0:
         notes.append(f"Neighbour averaging (the paper's inpainting) scores {fmt(na0['psnr'])} dB / "
                      f"{fmt(na0['ssim'], 3)} at {fmt(na0['warp_ms'] / bg0['warp_ms'], 1)}x background's warp time "
                      f"(iterations scale with the hole width); `none` shows the unfilled holes (magenta) for scale.")
@@ -186,7 +241,7 @@ def bounds_section(rows):
     get = {r["blur_sigma"]: r for r in bounds}
     smooth = next((r for r in of_kind(rows, "synthesis") if r["fill"] == "background-smooth" and r["radius"] == 0),
                   None)
-    if 4.0 in get and smooth:
+    if 4.0 in get and 16.0 in get and smooth:
         out += ["", f"A fill sees nothing of the real right view in its holes. Even aloeR blurred with sigma 4 pixels "
                 f"in the holes scores SSIM {fmt(get[4.0]['ssim'], 3)}, and sigma 16 {fmt(get[16.0]['ssim'], 3)}: SSIM's "
                 f"11-pixel window rewards detail only where it matches the real view, and detail that does not match "
@@ -212,19 +267,19 @@ def filter_section(rows):
                       fmt(r["max_abs"] * LEVEL, 1), fmt(r["mean_abs"] * LEVEL, 3),
                       "exact" if r["variant"] == "exact" else fmt(r["psnr_vs_exact"]),
                       fmt(r.get("synth_psnr")) if "synth_psnr" in r else "-"])
-    out = [table(["input depth", "radius", "variant", "ms", "speed-up", "max abs err (levels)",
+    out = [provenance(run_of(variants)), "",
+           table(["input depth", "radius", "variant", "ms", "speed-up", "max abs err (levels)",
                   "mean abs err (levels)", "PSNR vs exact dB", "right-view PSNR dB"], lines)]
     notes = []
-    for inp in ("estimated", "ground-truth"):
-        for radius in (5, 10):
-            e = exact.get((inp, radius))
-            sep = next((r for r in variants if r["variant"] == "separable" and r["input"] == inp
-                        and r["radius"] == radius), None)
-            if inp == "estimated" and e and sep:
-                notes.append(f"Radius {radius}, estimated depth: the separable variant takes "
-                             f"{fmt(sep['time_ms'], 1)} ms against {fmt(e['time_ms'], 1)} ms "
-                             f"({fmt(e['time_ms'] / sep['time_ms'], 1)}x faster), off by {fmt(sep['mean_abs'] * LEVEL, 2)} "
-                             f"levels on average and {fmt(sep['max_abs'] * LEVEL, 0)} at worst.")
+    sep = {radius: next((r for r in variants if r["variant"] == "separable" and r["input"] == "estimated"
+                         and r["radius"] == radius), None) for radius in (5, 10)}
+    ex = {radius: exact.get(("estimated", radius)) for radius in (5, 10)}
+    if all(sep.values()) and all(ex.values()):
+        speed = {k: fmt(ex[k]["time_ms"] / sep[k]["time_ms"], 1) for k in (5, 10)}
+        notes.append(f"On the estimated depth the separable variant is {speed[5]}x as fast as the exact window at "
+                     f"radius 5 and {speed[10]}x at radius 10, off by {fmt(sep[5]['mean_abs'] * LEVEL, 2)} and "
+                     f"{fmt(sep[10]['mean_abs'] * LEVEL, 2)} levels on average ({fmt(sep[5]['max_abs'] * LEVEL, 0)} "
+                     f"and {fmt(sep[10]['max_abs'] * LEVEL, 0)} at worst).")
     gt5 = [r for r in variants if r["input"] == "ground-truth" and r["radius"] == 5 and r.get("synth_psnr")]
     if gt5:
         spread = max(r["synth_psnr"] for r in gt5) - min(r["synth_psnr"] for r in gt5)
@@ -233,32 +288,40 @@ def filter_section(rows):
                      f"tap pattern that skips a thin structure (stride 2) or reaches it only through an L-shaped "
                      f"path (separable) can weigh the other side of the edge. The separable pass is the cheapest; "
                      f"its time grows linearly with the radius, the exact window's quadratically. It is "
-                     f"`BilateralParams::mode = Separable` in common/bilateral.h (CPU and GPU); stride 2 stays a "
-                     f"study in tools/quality/filter_variants.cpp.")
+                     f"`BilateralParams::mode = Separable` in common/bilateral.h (CPU and GPU).")
     return out + [""] + notes
+
+
+def cue_label(r):
+    """A depth-rank row's cue by name; input_format rows with their format."""
+    if r["cue"] == "input_format":
+        return f"input_format {r.get('format', '?')}"
+    return CUE_NAMES.get(r["cue"], r["cue"])
 
 
 def depth_section(rows):
     ranks = of_kind(rows, "depth_rank")
     if not ranks:
         return ["No depth-rank measurements in this run."]
-    key = lambda r: (r["cue"], r["hypothesis"], r["block_size"], r["edge_threshold"], r["region_weight"],
-                     r["ground_contact"], r["filter_radius"])
+    key = lambda r: (r["cue"], r.get("format"), r["hypothesis"], r["block_size"], r["edge_threshold"],
+                     r["region_weight"], r["ground_contact"], r["filter_radius"])
     half = {key(r): r for r in ranks if r.get("scale") == "half"}
     lines = []
     for r in ranks:
         if r.get("scale") != "full":
             continue
         h = half.get(key(r))
-        lines.append([r["cue"], r["hypothesis"], block_label(r), fmt(r["edge_threshold"], 0),
+        lines.append([cue_label(r), r["hypothesis"], block_label(r), fmt(r["edge_threshold"], 0),
                       fmt(r["region_weight"], 2), fmt(r["ground_contact"], 2), r["filter_radius"],
                       fmt(r["spearman"], 3), fmt(h["spearman"], 3) if h else "-", fmt(r["time_ms"], 1)])
     full0 = next((r for r in ranks if r.get("scale") == "full"), {})
     half0 = next((r for r in ranks if r.get("scale") == "half"), {})
-    out = [f"Full size {full0.get('width', '?')}x{full0.get('height', '?')}, half size "
-           f"{half0.get('width', '?')}x{half0.get('height', '?')}; each row moves one cue away from the defaults "
-           f"(`previous`: the defaults before the ground-contact cue and the automatic block size: block_size 4, "
-           f"ground_contact 0, region_weight 0.75; block_size `auto (n)`: the automatic size and what it came to).",
+    out = [provenance(run_of(ranks)), "",
+           f"Full size {full0.get('width', '?')}x{full0.get('height', '?')}, half size "
+           f"{half0.get('width', '?')}x{half0.get('height', '?')}, RGBA unless the cue is input_format; each row "
+           f"moves one cue away from the defaults, but `{CUE_NAMES['previous']}`: the estimator without the "
+           f"ground-contact cue and the automatic block size (ground_contact 0, block_size 4, region_weight 0.75). "
+           f"block_size `auto (n)`: the automatic size and what it came to.",
            "",
            table(["cue", "hypothesis", "block_size", "edge_threshold", "region_weight", "ground_contact",
                   "filter radius", "rho full", "rho half", "ms (full)"], lines)]
@@ -274,9 +337,8 @@ def depth_section(rows):
     if all(d.values()) and all(p.values()) and all(b4.values()):
         notes.append(f"With the defaults rho is {fmt(d['full']['spearman'], 3)} at full size and "
                      f"{fmt(d['half']['spearman'], 3)} at half size, against {fmt(b4['full']['spearman'], 3)} and "
-                     f"{fmt(b4['half']['spearman'], 3)} with 4-pixel blocks (the default until 2026-11-23) and "
-                     f"{fmt(p['full']['spearman'], 3)} and {fmt(p['half']['spearman'], 3)} before the ground-contact "
-                     f"cue.")
+                     f"{fmt(b4['half']['spearman'], 3)} with 4-pixel blocks and {fmt(p['full']['spearman'], 3)} and "
+                     f"{fmt(p['half']['spearman'], 3)} with `{CUE_NAMES['previous']}`.")
     if all(d.values()) and all(g0.values()):
         notes.append(f"Ground contact (a region takes the hypothesis of its nearest block: for top-bottom its lowest "
                      f"one, where an object stands on the ground) with region_weight 0.9 raises rho from "
@@ -285,12 +347,11 @@ def depth_section(rows):
                      f"depends on regions staying whole: with 4-pixel blocks at half size, twice as coarse relative "
                      f"to the picture, thin leaves break away from the plant and each takes its own contact.")
     if all(d.values()):
-        notes.append(f"The automatic block size (block_size 0, the default since 2026-11-23: one block per 540 pixels "
-                     f"of the picture's shorter side, at least 2) comes to {d['full'].get('effective_block_size')} "
-                     f"at both of Aloe's sizes, which keeps the leaves whole, and to 2 up to 1080p, 4 at 4K, 8 at 8K: "
-                     f"blocks cover the same share of the scene at every resolution, and 4K runs as before. Without "
-                     f"the feature smoothing that came with it, 2-pixel blocks doubled the static-background flicker "
-                     f"of vtest.avi (below).")
+        notes.append(f"The automatic block size (block_size 0, the default: one block per 540 pixels of the "
+                     f"picture's shorter side, at least 2) comes to {d['full'].get('effective_block_size')} at both "
+                     f"of Aloe's sizes, which keeps the leaves whole, and to 2 up to 1080p, 4 at 4K, 8 at 8K: blocks "
+                     f"cover the same share of the scene at every resolution. On video, 2-pixel blocks flicker more "
+                     f"than 4-pixel ones (see Flicker below).")
     notes.append("The other cues: region_weight moves rho monotonically (the more a block takes its region's value, "
                  "the more the ground contact counts); edge_threshold has a broad optimum around 24-32 and collapses "
                  "at 48, where the backdrop merges with the floor and one region spans the picture; the filter "
@@ -316,13 +377,14 @@ def flicker_section(rows):
         return [f"Flicker not measured: {errors[0]['error']}"]
     if not flick:
         return ["No flicker measurements in this run."]
-    lines = [[r.get("setting", "defaults"), r["stage"], fmt(r["temporal_smoothing"], 2),
+    lines = [[setting_name(r), r["stage"], fmt(r["temporal_smoothing"], 2),
               fmt(r["mean_abs"] * LEVEL, 3), fmt(r["p95_abs"] * LEVEL, 3),
               fmt(r["worst_frame_mean_abs"] * LEVEL, 3), fmt(100 * r["share_over_1_level"], 2),
               fmt(r["mean_abs_all_pixels"] * LEVEL, 3), fmt(r.get("depth_std", float("nan")) * LEVEL, 1),
               f"{r['cuts']}/{r['smoothed']}/{r['reused']}", fmt(r["time_ms"], 1)] for r in flick]
     f0 = flick[0]
-    out = [f"{f0['frames']} frames of {f0['video']} ({f0['width']}x{f0['height']}, decoded by OpenCV's "
+    out = [provenance(run_of(flick)), "",
+           f"{f0['frames']} frames of {f0['video']} ({f0['width']}x{f0['height']}, decoded by OpenCV's "
            f"{f0.get('decoder') or '?'} backend); static background = "
            f"{fmt(100 * f0['mask_fraction'], 1)} % of the pixels (luma standard deviation under "
            f"{fmt(f0['static_std_levels'], 0)} levels over the run). Changes in 8-bit depth levels (1 level = 1/255); "
@@ -334,35 +396,34 @@ def flicker_section(rows):
                   "ms/frame"], lines)]
     get = {(r.get("setting", "defaults"), r["stage"], r["temporal_smoothing"]): r for r in flick}
     on, off = get.get(("defaults", "filtered", 0.5)), get.get(("defaults", "filtered", 0.0))
-    old, prev = get.get(("2026-11-22", "filtered", 0.5)), get.get(("previous", "filtered", 0.5))
+    strong = get.get(("defaults", "filtered", 0.9))
+    coarse_plain, no_contact = get.get(("2026-11-22", "filtered", 0.5)), get.get(("previous", "filtered", 0.5))
     fine = get.get(("block_size 2, no feature smoothing", "filtered", 0.5))
     coarse, light = get.get(("block_size 4", "filtered", 0.5)), get.get(("feature_smoothing 0.5", "filtered", 0.5))
+    lv = lambda r: fmt(r["mean_abs"] * LEVEL, 3)
     notes = []
-    if on and old and prev:
+    if on and coarse_plain and no_contact:
         notes.append(f"With the defaults (automatic block size, here {on.get('effective_block_size', '?')} pixels; "
                      f"feature smoothing {fmt(on.get('feature_smoothing', float('nan')), 2)}; temporal smoothing 0.5) "
-                     f"the depth the warp receives changes by {fmt(on['mean_abs'] * LEVEL, 3)} levels per frame on "
-                     f"the static background, against {fmt(old['mean_abs'] * LEVEL, 3)} with the defaults of "
-                     f"2026-11-22 (4-pixel blocks, no feature smoothing) and {fmt(prev['mean_abs'] * LEVEL, 3)} "
-                     f"before the ground-contact cue; {fmt(100 * on['share_over_1_level'], 2)} % of the changes "
-                     f"reach one level (2026-11-22: {fmt(100 * old['share_over_1_level'], 2)} %). Over all pixels, "
-                     f"walkers included, the change is {fmt(on['mean_abs_all_pixels'] * LEVEL, 2)} levels per frame "
-                     f"(2026-11-22: {fmt(old['mean_abs_all_pixels'] * LEVEL, 2)}). The maps use less of the depth "
-                     f"range on this video (std {fmt(on['depth_std'] * LEVEL, 1)} levels against "
-                     f"{fmt(old['depth_std'] * LEVEL, 1)}): finer blocks make more, smaller regions.")
-    if fine and coarse and light and old:
-        notes.append(f"Each change alone: 2-pixel blocks without feature smoothing flicker by "
-                     f"{fmt(fine['mean_abs'] * LEVEL, 3)} levels per frame ({fmt(100 * fine['share_over_1_level'], 2)} "
-                     f"% of the changes reaching one level) and reuse {fine['reused']} frames against {old['reused']}: "
-                     f"a 2x2 block of 4:2:0 video carries one chroma sample and twice the noise of a 4x4 block mean, "
-                     f"so edges near the threshold flip from frame to frame. Feature smoothing (edges compare block "
-                     f"colours averaged over the frames since the block last moved by 8 levels) removes that: "
-                     f"{fmt(coarse['mean_abs'] * LEVEL, 3)} levels with 4-pixel blocks (against "
-                     f"{fmt(old['mean_abs'] * LEVEL, 3)} without), {fmt(on['mean_abs'] * LEVEL, 3)} with the automatic "
-                     f"size; a weight of 0.5 is too little ({fmt(light['mean_abs'] * LEVEL, 3)}).")
-    if on and off and off["mean_abs"] > 0:
-        notes.append(f"Temporal smoothing still halves the flicker ({fmt(off['mean_abs'] * LEVEL, 3)} levels without, "
-                     f"{fmt(on['mean_abs'] * LEVEL, 3)} with 0.5); its cost is lag on moving objects, which this "
+                     f"the depth the warp receives changes by {lv(on)} levels per frame on the static background; "
+                     f"{fmt(100 * on['share_over_1_level'], 2)} % of the changes reach one level, and over all "
+                     f"pixels, walkers included, the change is {fmt(on['mean_abs_all_pixels'] * LEVEL, 2)} levels per "
+                     f"frame. With 4-pixel blocks and no feature smoothing the static background changes by "
+                     f"{lv(coarse_plain)} levels, and without the ground-contact cue as well by {lv(no_contact)} "
+                     f"(depth std {fmt(no_contact['depth_std'] * LEVEL, 1)} levels against "
+                     f"{fmt(on['depth_std'] * LEVEL, 1)}). The defaults keep the finer blocks and the ground contact "
+                     f"for the depth they give (Aloe's rank correlation above) at this cost in flicker.")
+    if fine and coarse and light and coarse_plain and on:
+        notes.append(f"Each setting alone: 4-pixel blocks with feature smoothing change by {lv(coarse)} levels per "
+                     f"frame against {lv(on)} with the automatic 2-pixel blocks: a 2x2 block of 4:2:0 video carries "
+                     f"one chroma sample and twice the noise of a 4x4 block mean, so edges near the threshold flip "
+                     f"from frame to frame. Feature smoothing (edges compare block colours averaged over the frames "
+                     f"since the block last moved by 8 levels) {lowers(fine['mean_abs'], on['mean_abs'])} the flicker "
+                     f"from {lv(fine)} to {lv(on)} levels with 2-pixel blocks and from {lv(coarse_plain)} to "
+                     f"{lv(coarse)} with 4-pixel blocks; a weight of 0.5 gives {lv(light)}.")
+    if on and off and strong:
+        notes.append(f"Temporal smoothing {lowers(off['mean_abs'], on['mean_abs'])} it from {lv(off)} levels "
+                     f"(0) to {lv(on)} (0.5) and {lv(strong)} (0.9); its cost is lag on moving objects, which this "
                      f"measurement does not see. Frames that hardly change reuse the previous depth outright "
                      f"({on['reused']} of {on['frames']} here), with or without smoothing.")
     return out + [""] + notes
@@ -375,36 +436,33 @@ def hand_written(md, name):
     if not os.path.exists(path):
         return []
     with open(path) as f:
-        return f.read().rstrip("\n").split("\n") + [""]
-
-
-def rerun_lines(rows):
-    """Run lines after the first: parts measured again (`parts` says which)
-    and merged into the data file in place of the first run's rows."""
-    return [r for r in rows if r.get("kind") == "run"][1:]
+        return f.read().strip("\n").split("\n") + [""]
 
 
 def report(rows, md, png_rel, data_rel):
-    run = next((r for r in rows if r.get("kind") == "run"), {})
     parts = [
         "# Quality against run time",
         "",
-        f"Generated by `scripts/quality-report.sh` (tools/quality/, scripts/plot_quality.py) on "
-        f"{run.get('date', '?')}, commit `{run.get('git') or '?'}`, {run.get('cpu', '?')} with "
-        f"{threads(run)}, OpenCV {run.get('opencv', '?')}. Raw data: "
-        f"[{os.path.basename(data_rel)}]({data_rel}).",
-        *[f"Re-measured since: {r.get('parts', '?')} on {r.get('date', '?')}, commit `{r.get('git') or '?'}` "
-          f"(`{r.get('args', '')}`): its rows replace the first run's." for r in rerun_lines(rows)],
+        "How close pseudo3d's output comes to the truth on real data (the Middlebury Aloe pair, vtest.avi) and "
+        "what each setting costs in run time. `pseudo3d-quality` (tools/quality/) runs the CPU reference code of "
+        "`common/`; the CUDA kernels compute the same functions, so the errors hold for the GPU too. All times "
+        "here are CPU times; the GPU's are in [benchmarks.md](benchmarks.md) (\"GPU chain\", \"Filter kernel "
+        "variants\", \"Default fill\").",
+        "",
+        f"`scripts/quality-report.sh` runs every study and writes the raw lines "
+        f"([{os.path.basename(data_rel)}]({data_rel})), this page and the plot (scripts/plot_quality.py); "
+        f"`pseudo3d-quality --only PART` runs one study, whose lines, run line first, replace that study's in "
+        f"{os.path.basename(data_rel)}. Sections measured elsewhere (element tests, studies kept apart) live in "
+        f"[quality-notes/](quality-notes/) and are copied in. Each table names the machine, date, commit and "
+        f"command that measured it.",
         "",
         f"![error against run time]({png_rel})",
         "",
         "## How it is measured",
         "",
-        "Everything runs the CPU reference code of `common/` (the CUDA kernels compute the same functions, so the "
-        "errors hold for the GPU too; their times are in [benchmarks.md](benchmarks.md)). All times here are CPU "
-        "times (this machine's cores, not a GPU). Times are wall-clock "
-        f"medians of {run.get('runs', '?')} runs, taken round-robin across the configurations of a table so that "
-        "a burst of other load slows them alike; the machine is shared: read them as ratios, not absolutes.",
+        "Times are wall-clock medians of the runs a table's header gives, taken round-robin across the "
+        "configurations of a table so that a burst of other load slows them alike; the machines are shared: read "
+        "times as ratios within a table, not as absolutes.",
         "",
         "* **View synthesis.** Aloe (Middlebury, 1282x1110): the right view is rendered from aloeL and its "
         "ground-truth disparity exactly as the Aloe element test does (depth = GT / max(GT), view=right, "
@@ -430,9 +488,9 @@ def report(rows, md, png_rel, data_rel):
         "mean |depth(t) - depth(t-1)| over the static-background mask, per frame pair, averaged; p95 of all those "
         "per-pixel changes. `estimate` is the estimator's output, `filtered` what the warp receives. "
         "temporal_smoothing 0 still reuses the depth of frames that hardly change (static_threshold 0.5). "
-        "Settings: the defaults at three smoothings; `2026-11-22`, the defaults before the automatic block size "
-        "and the feature smoothing; `previous`, those before the ground-contact cue; and each of the two new "
-        "defaults alone.",
+        f"Settings: the defaults at three temporal smoothings; \"{SETTING_NAMES['2026-11-22']}\"; "
+        f"\"{SETTING_NAMES['previous']}\" (region_weight 0.75 too); and the block size and the feature smoothing "
+        "each moved alone.",
         "",
         "## View synthesis (Aloe right view)",
         "",
@@ -455,6 +513,7 @@ def report(rows, md, png_rel, data_rel):
         *depth_section(rows),
         "",
         *hand_written(md, "depth-vtest.md"),
+        *hand_written(md, "input-format.md"),
         "## Flicker on a static background (vtest.avi)",
         "",
         *flicker_section(rows),
