@@ -57,7 +57,7 @@ trap 'rm -rf "$tmp"' EXIT
 
 pipelines/image-to-anaglyph.sh data/aloeL.jpg "$tmp/anaglyph.png"
 pipelines/image-to-sbs.sh data/aloeL.jpg "$tmp/sbs-half.png" layout=side-by-side-half
-build/tools/pseudo3d-convert data/aloeL.jpg "$tmp/sbs.jpg" --depth-out "$tmp/depth.png" --quiet
+build/tools/convert/pseudo3d-convert data/aloeL.jpg "$tmp/sbs.jpg" --depth-out "$tmp/depth.png" --quiet
 synth=build/test-output/aloe-right-background-smooth-RGBA.png
 mkdir -p "$img"
 
