@@ -112,8 +112,8 @@ P3D_HD int bilateral_auto_scale(int width, int height) {
 
 // pseudo3dfilter's defaults: BilateralParams() in kDefaultFilterMode at the
 // automatic scale (full resolution up to 1080p, as before the scale existed).
-// The element and the tools that stand for it (pseudo3d-depthmap,
-// pseudo3d-bench) start from these.
+// The element and the tools that stand for it (pseudo3d-bench,
+// pseudo3d-quality) start from these.
 inline BilateralParams default_filter_params() {
   BilateralParams p;
   p.mode = kDefaultFilterMode;

@@ -54,7 +54,7 @@ float import_depth_sample(const DepthImportParams &p, uint32_t s, uint32_t smax)
 void import_depth_cpu(const DepthImportParams &p, const ImageView<const uint8_t> &src, int bits,
                       ImageView<float> out);
 
-// Out (pseudo3ddepthout, pseudo3d-depthmap): depth as grey, white = near:
+// Out (pseudo3ddepthout): depth as grey, white = near:
 // s = round(clamp(d, 0, 1) * smax), smax 255 (bits 8) or 65535 (bits 16),
 // NaN as 0 (far). `out` has `depth`'s size; 16-bit rows are uint16_t.
 // import_depth_cpu (near-white) of the result gives d to within 0.5 / smax.

@@ -10,13 +10,13 @@
 #
 #   scripts/bench-convert.sh [OUTDIR]
 # Needs gst-launch-1.0 and pseudo3d-convert (P3D_CONVERT, default
-# build/tools/pseudo3d-convert) with the plugin found; on the GPU machine
+# build/tools/convert/pseudo3d-convert) with the plugin found; on the GPU machine
 # `scripts/gpu-check.sh run OUTDIR convert` sets that up.
 set -uo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-convert-results}
 mkdir -p "$out"
-convert=${P3D_CONVERT:-$top/build/tools/pseudo3d-convert}
+convert=${P3D_CONVERT:-$top/build/tools/convert/pseudo3d-convert}
 frames=${P3D_BENCH_FRAMES:-600}
 work=${P3D_BENCH_WORK:-$out}
 mkdir -p "$work"

@@ -30,8 +30,8 @@ prepare() {
   [ -f build-gpu/build.ninja ] || meson setup build-gpu -Dbuildtype=release -Dgpu_arch=90 -Dcuda=enabled >/dev/null
   ninja -C build-gpu
   rm -rf .gpu && mkdir -p .gpu/payload/bin .gpu/payload/data
-  local bins=(build-gpu/tests/gpu/test_gpu build-gpu/tests/gpu/test_gpu_elements build-gpu/tools/pseudo3d-bench
-              build-gpu/tools/pseudo3d-convert)
+  local bins=(build-gpu/tests/gpu/test_gpu build-gpu/tests/gpu/test_gpu_elements
+              build-gpu/tools/dev/bench/pseudo3d-bench build-gpu/tools/convert/pseudo3d-convert)
   "$top/scripts/make-gst-runtime.sh" .gpu/payload/gstrt build-gpu/gst/libgstpseudo3d.so "${bins[@]}" >/dev/null
   cp "${bins[@]}" build-gpu/gst/libgstpseudo3d.so .gpu/payload/bin/
   strip --strip-unneeded .gpu/payload/bin/* 2>/dev/null || true

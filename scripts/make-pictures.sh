@@ -5,7 +5,7 @@
 # in docs/img/, made from data/aloeL.jpg and downscaled to 640 pixels wide so
 # that each file stays small:
 #   aloe-input.jpg             the 2D input
-#   aloe-depth.png             its estimated depth (pseudo3d-depthmap, white = near)
+#   aloe-depth.png             its estimated depth (pseudo3d-convert --depth-out, white = near)
 #   aloe-anaglyph.jpg          red-cyan Dubois anaglyph (pipelines/image-to-anaglyph.sh)
 #   aloe-sbs-half.jpg          half side-by-side (pipelines/image-to-sbs.sh layout=side-by-side-half)
 #   aloe-right-comparison.jpg  left view, ground-truth depth, right view synthesized
@@ -57,19 +57,22 @@ trap 'rm -rf "$tmp"' EXIT
 
 pipelines/image-to-anaglyph.sh data/aloeL.jpg "$tmp/anaglyph.png"
 pipelines/image-to-sbs.sh data/aloeL.jpg "$tmp/sbs-half.png" layout=side-by-side-half
-build/tools/pseudo3d-depthmap data/aloeL.jpg "$tmp/depth.png"
+build/tools/convert/pseudo3d-convert data/aloeL.jpg "$tmp/sbs.jpg" --depth-out "$tmp/depth.png" --quiet
 synth=build/test-output/aloe-right-background-smooth-RGBA.png
 mkdir -p "$img"
 
 "$py" - "$top" "$tmp" "$img" "$width" "$synth" <<'PY'
 import os, sys
+import numpy as np
 from PIL import Image, ImageDraw
 
 top, tmp, img, width, synth = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5]
 
 def scaled(path, w):
     im = Image.open(path)
-    im = im.convert("L" if im.mode in ("L", "I", "I;16") else "RGB")
+    if im.mode in ("I", "I;16"):  # 16-bit grey (the depth map): to 8 bits, rounded
+        im = Image.fromarray(((np.asarray(im, dtype=np.uint32) * 255 + 32767) // 65535).astype(np.uint8))
+    im = im.convert("L" if im.mode == "L" else "RGB")
     return im.resize((w, round(im.height * w / im.width)), Image.LANCZOS)
 
 def save(im, name):

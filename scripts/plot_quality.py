@@ -62,7 +62,7 @@ def provenance(run):
             f"{run.get('date', '?')[:10]}, commit {commit}, {timing}: `{run.get('args', '?')}`.")
 
 
-# Settings that tools/quality/ (flicker.cpp, depth_rank.cpp) labels by a date
+# Settings that tools/dev/quality/ (flicker.cpp, depth_rank.cpp) labels by a date
 # or as "previous": the report names them by what they set.
 SETTING_NAMES = {
     "2026-11-22": "4-pixel blocks, no feature smoothing",
@@ -444,7 +444,7 @@ def report(rows, md, png_rel, data_rel):
         "# Quality against run time",
         "",
         "How close pseudo3d's output comes to the truth on real data (the Middlebury Aloe pair, vtest.avi) and "
-        "what each setting costs in run time. `pseudo3d-quality` (tools/quality/) runs the CPU reference code of "
+        "what each setting costs in run time. `pseudo3d-quality` (tools/dev/quality/) runs the CPU reference code of "
         "`common/`; the CUDA kernels compute the same functions, so the errors hold for the GPU too. All times "
         "here are CPU times; the GPU's are in [benchmarks.md](benchmarks.md) (\"GPU chain\", \"Filter kernel "
         "variants\", \"Default fill\").",
@@ -477,7 +477,7 @@ def report(rows, md, png_rel, data_rel):
         "* **Filter variants.** The exact windowed filter (`bilateral_filter_cpu`, mode Exact) against two "
         "approximations with the same weight tables and threading: *separable* (mode Separable of "
         "common/bilateral.h: a 1D cross-bilateral pass along rows, then along columns, each against the centre's "
-        "guide: 2(2r+1) taps) and *stride2* (a study in tools/quality/: only taps with even dx, dy, a quarter of "
+        "guide: 2(2r+1) taps) and *stride2* (a study in tools/dev/quality/: only taps with even dx, dy, a quarter of "
         "the window). Inputs: the estimator's depth of aloeL (what the element filters) and the GT depth (which "
         "also goes through the warp, fill=background-smooth).",
         "* **Depth estimation.** `DepthEstimatorCpu` + the default filter on aloeL; Spearman rank correlation "

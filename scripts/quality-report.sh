@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Measures error against run time on real data and writes the report:
-#   docs/quality.jsonl           raw measurements (tools/quality/, one file per study)
+#   docs/quality.jsonl           raw measurements (tools/dev/quality/, one file per study)
 #   docs/quality.md              tables and what they say
 #   docs/img/quality-vs-time.png PSNR vs time of view synthesis, filter error vs time
 # Builds pseudo3d-quality in build/ (BUILDDIR=... for another folder) and
@@ -22,8 +22,8 @@ fi
 
 scripts/get-test-data.sh >/dev/null
 [ -f "$builddir/build.ninja" ] || meson setup "$builddir" >/dev/null
-ninja -C "$builddir" tools/pseudo3d-quality >/dev/null
+ninja -C "$builddir" tools/dev/quality/pseudo3d-quality >/dev/null
 
 mkdir -p docs/img
-"$builddir/tools/pseudo3d-quality" --data data --out docs/quality.jsonl "$@"
+"$builddir/tools/dev/quality/pseudo3d-quality" --data data --out docs/quality.jsonl "$@"
 "$py" scripts/plot_quality.py docs/quality.jsonl docs/img/quality-vs-time.png docs/quality.md

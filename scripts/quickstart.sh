@@ -21,7 +21,7 @@ scripts/get-test-data.sh
 scripts/build.sh -Dtests=disabled "$@"
 
 mkdir -p out
-convert=build/tools/pseudo3d-convert
+convert=build/tools/convert/pseudo3d-convert
 echo "converting the samples into out/ ..."
 "$convert" data/vtest-audio.mkv out/vtest-sbs.mp4 --force
 "$convert" data/aloeL.jpg out/aloe-sbs.jpg --depth-out out/aloe-depth.png --force

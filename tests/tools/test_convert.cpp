@@ -695,6 +695,39 @@ TEST_F(Convert, PhotoJpegAppliesExifOrientationAndKeepsExif) {
   EXPECT_LT(std::abs(left - right), (bottom - top) / 3) << "left " << left << " right " << right;
 }
 
+// --depth-out is pseudo3ddepthout's picture of the depth pseudo3dwarp
+// renders from: the converter's PNG holds, sample for sample, what the
+// elements write for the same picture and options.
+TEST_F(Convert, PhotoDepthOutIsWhatPseudo3dDepthOutWrites) {
+  cv::Mat picture(120, 160, CV_8UC3);
+  cv::RNG rng(11);
+  for (int y = 0; y < picture.rows; y += 8)
+    for (int x = 0; x < picture.cols; x += 8)
+      picture(cv::Rect(x, y, 8, 8)).setTo(cv::Scalar(rng.uniform(30, 220), rng.uniform(30, 220), rng.uniform(30, 220)));
+  const std::string in = fx().dir + "/blocks.png", out = fx().dir + "/blocks-sbs.png",
+                    depth = fx().dir + "/blocks-depth.png", raw = fx().dir + "/blocks-depth.raw";
+  ASSERT_TRUE(cv::imwrite(in, picture));
+  g_remove(out.c_str());
+  g_remove(depth.c_str());
+  const ToolRun r = run_convert({in, out, "--depth-out", depth, "--hypothesis", "center-near", "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  ASSERT_EQ(run_to_eos("filesrc location=" + in + " ! pngdec ! videoconvert ! video/x-raw,format=RGBA ! "
+                       "pseudo3ddepth hypothesis=center-near ! pseudo3dfilter ! pseudo3ddepthout ! "
+                       "video/x-raw,format=GRAY16_LE ! filesink location=" + raw),
+            "");
+  std::vector<uint8_t> grey = read_bytes(raw);  // rows of 320 bytes: no padding
+  ASSERT_EQ(grey.size(), 160u * 120u * 2u);
+  const cv::Mat expected(120, 160, CV_16UC1, grey.data());  // little-endian samples, as the host's
+  const cv::Mat got = cv::imread(depth, cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(got.empty());
+  ASSERT_EQ(got.type(), CV_16UC1);
+  ASSERT_EQ(got.size(), expected.size());
+  EXPECT_EQ(cv::norm(got, expected, cv::NORM_INF), 0.0);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(expected, &lo, &hi);
+  EXPECT_GT(hi - lo, 0.2 * 65535) << "a depth map, not a flat picture";
+}
+
 TEST_F(Convert, PhotoMpoHoldsTwoDisparityImages) {
   const std::string in = make_rotated_jpeg(fx().dir), out = fx().dir + "/photo.mpo";
   g_remove(out.c_str());
@@ -939,23 +972,27 @@ TEST_F(Convert, DoubleDashEndsTheOptions) {
 
 // The converter deinitialises GStreamer on its way out, so that the leaks
 // tracer checks what is still alive then, and finds nothing: after a video
-// and a photo conversion, and after a failed one.
+// and a photo conversion (with and without its depth map), and after a
+// failed one.
 TEST_F(Convert, LeaksTracerFindsNothingAlive) {
   const std::vector<std::string> env = {"GST_TRACERS=leaks", "GST_DEBUG=GST_TRACER:7,leaks:5", "GST_DEBUG_NO_COLOR=1"};
   const std::string out = fx().dir + "/leaks.mkv", photo = fx().dir + "/leaks.png",
-                    photo_out = fx().dir + "/leaks.mpo", bad = fx().dir + "/leaks-no-film.mp4",
-                    bad_out = fx().dir + "/leaks-failed.mkv";
+                    photo_out = fx().dir + "/leaks.mpo", depth_out = fx().dir + "/leaks-depth.png",
+                    bad = fx().dir + "/leaks-no-film.mp4", bad_out = fx().dir + "/leaks-failed.mkv";
   ASSERT_TRUE(cv::imwrite(photo, cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160))));
   { std::ofstream(bad) << "this is no video\n"; }
   g_remove(out.c_str());
   g_remove(photo_out.c_str());
+  g_remove(depth_out.c_str());
   const ToolRun video = run_convert_in("", {fx().aac_mp4, out, "--quiet", "--preset", "ultrafast"}, env);
   const ToolRun still = run_convert_in("", {photo, photo_out, "--quiet"}, env);
+  const ToolRun with_depth = run_convert_in("", {photo, photo_out, "--depth-out", depth_out, "--force", "--quiet"}, env);
   const ToolRun failed = run_convert_in("", {bad, bad_out, "--quiet"}, env);
   ASSERT_EQ(video.status, 0) << video.err;
   ASSERT_EQ(still.status, 0) << still.err;
+  ASSERT_EQ(with_depth.status, 0) << with_depth.err;
   EXPECT_EQ(failed.status, 1) << failed.err;
-  for (const ToolRun *r : {&video, &still, &failed}) {
+  for (const ToolRun *r : {&video, &still, &with_depth, &failed}) {
     EXPECT_NE(r->err.find("checking for leaks"), std::string::npos) << "the leaks tracer never checked";
     EXPECT_EQ(r->err.find("Leaks detected"), std::string::npos) << r->err;
     // A leaked object is logged as "object-alive, type-name=(string)Gst...";

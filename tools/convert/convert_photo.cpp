@@ -1,13 +1,9 @@
 #include "convert_photo.h"
 
-#include <gst/app/gstappsink.h>
-
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
 
-#include "depth_meta.h"
 #include "gpu.h"
 #include "image_io.h"
 #include "jpeg_meta.h"
@@ -32,71 +28,49 @@ bool write_file(const std::string &path, const Bytes &data) {
   return static_cast<bool>(f);
 }
 
-// The depth plane on the buffer pseudo3dwarp receives, as 16-bit grey (big
-// endian, as pngenc takes it; white = near). The plugin is a loaded module,
-// so the meta is found by its registered API name.
-struct DepthCapture {
-  Image depth;
-};
-
-GstPadProbeReturn capture_depth(GstPad *, GstPadProbeInfo *info, gpointer data) {
-  auto *c = static_cast<DepthCapture *>(data);
-  const GType api = g_type_from_name("Pseudo3DDepthMetaAPI");
-  auto *meta = api ? reinterpret_cast<Pseudo3DDepthMeta *>(gst_buffer_get_meta(GST_PAD_PROBE_INFO_BUFFER(info), api))
-                   : nullptr;
-  if (!meta || !meta->plane || !*meta->plane || (*meta->plane)->on_device) return GST_PAD_PROBE_OK;
-  const p3d::gst::DepthPlane &d = **meta->plane;
-  Image &out = c->depth;
-  out.width = d.width;
-  out.height = d.height;
-  out.format = "GRAY16_BE";
-  out.data.resize(static_cast<size_t>(d.width) * d.height * 2);
-  for (size_t i = 0; i < static_cast<size_t>(d.width) * d.height; ++i) {
-    const float v = std::fmin(1.f, std::fmax(0.f, d.host[i]));
-    const auto g = static_cast<uint16_t>(std::lround(v * 65535.f));
-    out.data[2 * i] = static_cast<uint8_t>(g >> 8);
-    out.data[2 * i + 1] = static_cast<uint8_t>(g & 0xFF);
-  }
-  return GST_PAD_PROBE_OK;
-}
-
-// Runs the four stages on one picture. `layout`/`swap` decide the packing.
+// The four stages on one picture, uploaded once and downloaded once when
+// they run on the GPU (on_processing, gpu.h). With `depth_png`, a tee after
+// pseudo3dfilter hands the depth pseudo3dwarp renders from to
+// pseudo3ddepthout (which reads a device depth back itself), and that grey
+// picture is encoded as a 16-bit PNG (white = near) into *depth_png.
+//   appsrc ! [cudaupload ! video/x-raw(memory:CUDAMemory) !] pseudo3ddepth !
+//   pseudo3dfilter ! [tee ! queue !] pseudo3dwarp ! pseudo3dpack ! [cudadownload !]
+//   video/x-raw,format=RGBA ! appsink
+//   [tee. ! queue ! pseudo3ddepthout ! GRAY16_LE ! videoconvert ! GRAY16_BE ! pngenc ! appsink]
+// `layout`/`swap` decide the packing.
 bool render(const Options &o, Processing processing, const Image &in, const std::string &layout, bool swap,
-            Image *out, Image *depth, std::string *error) {
-  GstElement *pipeline = gst_pipeline_new("pseudo3d-photo");
-  const char *factories[] = {"appsrc", "pseudo3ddepth", "pseudo3dfilter", "pseudo3dwarp", "pseudo3dpack", "appsink"};
-  GstElement *e[6];
-  for (int i = 0; i < 6; ++i) {
-    e[i] = gst_element_factory_make(factories[i], nullptr);
-    if (!e[i]) {
-      *error = std::string("GStreamer element ") + factories[i] + " is missing";
-      gst_object_unref(pipeline);  // holds the ones made so far
-      return false;
-    }
-    gst_bin_add(GST_BIN(pipeline), e[i]);
-  }
-  GstElement *stages[] = {e[1], e[2], e[3], e[4]};
-  for (GstElement *s : stages)
-    gst_util_set_object_arg(G_OBJECT(s), "processing", processing == Processing::Gpu ? "gpu" : "cpu");
-  apply_to_stages(o, stages, 4, layout, swap);
+            Image *out, Bytes *depth_png, std::string *error) {
+  const std::string stages = std::string("pseudo3ddepth name=depth ! pseudo3dfilter name=filter ! ") +
+                             (depth_png ? "tee name=t ! queue ! " : "") +
+                             "pseudo3dwarp name=warp ! pseudo3dpack name=pack";
+  std::string description = "appsrc name=src format=time ! " + on_processing(processing, stages) +
+                            " ! video/x-raw,format=RGBA ! appsink name=sink sync=false";
+  if (depth_png)
+    description += " t. ! queue ! pseudo3ddepthout ! video/x-raw,format=GRAY16_LE ! videoconvert ! "
+                   "video/x-raw,format=GRAY16_BE ! pngenc ! appsink name=depth_png sync=false";
+  GstElement *pipeline = launch(description, error);
+  if (!pipeline) return false;
+  GstElement *stage_elements[] = {by_name(pipeline, "depth"), by_name(pipeline, "filter"), by_name(pipeline, "warp"),
+                                  by_name(pipeline, "pack")};
+  for (GstElement *s : stage_elements)
+    gst_util_set_object_arg(G_OBJECT(s), "processing", processing_nick(processing));
+  apply_to_stages(o, stage_elements, 4, layout, swap);
   GstCaps *caps = nullptr;
   GstBuffer *buf = image_to_buffer(in, &caps);
-  g_object_set(e[0], "caps", caps, "format", GST_FORMAT_TIME, NULL);
+  GstElement *src = by_name(pipeline, "src");
+  g_object_set(src, "caps", caps, NULL);
   gst_caps_unref(caps);
-  GstCaps *rgba = gst_caps_from_string("video/x-raw,format=RGBA");
-  g_object_set(e[5], "caps", rgba, "sync", FALSE, NULL);
-  gst_caps_unref(rgba);
-  gst_element_link_many(e[0], e[1], e[2], e[3], e[4], e[5], NULL);
-  DepthCapture capture;
-  GstPad *warp_sink = gst_element_get_static_pad(e[3], "sink");
-  gst_pad_add_probe(warp_sink, GST_PAD_PROBE_TYPE_BUFFER, capture_depth, &capture, nullptr);
-  gst_object_unref(warp_sink);
-  GstSample *s = run_for_one_sample(pipeline, e[0], buf, e[5], error);
-  const bool ok = s && image_from_sample(s, out);
-  if (s && !ok) *error = "unexpected output of pseudo3dpack";
-  if (s) gst_sample_unref(s);
+  GstElement *sinks[] = {by_name(pipeline, "sink"), depth_png ? by_name(pipeline, "depth_png") : nullptr};
+  GstSample *samples[2] = {nullptr, nullptr};
+  bool ok = run_for_samples(pipeline, src, buf, sinks, samples, depth_png ? 2 : 1, error);
+  if (ok && !image_from_sample(samples[0], out)) {
+    *error = "unexpected output of pseudo3dpack";
+    ok = false;
+  }
+  if (ok && depth_png) *depth_png = bytes_of_sample(samples[1]);
+  for (GstSample *s : samples)
+    if (s) gst_sample_unref(s);
   gst_object_unref(pipeline);
-  *depth = std::move(capture.depth);
   return ok;
 }
 
@@ -139,8 +113,9 @@ bool convert_photo(const Options &o, std::string *error) {
   OutputFile out, depth_out;
   if (!out.open(o.output, o.force, error)) return false;
   if (!o.depth_out.empty() && !depth_out.open(o.depth_out, o.force, error)) return false;
-  Image packed, depth;
-  if (!render(o, processing, upright, layout, swap, &packed, &depth, error)) {
+  Image packed;
+  Bytes depth_png;
+  if (!render(o, processing, upright, layout, swap, &packed, o.depth_out.empty() ? nullptr : &depth_png, error)) {
     *error = o.input + ": " + *error;
     return false;
   }
@@ -164,15 +139,7 @@ bool convert_photo(const Options &o, std::string *error) {
     if (!meta.empty()) bytes = with_segments(bytes, {{0xE1, meta}});
   }
   if (!write_output(&out, bytes, error)) return false;
-  if (!o.depth_out.empty()) {
-    Bytes png;
-    if (depth.data.empty()) {
-      *error = o.depth_out + ": the depth map could not be read (it stayed in GPU memory)";
-      return false;
-    }
-    if (!encode_image(depth, "png", false, &png, error)) return encode_failed(o.depth_out, error);
-    if (!write_output(&depth_out, png, error)) return false;
-  }
+  if (!o.depth_out.empty() && !write_output(&depth_out, depth_png, error)) return false;
   if (!out.commit(error) || (!o.depth_out.empty() && !depth_out.commit(error))) return false;
   if (!o.quiet) {
     const std::string what = o.kind == OutputKind::Mpo   ? "left and right view"

@@ -39,6 +39,14 @@ bool resolve_processing(Processing asked, Processing *resolved, std::string *err
   return true;
 }
 
+const char *processing_nick(Processing processing) { return processing == Processing::Gpu ? "gpu" : "cpu"; }
+
+std::string on_processing(Processing processing, const std::string &stages) {
+  if (processing != Processing::Gpu) return stages;
+  // cudaupload also offers system memory: insist on device memory after it.
+  return "cudaupload ! video/x-raw(memory:CUDAMemory) ! " + stages + " ! cudadownload";
+}
+
 int prefer_gpu_decoders() {
   int raised = 0;
   for (const char *name : kGpuDecoders) {

@@ -20,25 +20,6 @@ const char *flip_for_orientation(int o) {
   return o >= 1 && o <= 8 ? kDirections[o] : "identity";
 }
 
-// gst_parse_launch with the named elements looked up; null on failure.
-GstElement *launch(const std::string &description, std::string *error) {
-  GError *err = nullptr;
-  GstElement *p = gst_parse_launch(description.c_str(), &err);
-  if (err) {
-    *error = std::string("GStreamer: ") + err->message;
-    g_clear_error(&err);
-    if (p) gst_object_unref(p);
-    return nullptr;
-  }
-  return p;
-}
-
-GstElement *by_name(GstElement *pipeline, const char *name) {
-  GstElement *e = gst_bin_get_by_name(GST_BIN(pipeline), name);
-  if (e) gst_object_unref(e);  // the pipeline keeps it alive
-  return e;
-}
-
 // decodebin's autoplug-continue: a picture larger than the 3D stages take
 // is refused from the size its typefind or parser reads in the header,
 // before a decoder is plugged (a 20000x20000 PNG would take seconds and
@@ -64,12 +45,29 @@ void refuse_too_large_pad(GstElement *decodebin, GstPad *pad, gpointer refused) 
 
 }  // namespace
 
+GstElement *launch(const std::string &description, std::string *error) {
+  GError *err = nullptr;
+  GstElement *p = gst_parse_launch(description.c_str(), &err);
+  if (err) {
+    *error = std::string("GStreamer: ") + err->message;
+    g_clear_error(&err);
+    if (p) gst_object_unref(p);
+    return nullptr;
+  }
+  return p;
+}
+
+GstElement *by_name(GstElement *pipeline, const char *name) {
+  GstElement *e = gst_bin_get_by_name(GST_BIN(pipeline), name);
+  if (e) gst_object_unref(e);  // the pipeline keeps it alive
+  return e;
+}
+
 Image Image::crop_columns(int x0, int w) const {
   Image out;
   out.width = w;
   out.height = height;
-  out.format = format;
-  const int bpp = bytes_per_pixel();
+  const int bpp = kBytesPerPixel;
   out.data.resize(static_cast<size_t>(w) * height * bpp);
   for (int y = 0; y < height; ++y)
     std::memcpy(&out.data[static_cast<size_t>(y) * w * bpp], &data[(static_cast<size_t>(y) * width + x0) * bpp],
@@ -79,14 +77,14 @@ Image Image::crop_columns(int x0, int w) const {
 
 GstBuffer *image_to_buffer(const Image &image, GstCaps **caps) {
   GstVideoInfo info;
-  gst_video_info_set_format(&info, gst_video_format_from_string(image.format.c_str()), image.width, image.height);
+  gst_video_info_set_format(&info, GST_VIDEO_FORMAT_RGBA, image.width, image.height);
   GST_VIDEO_INFO_FPS_N(&info) = 0;  // a still picture
   GST_VIDEO_INFO_FPS_D(&info) = 1;
   *caps = gst_video_info_to_caps(&info);
   GstBuffer *buf = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
   GstVideoFrame frame;
   gst_video_frame_map(&frame, &info, buf, GST_MAP_WRITE);
-  const size_t row = static_cast<size_t>(image.width) * image.bytes_per_pixel();
+  const size_t row = static_cast<size_t>(image.width) * Image::kBytesPerPixel;
   for (int y = 0; y < image.height; ++y)
     std::memcpy(static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) + y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0),
                 &image.data[y * row], row);
@@ -98,14 +96,12 @@ GstBuffer *image_to_buffer(const Image &image, GstCaps **caps) {
 bool image_from_sample(GstSample *sample, Image *out) {
   GstVideoInfo info;
   if (!gst_video_info_from_caps(&info, gst_sample_get_caps(sample))) return false;
-  const GstVideoFormat f = GST_VIDEO_INFO_FORMAT(&info);
-  if (f != GST_VIDEO_FORMAT_RGBA && f != GST_VIDEO_FORMAT_GRAY16_BE) return false;
+  if (GST_VIDEO_INFO_FORMAT(&info) != GST_VIDEO_FORMAT_RGBA) return false;
   GstVideoFrame frame;
   if (!gst_video_frame_map(&frame, &info, gst_sample_get_buffer(sample), GST_MAP_READ)) return false;
   out->width = GST_VIDEO_INFO_WIDTH(&info);
   out->height = GST_VIDEO_INFO_HEIGHT(&info);
-  out->format = gst_video_format_to_string(f);
-  const size_t row = static_cast<size_t>(out->width) * out->bytes_per_pixel();
+  const size_t row = static_cast<size_t>(out->width) * Image::kBytesPerPixel;
   out->data.resize(row * out->height);
   for (int y = 0; y < out->height; ++y)
     std::memcpy(&out->data[y * row],
@@ -115,39 +111,62 @@ bool image_from_sample(GstSample *sample, Image *out) {
   return true;
 }
 
-GstSample *run_for_one_sample(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *appsink,
-                              std::string *error) {
+std::vector<uint8_t> bytes_of_sample(GstSample *sample) {
+  GstBuffer *b = gst_sample_get_buffer(sample);
+  std::vector<uint8_t> bytes(gst_buffer_get_size(b));
+  gst_buffer_extract(b, 0, bytes.data(), bytes.size());
+  return bytes;
+}
+
+bool run_for_samples(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *const *sinks,
+                     GstSample **samples, int n, std::string *error) {
+  for (int i = 0; i < n; ++i) samples[i] = nullptr;
   GstBus *bus = gst_element_get_bus(pipeline);
-  GstSample *sample = nullptr;
+  bool failed = false;
   if (gst_element_set_state(pipeline, GST_STATE_PLAYING) != GST_STATE_CHANGE_FAILURE) {
     if (appsrc) {
       gst_app_src_push_buffer(GST_APP_SRC(appsrc), buffer);
       buffer = nullptr;
       gst_app_src_end_of_stream(GST_APP_SRC(appsrc));
     }
-    // Poll both ends: appsink blocks on nothing if an element fails.
-    while (!sample) {
-      sample = gst_app_sink_try_pull_sample(GST_APP_SINK(appsink), 100 * GST_MSECOND);
-      if (sample) break;
-      GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
-      if (msg) {
-        *error = error_text(msg);
-        gst_message_unref(msg);
-        break;
-      }
-      if (gst_app_sink_is_eos(GST_APP_SINK(appsink))) {
-        *error = "no picture came out";
-        break;
+    // Poll the sinks and the bus: an appsink waits on nothing if an
+    // element fails.
+    for (int got = 0; got < n && !failed;) {
+      for (int i = 0; i < n && !failed; ++i) {
+        if (samples[i]) continue;
+        samples[i] = gst_app_sink_try_pull_sample(GST_APP_SINK(sinks[i]), 100 * GST_MSECOND);
+        if (samples[i]) {
+          ++got;
+        } else if (GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
+          *error = error_text(msg);
+          gst_message_unref(msg);
+          failed = true;
+        } else if (gst_app_sink_is_eos(GST_APP_SINK(sinks[i]))) {
+          *error = "no picture came out";
+          failed = true;
+        }
       }
     }
   } else {
     GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
     *error = msg ? error_text(msg) : "the pipeline did not start";
     if (msg) gst_message_unref(msg);
+    failed = true;
+  }
+  for (int i = 0; i < n && failed; ++i) {
+    if (samples[i]) gst_sample_unref(samples[i]);
+    samples[i] = nullptr;
   }
   if (buffer) gst_buffer_unref(buffer);
   gst_element_set_state(pipeline, GST_STATE_NULL);
   gst_object_unref(bus);
+  return !failed;
+}
+
+GstSample *run_for_one_sample(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *appsink,
+                              std::string *error) {
+  GstSample *sample = nullptr;
+  run_for_samples(pipeline, appsrc, buffer, &appsink, &sample, 1, error);
   return sample;
 }
 
@@ -181,8 +200,6 @@ bool encode_image(const Image &image, const std::string &codec, bool full_chroma
   if (codec == "jpeg")
     tail = std::string("videoconvert ! video/x-raw,format=") + (full_chroma ? "Y444" : "I420") +
            ",colorimetry=1:4:0:0 ! jpegenc quality=95";
-  else if (image.format == "GRAY16_BE")
-    tail = "pngenc";
   else
     tail = "videoconvert ! video/x-raw,format=RGB ! pngenc";
   GstElement *p = launch("appsrc name=src format=time ! " + tail + " ! appsink name=sink sync=false", error);
@@ -194,9 +211,7 @@ bool encode_image(const Image &image, const std::string &codec, bool full_chroma
   gst_caps_unref(caps);
   GstSample *s = run_for_one_sample(p, src, buf, by_name(p, "sink"), error);
   if (s) {
-    GstBuffer *b = gst_sample_get_buffer(s);
-    bytes->resize(gst_buffer_get_size(b));
-    gst_buffer_extract(b, 0, bytes->data(), bytes->size());
+    *bytes = bytes_of_sample(s);
     gst_sample_unref(s);
   }
   gst_object_unref(p);

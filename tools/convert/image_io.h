@@ -12,12 +12,11 @@
 
 namespace p3d::convert {
 
-// Tightly packed rows: RGBA (4 bytes a pixel) or GRAY16_BE (2).
+// RGBA, tightly packed rows (4 bytes a pixel).
 struct Image {
+  static constexpr int kBytesPerPixel = 4;
   int width = 0, height = 0;
-  std::string format = "RGBA";
   std::vector<uint8_t> data;
-  int bytes_per_pixel() const { return format == "RGBA" ? 4 : 2; }
   // Columns [x0, x0 + w) as a new image.
   Image crop_columns(int x0, int w) const;
 };
@@ -29,18 +28,29 @@ struct Image {
 bool read_image(const std::string &path, int exif_orientation, Image *out, std::string *error);
 
 // Encodes an image. codec "jpeg" (4:2:0, or 4:4:4 with `full_chroma`,
-// quality 95) or "png" (RGB, or 16-bit grey for GRAY16_BE).
+// quality 95) or "png" (RGB).
 bool encode_image(const Image &image, const std::string &codec, bool full_chroma, std::vector<uint8_t> *bytes,
                   std::string *error);
 
 // A buffer and caps for an image (rows laid out as GstVideoInfo wants).
 GstBuffer *image_to_buffer(const Image &image, GstCaps **caps);
-// The picture of a raw video sample (RGBA or GRAY16_BE).
+// The picture of a raw RGBA video sample.
 bool image_from_sample(GstSample *sample, Image *out);
+// The bytes of a sample's buffer (an encoder's output).
+std::vector<uint8_t> bytes_of_sample(GstSample *sample);
+
+// gst_parse_launch of a pipeline description; null with *error on failure.
+GstElement *launch(const std::string &description, std::string *error);
+// The element named `name` in `pipeline`, which keeps it alive (no new ref).
+GstElement *by_name(GstElement *pipeline, const char *name);
 
 // Starts `pipeline`, pushes `buffer` (if any) and EOS into `appsrc`, and
-// returns the first sample of `appsink` (null with *error on failure or
-// when no sample came). Leaves the pipeline in NULL.
+// waits for the first sample of each of the `n` appsinks `sinks` into
+// `samples` (new refs). False with *error, and no sample, on an error or
+// when one of them got none. Leaves the pipeline in NULL.
+bool run_for_samples(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *const *sinks,
+                     GstSample **samples, int n, std::string *error);
+// The same for one appsink: its sample, or null with *error.
 GstSample *run_for_one_sample(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *appsink,
                               std::string *error);
 

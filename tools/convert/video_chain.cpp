@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "gpu.h"
 #include "gst_run.h"
 #include "progress.h"
 #include "stage_settings.h"
@@ -93,7 +94,7 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
     return false;
   }
   apply_to_bin(o, convert_);
-  gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing == Processing::Gpu ? "gpu" : "cpu");
+  gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing_nick(processing));
   // The bin's warp packs into I420/NV12 itself, as pseudo3dpack would (on
   // the GPU when the frames are there): a third of the bytes to download
   // and no CPU conversion; the videoconvert after it then passes frames

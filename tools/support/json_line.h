@@ -1,5 +1,6 @@
-// One JSON object per line, for the tools' result files (pseudo3d-bench,
-// pseudo3d-quality). Non-finite numbers become null: JSON has no NaN.
+// One JSON object per line, for the tools' result files (pseudo3d-convert
+// --benchmark, pseudo3d-bench, pseudo3d-quality). Non-finite numbers become
+// null: JSON has no NaN.
 #pragma once
 
 #include <cmath>
