@@ -43,6 +43,10 @@ def load(path):
                 run = r
             else:
                 r["_run"] = run
+                if "setting" in r:
+                    r["setting"] = OLD_SETTINGS.get(r["setting"], r["setting"])
+                if "cue" in r:
+                    r["cue"] = OLD_CUES.get(r["cue"], r["cue"])
             rows.append(r)
     return rows
 
@@ -62,18 +66,18 @@ def provenance(run):
             f"{run.get('date', '?')[:10]}, commit {commit}, {timing}: `{run.get('args', '?')}`.")
 
 
-# Settings that tools/dev/quality/ (flicker.cpp, depth_rank.cpp) labels by a date
-# or as "previous": the report names them by what they set.
-SETTING_NAMES = {
-    "2026-11-22": "4-pixel blocks, no feature smoothing",
-    "previous": "4-pixel blocks, no feature smoothing, no ground contact",
-}
-CUE_NAMES = {"previous": "no ground contact"}
+# The comparison settings of the flicker and depth studies, as
+# tools/dev/quality/ labels them. Lines written before those labels named
+# what they set carry older keys; load() renames them.
+COARSE = "4-pixel blocks, no feature smoothing"
+COARSE_NO_CONTACT = "4-pixel blocks, no feature smoothing, no ground contact"
+NO_CONTACT = "no ground contact"
+OLD_SETTINGS = {"2026-11-22": COARSE, "previous": COARSE_NO_CONTACT}
+OLD_CUES = {"previous": NO_CONTACT}
 
 
 def setting_name(r):
-    label = r.get("setting", "defaults")
-    return SETTING_NAMES.get(label, label)
+    return r.get("setting", "defaults")
 
 
 def of_kind(rows, kind):
@@ -296,7 +300,7 @@ def cue_label(r):
     """A depth-rank row's cue by name; input_format rows with their format."""
     if r["cue"] == "input_format":
         return f"input_format {r.get('format', '?')}"
-    return CUE_NAMES.get(r["cue"], r["cue"])
+    return r["cue"]
 
 
 def depth_section(rows):
@@ -319,7 +323,7 @@ def depth_section(rows):
     out = [provenance(run_of(ranks)), "",
            f"Full size {full0.get('width', '?')}x{full0.get('height', '?')}, half size "
            f"{half0.get('width', '?')}x{half0.get('height', '?')}, RGBA unless the cue is input_format; each row "
-           f"moves one cue away from the defaults, but `{CUE_NAMES['previous']}`: the estimator without the "
+           f"moves one cue away from the defaults, but `{NO_CONTACT}`: the estimator without the "
            f"ground-contact cue and the automatic block size (ground_contact 0, block_size 4, region_weight 0.75). "
            f"block_size `auto (n)`: the automatic size and what it came to.",
            "",
@@ -330,7 +334,7 @@ def depth_section(rows):
         return next((r for r in ranks if r.get("scale") == scale and r["cue"] == cue
                      and all(r.get(k) == v for k, v in kv.items())), None)
     d = {s: find(s, "defaults") for s in ("full", "half")}
-    p = {s: find(s, "previous") for s in ("full", "half")}
+    p = {s: find(s, NO_CONTACT) for s in ("full", "half")}
     b4 = {s: find(s, "block_size", block_size=4) for s in ("full", "half")}
     g0 = {s: find(s, "ground_contact", ground_contact=0.0) for s in ("full", "half")}
     notes = []
@@ -338,7 +342,7 @@ def depth_section(rows):
         notes.append(f"With the defaults rho is {fmt(d['full']['spearman'], 3)} at full size and "
                      f"{fmt(d['half']['spearman'], 3)} at half size, against {fmt(b4['full']['spearman'], 3)} and "
                      f"{fmt(b4['half']['spearman'], 3)} with 4-pixel blocks and {fmt(p['full']['spearman'], 3)} and "
-                     f"{fmt(p['half']['spearman'], 3)} with `{CUE_NAMES['previous']}`.")
+                     f"{fmt(p['half']['spearman'], 3)} with `{NO_CONTACT}`.")
     if all(d.values()) and all(g0.values()):
         notes.append(f"Ground contact (a region takes the hypothesis of its nearest block: for top-bottom its lowest "
                      f"one, where an object stands on the ground) with region_weight 0.9 raises rho from "
@@ -397,7 +401,7 @@ def flicker_section(rows):
     get = {(r.get("setting", "defaults"), r["stage"], r["temporal_smoothing"]): r for r in flick}
     on, off = get.get(("defaults", "filtered", 0.5)), get.get(("defaults", "filtered", 0.0))
     strong = get.get(("defaults", "filtered", 0.9))
-    coarse_plain, no_contact = get.get(("2026-11-22", "filtered", 0.5)), get.get(("previous", "filtered", 0.5))
+    coarse_plain, no_contact = get.get((COARSE, "filtered", 0.5)), get.get((COARSE_NO_CONTACT, "filtered", 0.5))
     fine = get.get(("block_size 2, no feature smoothing", "filtered", 0.5))
     coarse, light = get.get(("block_size 4", "filtered", 0.5)), get.get(("feature_smoothing 0.5", "filtered", 0.5))
     lv = lambda r: fmt(r["mean_abs"] * LEVEL, 3)
@@ -488,8 +492,8 @@ def report(rows, md, png_rel, data_rel):
         "mean |depth(t) - depth(t-1)| over the static-background mask, per frame pair, averaged; p95 of all those "
         "per-pixel changes. `estimate` is the estimator's output, `filtered` what the warp receives. "
         "temporal_smoothing 0 still reuses the depth of frames that hardly change (static_threshold 0.5). "
-        f"Settings: the defaults at three temporal smoothings; \"{SETTING_NAMES['2026-11-22']}\"; "
-        f"\"{SETTING_NAMES['previous']}\" (region_weight 0.75 too); and the block size and the feature smoothing "
+        f"Settings: the defaults at three temporal smoothings; \"{COARSE}\"; "
+        f"\"{COARSE_NO_CONTACT}\" (region_weight 0.75 too); and the block size and the feature smoothing "
         "each moved alone.",
         "",
         "## View synthesis (Aloe right view)",

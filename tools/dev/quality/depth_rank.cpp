@@ -44,7 +44,7 @@ const char *pixel_format_name(PixelFormat f) {
 }
 
 struct RankCase {
-  const char *cue;  // what this case changes: "defaults", "previous", a parameter name
+  const char *cue;  // what this case changes: "defaults", "no ground contact", a parameter name
   DepthParams depth;
   int radius;  // 0: no filter
   PixelFormat format = PixelFormat::RGBA;  // how the picture reaches the estimator and the filter
@@ -53,7 +53,8 @@ struct RankCase {
 std::vector<RankCase> rank_cases() {
   std::vector<RankCase> cases;
   cases.push_back({"defaults", DepthParams(), 5});
-  RankCase previous{"previous", DepthParams(), 5};  // before the ground-contact cue (and the automatic block size)
+  // Without the ground-contact cue, with 4-pixel blocks and region weight 0.75.
+  RankCase previous{"no ground contact", DepthParams(), 5};
   previous.depth.block_size = 4;
   previous.depth.ground_contact = 0.f;
   previous.depth.region_weight = 0.75f;
