@@ -21,7 +21,7 @@
 // it gains: in a grid of mostly blocks that return at once, the two
 // instructions in each of them cost more than the overlap saves (the
 // warp's BackgroundSmooth sums kernel gains because it has a block for
-// every 8 tiles, not one a tile: cuda/warp.cu, launch_smooth).
+// every 8 tiles, not one a tile: cuda/warp_smooth.cu, launch_smooth).
 #pragma once
 
 #include <utility>

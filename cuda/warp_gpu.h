@@ -2,51 +2,10 @@
 // with warp_render_cpu (same P3D_HD helpers, -fmad=false; the z-buffer max
 // is order independent, so atomicMax gives the CPU's sequential result).
 //
-// Per frame, all on `stream`: one block per output row y renders both eyes
-// of it: the source row is converted once (load_rgba) into shared memory,
-// then per warped eye it clears its z-buffer (shared memory; global memory
-// only for rows too wide for it, from about 28000 pixels on Hopper with
-// 32-bit keys, 19000 with 64-bit ones; rows wider than about 50000 pixels
-// are refused with cudaErrorInvalidValue), scatters
-// the depth row (atomicMax on 32-bit keys where every hit lies within 127
-// pixels of its target, 64-bit ones otherwise), resolves colours and holes
-// (kHoleColour for fill=None), adds the row's holes to a device counter and,
-// for Background, fills the row's holes: a ballot per 32-pixel chunk gives
-// its hole bits, and each hole finds its nearest non-holes by searching
-// those bits (holes are narrow: rarely past the next chunk), no host sync.
-// An eye with shift 0 is copied. Where both eyes are warped and a second
-// z-buffer costs no resident row (rows up to about 4600 pixels on Hopper),
-// the block renders them together: each source pixel's depths are read
-// once and placed in both z-buffers, and each target resolves both eyes.
-// Row groups: where both eyes are warped with 32-bit keys and the depth is
-// on cells of 2 x 2 pixels or more (the filter's 4 x 4 grid at 4K and
-// 8K), the rows of a cell row hold the same z-buffers (the keys hold where
-// a hit comes from, not its colour), so one block renders up to 4 such
-// rows from one scatter, each with its own source row; where shared memory
-// holds a source row for each of them (4K), it converts them all first and
-// resolves them in one pass. The output is the same as row by row. The
-// groups that whole waves of resident blocks take go first; the rows after
-// them, too few groups to fill another wave, take a block a row (in
-// RowsTogether blocks, at 4K, a block an eye), so that the last wave does
-// not run on a few SMs while the rest idle (measured: docs/benchmarks.md,
-// Design measurements, "Warp: row groups").
-//  * BackgroundSmooth: the row kernel also finds every hole's anchor (the
-//    clean pixels from the chunks' hole bits, nearest clean / non-hole
-//    pixels by bit search as for Background) and writes the states of the
-//    chunks with holes and whether each 32-pixel chunk of the row has a
-//    hole, and lists the tiles with holes; then a block (256 threads, 512
-//    where shared memory bounds the tiles an SM holds anyway) per listed
-//    tile of 32 columns x up to 32 rows and eye copies the states and
-//    anchors of
-//    its rows and R more above and below into shared memory, slides the
-//    +-R window down the column runs of holes (column sums V for its
-//    columns and Rx more either side) and sums V over +-Rx along each
-//    hole's row run. No host sync. Scratch: kSmoothBytesPerPixel per pixel
-//    and eye.
-//  * NeighborAverage: afterwards, Jacobi steps ping-ponging two hole masks,
-//    in batches of kWarpFillBatch steps; after each batch the host reads the
-//    per-step fill counts (a stream sync) to stop when no hole is left or a
-//    step filled nothing (what is left is then painted kFillBlack).
+// How a frame is rendered: cuda/warp.cu, and the files it names. Rows
+// wider than the device's shared memory allows (about 50000 pixels on
+// Hopper) are refused with cudaErrorInvalidValue. No host sync, but
+// fill=NeighborAverage's (one a batch of its steps) and holes_out's.
 // Buffers grow on demand and are reused: no per-frame allocation once the
 // largest frame has been seen. One renderer serves one stream at a time.
 #pragma once
@@ -57,41 +16,11 @@
 #include "../common/warp.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
+#include "warp_plan.h"  // the renderer's cached choices
 
 namespace p3d {
 
-// NeighborAverage steps launched between two host checks of the counters.
-constexpr int kWarpFillBatch = 8;
-// BackgroundSmooth scratch per pixel and eye: anchor (Rgba), state; and a
-// byte per 32-pixel chunk of a row and eye (has it a hole).
-constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
-
-// The row kernels render() chose for rows of `width` pixels and `fill`
-// with both eyes warped and 32-bit keys (cuda/warp.cu,
-// choose_row_kernels): both eyes at once, and row groups where the depth
-// is on cells of 2 x 2 pixels or more, in blocks of a row's size or in
-// wide blocks of wide_group_threads, row by row or all rows together.
-struct RowKernelChoice {
-  int width = -1;
-  HoleFill fill = HoleFill::None;
-  bool both_eyes = false;
-  bool groups = false;
-  bool wide_groups = false;
-  bool rows_together = false;
-  int wide_group_threads = 0;  // a WideGroup or RowsTogether block's size
-  int group_slots = 0;         // the group blocks the device holds resident (waves)
-};
-
-// The BackgroundSmooth sums kernel's block size last chosen, for a kernel
-// and its shared memory (cuda/warp.cu, smooth_tile_threads).
-struct SmoothSumsLaunch {
-  const void *kernel = nullptr;  // the kernel with no register bound, for the frame's plan
-  size_t smem = 0;
-  const void *launch = nullptr;  // the kernel launched: it, or its register-bound twin
-  int threads = 0;
-};
-
-struct FusedAnaglyph;  // cuda/warp.cu
+struct FusedAnaglyph;  // cuda/warp_internal.h
 
 class WarpRendererGpu {
  public:
@@ -145,8 +74,8 @@ class WarpRendererGpu {
   std::vector<const void *> attributes_set_;
   // The row kernels for the last width and fill, asked once per width and
   // fill.
-  RowKernelChoice rows_;
-  SmoothSumsLaunch sums_launch_;
+  warp_detail::RowKernelChoice rows_;
+  warp_detail::SmoothSumsLaunch sums_launch_;
 };
 
 }  // namespace p3d

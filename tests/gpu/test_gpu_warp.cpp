@@ -254,7 +254,7 @@ TEST_F(GpuWarp, DepthOnCellGrids) {
       }
 }
 
-// Rows that share their depth cells share one scatter (cuda/warp.cu,
+// Rows that share their depth cells share one scatter (cuda/warp_plan.h,
 // choose_row_kernels): at the widths above, on Hopper, in RowsTogether
 // blocks (a source row buffer for each row); here, 6000 pixels, in
 // WideGroup blocks (rows one after another), where neither a RowsTogether
@@ -267,7 +267,7 @@ TEST_F(GpuWarp, DepthOnCellGrids) {
 TEST_F(GpuWarp, RowGroupsInWideRows) { expect_row_groups(6000, 67, 2.f, PixelFormat::BGRx); }
 
 // More row groups than the GPU holds blocks of at once, not a whole number
-// of waves of them (cuda/warp.cu, group_tail_y0): the groups that fill
+// of waves of them (cuda/warp_plan.h, group_tail_y0): the groups that fill
 // whole waves go first, the rows after them a block each (at these widths,
 // RowsTogether blocks on Hopper, a block for each eye of each row). 1363
 // rows are 341 groups of 4 (the last of 3 rows), more than the 264
