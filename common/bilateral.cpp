@@ -76,10 +76,17 @@ inline void for_each_strip(int x0, int x1, const StripFn &strip) {
   for (int x = x0; x < x1; x += kStrip) strip(x + kStrip <= x1 ? x : x1 - kStrip);
 }
 
+// r grown by `by` pixels on every side, clipped to a w x h picture.
+PixelRect grown(const PixelRect &r, int by, int w, int h) {
+  return PixelRect{std::max(0, r.x0 - by), std::max(0, r.y0 - by), std::min(w, r.x1 + by), std::min(h, r.y1 + by)};
+}
+
 // The filter at full resolution of sanitised parameters p (scale 1) on the
-// guide's luma (CV_8UC1); depth_in does not alias depth_out.
+// guide's luma (CV_8UC1), for the output pixels of `where` only; it reads
+// luma and depth_in within p.radius of them. depth_in does not alias
+// depth_out. mid: the Separable row pass, the picture's size.
 void filter_on_luma(const BilateralParams &p, const cv::Mat &luma, ImageView<const float> depth_in,
-                    ImageView<float> depth_out) {
+                    ImageView<float> depth_out, const PixelRect &where, cv::Mat &mid) {
   // The range table mirrored (bilateral_mirror_range): `range` points at its
   // centre, so range[g] is the weight of a guide difference g in -255..255,
   // and range[|g|] (what bilateral_pixel reads) the same value.
@@ -91,19 +98,22 @@ void filter_on_luma(const BilateralParams &p, const cv::Mat &luma, ImageView<con
   const int w = depth_in.width, h = depth_in.height;
   const int r = p.radius, side = 2 * r + 1;
   const float *space_centre = space.data() + r * side + r;  // space(0, 0)
-  const int x0 = std::min(r, w), x1 = std::max(x0, w - r);  // [x0, x1): the window needs no clipping in x
+  // [x0, x1): the columns of `where` whose window needs no clipping in x.
+  const int x0 = std::max(where.x0, std::min(r, w)), x1 = std::min(where.x1, std::max(std::min(r, w), w - r));
   const bool strips_in_row = x1 - x0 >= kStrip;
+  const bool strips_down = where.x1 - where.x0 >= kStrip;
   const ptrdiff_t luma_step = static_cast<ptrdiff_t>(luma.step[0]);
   auto guide_at = [&luma](int qx, int qy) { return luma.ptr<uint8_t>(qy)[qx]; };
   auto depth_at = [&depth_in](int qx, int qy) { return depth_in.row(qy)[qx]; };
   if (p.mode == BilateralMode::Separable) {
-    // Both passes in strips of kStrip pixels (window_strip) where the row is
-    // long enough: along the row at the pixels whose window needs no
+    // Both passes in strips of kStrip pixels (window_strip) where the run
+    // is long enough: along the row at the pixels whose window needs no
     // clipping, down the columns everywhere (a row's taps are clipped alike
     // for all its pixels). The other pixels take bilateral_pass_pixel().
-    cv::Mat mid(h, w, CV_32FC1);
-    const bool strips_down = w >= kStrip;
-    cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+    // The row pass covers the rows the column pass reads.
+    if (mid.rows != h || mid.cols != w) mid.create(h, w, CV_32FC1);
+    const PixelRect rows_read = grown(where, r, w, h);
+    cv::parallel_for_(cv::Range(rows_read.y0, rows_read.y1), [&](const cv::Range &rows) {
       for (int y = rows.start; y < rows.end; ++y) {
         const uint8_t *g = luma.ptr<uint8_t>(y);
         const float *dep = depth_in.row(y);
@@ -112,22 +122,22 @@ void filter_on_luma(const BilateralParams &p, const cv::Mat &luma, ImageView<con
           for_each_strip(x0, x1, [&](int x) {
             window_strip(g + x, luma_step, dep + x, 0, 0, 0, -r, r, space_centre, side, range, out + x);
           });
-        for (int x = 0; x < w; ++x)
+        for (int x = where.x0; x < where.x1; ++x)
           if (!strips_in_row || x < x0 || x >= x1)
             out[x] = bilateral_pass_pixel(x, y, 1, 0, w, r, space.data(), range, guide_at, depth_at);
       }
     });
     auto mid_at = [&mid](int qx, int qy) { return mid.ptr<float>(qy)[qx]; };
-    cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+    cv::parallel_for_(cv::Range(where.y0, where.y1), [&](const cv::Range &rows) {
       for (int y = rows.start; y < rows.end; ++y) {
         float *out = depth_out.row(y);
         if (!strips_down) {
-          for (int x = 0; x < w; ++x)
+          for (int x = where.x0; x < where.x1; ++x)
             out[x] = bilateral_pass_pixel(x, y, 0, 1, h, r, space.data(), range, guide_at, mid_at);
           continue;
         }
         const int d0 = std::max(-r, -y), d1 = std::min(r, h - 1 - y);
-        for_each_strip(0, w, [&](int x) {
+        for_each_strip(where.x0, where.x1, [&](int x) {
           const uint8_t *g = luma.ptr<uint8_t>(y) + x;
           window_strip(g, luma_step, mid.ptr<float>(y) + x, static_cast<ptrdiff_t>(mid.step[0]), d0,
                        d1, 0, 0, space_centre, side, range, out + x);
@@ -138,7 +148,7 @@ void filter_on_luma(const BilateralParams &p, const cv::Mat &luma, ImageView<con
   }
   // The exact window: strips where it needs no clipping in x (its rows are
   // clipped alike for the whole row), per pixel elsewhere.
-  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+  cv::parallel_for_(cv::Range(where.y0, where.y1), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       float *out = depth_out.row(y);
       const uint8_t *g = luma.ptr<uint8_t>(y);
@@ -148,35 +158,54 @@ void filter_on_luma(const BilateralParams &p, const cv::Mat &luma, ImageView<con
           window_strip(g + x, luma_step, depth_in.row(y) + x, static_cast<ptrdiff_t>(depth_in.pitch),
                        dy0, dy1, -r, r, space_centre, side, range, out + x);
         });
-      for (int x = 0; x < w; ++x)
+      for (int x = where.x0; x < where.x1; ++x)
         if (!strips_in_row || x < x0 || x >= x1)
           out[x] = bilateral_pixel(x, y, w, h, r, space.data(), range, guide_at, depth_at);
     }
   });
 }
 
+// The guide's luma over rect r of `luma` (the picture's size).
+void guide_luma_rect(const FrameView &guide, const PixelRect &r, cv::Mat &luma) {
+  cv::parallel_for_(cv::Range(r.y0, r.y1), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      uint8_t *out = luma.ptr<uint8_t>(y);
+      for (int x = r.x0; x < r.x1; ++x) out[x] = load_luma(guide, x, y);
+    }
+  });
+}
+
 // The coarse grid of step s > 1 (common/bilateral.h): guide' and depth'
-// per cell, filtered there, each result spread over its cell.
+// of the cells the output cells of `where` read, filtered there, each
+// result spread over the pixels of `where` in its cell.
 void filter_on_cells(const BilateralParams &p, int s, const FrameView &guide, ImageView<const float> depth_in,
-                     ImageView<float> depth_out) {
+                     ImageView<float> depth_out, const PixelRect &where, BilateralScratch &scratch) {
   const int w = depth_in.width, h = depth_in.height;
   const int cw = bilateral_cells(w, s), ch = bilateral_cells(h, s);
-  cv::Mat luma(ch, cw, CV_8UC1), depth(ch, cw, CV_32FC1), out(ch, cw, CV_32FC1);
-  cv::parallel_for_(cv::Range(0, ch), [&](const cv::Range &rows) {
+  const BilateralParams coarse = bilateral_coarse_params(p, s);
+  const PixelRect cells{where.x0 / s, where.y0 / s, bilateral_cells(where.x1, s), bilateral_cells(where.y1, s)};
+  const PixelRect read = grown(cells, coarse.radius, cw, ch);
+  cv::Mat &luma = scratch.luma, &depth = scratch.cell_depth, &out = scratch.cell_out;
+  if (luma.rows != ch || luma.cols != cw) {
+    luma.create(ch, cw, CV_8UC1);
+    depth.create(ch, cw, CV_32FC1);
+    out.create(ch, cw, CV_32FC1);
+  }
+  cv::parallel_for_(cv::Range(read.y0, read.y1), [&](const cv::Range &rows) {
     for (int cy = rows.start; cy < rows.end; ++cy) {
       const float *src = depth_in.row(cy * s);
-      for (int cx = 0; cx < cw; ++cx) {
+      for (int cx = read.x0; cx < read.x1; ++cx) {
         luma.ptr<uint8_t>(cy)[cx] = static_cast<uint8_t>(bilateral_cell_luma(guide, cx, cy, s));
         depth.ptr<float>(cy)[cx] = src[cx * s];
       }
     }
   });
-  filter_on_luma(bilateral_coarse_params(p, s), luma, as_const(float_view(depth)), float_view(out));
-  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
+  filter_on_luma(coarse, luma, as_const(float_view(depth)), float_view(out), cells, scratch.mid);
+  cv::parallel_for_(cv::Range(where.y0, where.y1), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       const float *cell = out.ptr<float>(y / s);
       float *dst = depth_out.row(y);
-      for (int x = 0; x < w; ++x) dst[x] = cell[x / s];
+      for (int x = where.x0; x < where.x1; ++x) dst[x] = cell[x / s];
     }
   });
 }
@@ -185,34 +214,58 @@ void filter_on_cells(const BilateralParams &p, int s, const FrameView &guide, Im
 
 void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                           ImageView<float> depth_out) {
+  BilateralScratch scratch;
+  bilateral_filter_cpu(params, guide, depth_in, depth_out,
+                       {PixelRect{0, 0, depth_out.width, depth_out.height}}, scratch);
+}
+
+void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
+                          ImageView<float> depth_out, const std::vector<PixelRect> &where,
+                          BilateralScratch &scratch) {
   CV_Assert(guide.width == depth_in.width && guide.height == depth_in.height);
   CV_Assert(depth_out.width == depth_in.width && depth_out.height == depth_in.height);
   if (depth_in.empty() || depth_out.empty()) return;
 
   const BilateralParams p = bilateral_sanitize(params);
   const int s = bilateral_effective_scale(p, depth_in.width, depth_in.height);
-  if (s > 1) {  // reads depth_in into its own grid first, so it may alias depth_out
-    filter_on_cells(p, s, guide, depth_in, depth_out);
-    return;
-  }
+  const PixelRect whole{0, 0, depth_in.width, depth_in.height};
+  // The filter never reads a pixel it has written: one rectangle on the
+  // coarse grid reads depth_in into its own grid first, anything else
+  // reads a private copy when the planes alias.
   cv::Mat in_copy;
-  if (static_cast<const void *>(depth_in.data) == static_cast<const void *>(depth_out.data)) {
+  const bool alias = static_cast<const void *>(depth_in.data) == static_cast<const void *>(depth_out.data);
+  if (alias && (s == 1 || where.size() > 1)) {
     in_copy = copy_of(depth_in);
     depth_in = as_const(float_view(in_copy));
   }
-  filter_on_luma(bilateral_coarse_params(p, 1), bilateral_guide_luma(guide), depth_in, depth_out);
+  if (s > 1) {
+    for (const PixelRect &r : where)
+      if (!r.empty()) filter_on_cells(p, s, guide, depth_in, depth_out, r, scratch);
+    return;
+  }
+  const BilateralParams fine = bilateral_coarse_params(p, 1);
+  cv::Mat &luma = scratch.luma;
+  if (luma.rows != depth_in.height || luma.cols != depth_in.width) luma.create(depth_in.height, depth_in.width, CV_8UC1);
+  for (const PixelRect &r : where)
+    if (!r.empty()) guide_luma_rect(guide, grown(r, fine.radius, whole.x1, whole.y1), luma);
+  for (const PixelRect &r : where)
+    if (!r.empty()) filter_on_luma(fine, luma, depth_in, depth_out, r, scratch.mid);
+}
+
+int bilateral_reach(const BilateralParams &params, int width, int height) {
+  const BilateralParams p = bilateral_sanitize(params);
+  const int s = bilateral_effective_scale(p, width, height);
+  if (s <= 1) return p.radius;
+  // An output pixel takes its cell's result, which reads the cells within
+  // the coarse radius, each the pixels of its own cell.
+  return (bilateral_coarse_params(p, s).radius + 1) * s;
 }
 
 // The guide's luma once per pixel: the window reads every value up to
 // (2r+1)^2 times, and load_luma() of R'G'B' is a few float operations.
 cv::Mat bilateral_guide_luma(const FrameView &guide) {
   cv::Mat luma(guide.height, guide.width, CV_8UC1);
-  cv::parallel_for_(cv::Range(0, guide.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      uint8_t *out = luma.ptr<uint8_t>(y);
-      for (int x = 0; x < guide.width; ++x) out[x] = load_luma(guide, x, y);
-    }
-  });
+  guide_luma_rect(guide, PixelRect{0, 0, guide.width, guide.height}, luma);
   return luma;
 }
 

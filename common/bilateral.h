@@ -104,6 +104,13 @@ struct BilateralParams {
   int scale = 1;              // 1..kMaxBilateralScale: the grid step; 0 = bilateral_auto_scale()
 };
 
+// Field by field: an adaptive stage recomputes everything when they differ.
+inline bool operator==(const BilateralParams &a, const BilateralParams &b) {
+  return a.radius == b.radius && a.sigma_space == b.sigma_space && a.sigma_range == b.sigma_range &&
+         a.mode == b.mode && a.scale == b.scale;
+}
+inline bool operator!=(const BilateralParams &a, const BilateralParams &b) { return !(a == b); }
+
 // The grid step the filter takes at a picture size (scale 0) on a frame of
 // width x height.
 P3D_HD int bilateral_auto_scale(int width, int height) {
@@ -285,14 +292,35 @@ P3D_HD float bilateral_pass_pixel(int x, int y, int step_x, int step_y, int leng
 void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                           ImageView<float> depth_out);
 
+// How far, in pixels across and down, a change of the guide or of the
+// depth can move the filter's output (the adaptive stages recompute the
+// tiles within this reach of a changed one): the radius, or at a grid
+// step s the coarse radius plus one cell, in pixels.
+int bilateral_reach(const BilateralParams &params, int width, int height);
+
 }  // namespace p3d
 
 #if !defined(__CUDACC__)
+#include <vector>
+
 #include <opencv2/core.hpp>
+
+#include "change_map.h"
 
 namespace p3d {
 // The guide's 8-bit luma (load_luma) of every pixel, computed once: the
 // window reads each value up to (2r+1)^2 times. Host code only (OpenCV).
 cv::Mat bilateral_guide_luma(const FrameView &guide);
+
+// The CPU filter's working images, kept by a caller that filters a stream
+// so that a frame allocates nothing.
+struct BilateralScratch {
+  cv::Mat luma, mid, cell_depth, cell_out;
+};
+// The filter's output over the rectangles `where` only; the rest of
+// depth_out is left as it is. Each pixel gets the bits that the call over
+// the whole picture gives it.
+void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
+                          ImageView<float> depth_out, const std::vector<PixelRect> &where, BilateralScratch &scratch);
 }  // namespace p3d
 #endif

@@ -1,13 +1,15 @@
 #include "depth_estimate.h"
 
 #include <algorithm>
+#include <cstring>
 #include <numeric>
 
 #include <opencv2/core.hpp>
 
 namespace p3d {
 
-void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features) {
+void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features,
+                        const std::vector<uint8_t> *only) {
   const int B = block_size, W = frame.width, H = frame.height;
   if (B < 1 || W <= 0 || H <= 0) {
     features.clear();
@@ -22,6 +24,7 @@ void block_features_cpu(const FrameView &frame, int block_size, std::vector<floa
       const int rows = block_extent(j, B, H);
       float *f = &features[static_cast<size_t>(j) * bx * 3];
       for (int i = 0; i < bx; ++i) {
+        if (only && !(*only)[static_cast<size_t>(j) * bx + i]) continue;
         const int cols = block_extent(i, B, W);
         uint32_t sum[3] = {0, 0, 0};
         for (int y = j * B; y < j * B + rows; ++y)
@@ -129,24 +132,73 @@ void depth_from_grey_cpu(const FrameView &grey, const YuvToRgb &m, ImageView<flo
 
 void DepthEstimatorCpu::reset() { have_state_ = false; }
 
+namespace {
+
+// The blocks with a pixel in a changed tile: one flag a block (bx x by).
+std::vector<uint8_t> blocks_touched(const ChangeMap &changes, int B, int bx, int by) {
+  std::vector<uint8_t> touched(static_cast<size_t>(bx) * by, 0);
+  for (int ty = 0; ty < changes.tiles_y(); ++ty)
+    for (int tx = 0; tx < changes.tiles_x(); ++tx) {
+      if (!changes.tile(tx, ty)) continue;
+      const PixelRect r = tile_pixels(tx, ty, changes.width(), changes.height());
+      for (int j = r.y0 / B; j <= (r.y1 - 1) / B; ++j)
+        std::fill(touched.begin() + static_cast<size_t>(j) * bx + r.x0 / B,
+                  touched.begin() + static_cast<size_t>(j) * bx + (r.x1 - 1) / B + 1, 1);
+    }
+  return touched;
+}
+
+}  // namespace
+
 TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const FrameView &frame,
                                              ImageView<float> depth) {
+  const TemporalDecision d = estimate_blocks(params, frame, nullptr);
+  expand(depth);
+  return d;
+}
+
+void DepthEstimatorCpu::expand(ImageView<float> depth) const {
+  expand_block_depth_cpu(block_depth_, bx_, block_, depth);
+}
+
+TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, const FrameView &frame,
+                                                    const ChangeMap *changes) {
   const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
+  output_changed_ = true;
   if (W <= 0 || H <= 0) {
     reset();
     return TemporalDecision::Cut;
   }
   const int bx = blocks_along(W, B), by = blocks_along(H, B);
   const bool same_grid = have_state_ && bx == bx_ && by == by_ && B == block_ && W == width_ && H == height_;
-
-  block_features_cpu(frame, B, features_);
+  // Adaptive: features_ still holds the previous frame's features, and
+  // only the blocks that a changed tile touches are summed again (the
+  // others have the same pixels, so the same sums).
+  const bool incremental = changes && same_grid && features_current_ && changes->width() == W &&
+                           changes->height() == H;
+  std::vector<uint8_t> touched;
+  if (incremental) {
+    touched = blocks_touched(*changes, B, bx, by);
+    block_features_cpu(frame, B, features_, &touched);
+  } else {
+    block_features_cpu(frame, B, features_);
+  }
   const size_t row_values = static_cast<size_t>(bx) * 3;
   float diff = 0.f;
   if (same_grid) {
-    // Integer partial sums per block row: exact, so the split does not matter.
+    // Integer partial sums per block row: exact, so the split does not
+    // matter. Incremental: a row without a touched block keeps its sum when
+    // the reference stayed (a reused frame), and is 0 when the reference is
+    // the previous frame itself.
     row_diff_.resize(by);
     cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
       for (int j = range.start; j < range.end; ++j) {
+        if (incremental && std::find(touched.begin() + static_cast<size_t>(j) * bx,
+                                     touched.begin() + static_cast<size_t>(j + 1) * bx, 1) ==
+                               touched.begin() + static_cast<size_t>(j + 1) * bx) {
+          if (last_decision_ != TemporalDecision::Reuse) row_diff_[j] = 0;
+          continue;
+        }
         uint64_t s = 0;
         for (size_t k = static_cast<size_t>(j) * row_values; k < static_cast<size_t>(j + 1) * row_values; ++k)
           s += temporal_diff_fixed(features_[k], ref_features_[k]);
@@ -158,7 +210,16 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
     diff = temporal_mean_diff(fixed_sum, static_cast<long long>(features_.size()));
   }
   const TemporalDecision decision = temporal_decision(same_grid, diff, params);
-  if (decision != TemporalDecision::Reuse) ref_features_.swap(features_);  // features_ is rewritten next frame
+  // The reference becomes this frame's features. Adaptive calls copy them,
+  // since the next call updates features_ in place; others trade buffers.
+  if (decision != TemporalDecision::Reuse) {
+    if (changes) {
+      ref_features_ = features_;
+    } else {
+      ref_features_.swap(features_);
+    }
+  }
+  features_current_ = changes != nullptr;
   const std::vector<float> &features = decision != TemporalDecision::Reuse ? ref_features_ : features_;
 
   const bool cut = decision == TemporalDecision::Cut;
@@ -167,15 +228,6 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
     for (size_t k = static_cast<size_t>(range.start) * row_values; k < static_cast<size_t>(range.end) * row_values; k += 3)
       smooth_block_feature(cut, params.feature_smoothing, &features[k], &smoothed_[k]);
   });
-  region_labels_cpu(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), labels_);
-  block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
-
-  block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values
-  cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
-    for (size_t k = static_cast<size_t>(range.start) * bx; k < static_cast<size_t>(range.end) * bx; ++k)
-      block_depth_[k] = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);
-  });
-
   have_state_ = true;
   bx_ = bx;
   by_ = by;
@@ -183,7 +235,32 @@ TemporalDecision DepthEstimatorCpu::estimate(const DepthParams &params, const Fr
   width_ = W;
   height_ = H;
   last_diff_ = diff;
-  expand_block_depth_cpu(block_depth_, bx, B, depth);
+  last_decision_ = decision;
+  // A reused frame outputs the previous block depths whatever the regions
+  // are: adaptive calls leave steps 2-4 out (labels() then describe the
+  // last frame that used them).
+  if (changes && decision == TemporalDecision::Reuse && !block_depth_.empty()) {
+    output_changed_ = false;
+    return decision;
+  }
+  region_labels_cpu(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), labels_);
+  block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
+
+  const bool had_output = block_depth_.size() == fresh_depth_.size();
+  block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values
+  std::vector<uint8_t> row_changed(static_cast<size_t>(by), had_output ? 0 : 1);
+  cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
+    for (int j = range.start; j < range.end; ++j) {
+      bool changed = false;
+      for (size_t k = static_cast<size_t>(j) * bx; k < static_cast<size_t>(j + 1) * bx; ++k) {
+        const float out = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);
+        changed = changed || std::memcmp(&out, &block_depth_[k], sizeof out) != 0;
+        block_depth_[k] = out;
+      }
+      if (changed) row_changed[j] = 1;
+    }
+  });
+  output_changed_ = std::find(row_changed.begin(), row_changed.end(), 1) != row_changed.end();
   return decision;
 }
 

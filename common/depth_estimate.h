@@ -46,7 +46,10 @@
 //     (The mean is taken in fixed point, see temporal_diff_fixed(); a change
 //     of block_size is a size change of the block grid, so also a cut.)
 //     Steps 1-4 run on every frame, reused or not, so labels() always
-//     describe the current frame.
+//     describe the current frame; an adaptive call (estimate_blocks() with
+//     a ChangeMap) sums step 1 only over the blocks a changed tile touches
+//     and leaves steps 2-4 out on a reused frame, whose output does not
+//     depend on them: the same block depths.
 //  6. Expansion. Every pixel takes its block's depth (piecewise constant; the
 //     cross-bilateral filter aligns the block edges with image edges later).
 // Depth convention: 0 = farthest, 1 = nearest.
@@ -55,8 +58,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "frame.h"
+#include "change_map.h"
 #include "enum_name.h"
+#include "frame.h"
 
 namespace p3d {
 
@@ -244,6 +248,14 @@ class DepthEstimatorCpu {
   // Estimates depth for one frame into `depth` (same size as the frame).
   // Returns what the temporal step decided.
   TemporalDecision estimate(const DepthParams &params, const FrameView &frame, ImageView<float> depth);
+  // Steps 1-5 only: the block depths of `frame`. changes: the tiles in
+  // which `frame` differs from the frame of the previous call (null: not
+  // known, all of them); the block depths are bit for bit those of a call
+  // without it. output_changed() then tells whether any block depth
+  // differs from the previous call's, and expand() writes the map.
+  TemporalDecision estimate_blocks(const DepthParams &params, const FrameView &frame, const ChangeMap *changes);
+  bool output_changed() const { return output_changed_; }
+  void expand(ImageView<float> depth) const;
   void reset();  // forget history (next frame is treated as a cut)
 
   // Block-level results of the last call, for tests.
@@ -265,12 +277,17 @@ class DepthEstimatorCpu {
   std::vector<float> block_depth_;   // output of the last frame
   std::vector<float> fresh_depth_;   // b of this frame (step 4), before step 5
   float last_diff_ = 0.f;
+  TemporalDecision last_decision_ = TemporalDecision::Cut;
   bool have_state_ = false;
+  bool features_current_ = false;  // features_ holds the previous call's features (adaptive calls)
+  bool output_changed_ = true;
 };
 
 // Stateless helpers the estimator is built from (exposed for tests and for
 // the GPU tests that compare intermediate results).
-void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features);
+// only: one flag a block; the blocks without it keep their values in features.
+void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features,
+                        const std::vector<uint8_t> *only = nullptr);
 // yuv: the features are Y'CbCr means (blocks_joined()).
 void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold, bool yuv,
                        std::vector<int> &labels);

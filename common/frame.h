@@ -60,6 +60,11 @@ struct YuvToRgb {
 };
 
 YuvToRgb yuv_to_rgb_params(double kr, double kb, bool full_range);
+inline bool operator==(const YuvToRgb &a, const YuvToRgb &b) {
+  return a.y_offset == b.y_offset && a.y_scale == b.y_scale && a.c_scale == b.c_scale && a.rv == b.rv &&
+         a.gu == b.gu && a.gv == b.gv && a.bu == b.bu;
+}
+inline bool operator!=(const YuvToRgb &a, const YuvToRgb &b) { return !(a == b); }
 
 // R'G'B' -> Y'CbCr for 8-bit output (the inverse of YuvToRgb), built by
 // rgb_to_yuv_params() (colour.cpp) from the output caps' colorimetry:
@@ -73,6 +78,10 @@ struct RgbToYuv {
 };
 
 RgbToYuv rgb_to_yuv_params(double kr, double kb, bool full_range);
+inline bool operator==(const RgbToYuv &a, const RgbToYuv &b) {
+  return a.kr == b.kr && a.kg == b.kg && a.kb == b.kb && a.cb == b.cb && a.cr == b.cr && a.y_offset == b.y_offset &&
+         a.y_scale == b.y_scale && a.c_scale == b.c_scale;
+}
 
 // Luma weights of the guide image and of depth read from grey pictures
 // (BT.601; only used on R'G'B' values, so it is colorimetry independent).

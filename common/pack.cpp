@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -212,7 +213,8 @@ void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp,
   }
 }
 
-void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out) {
+void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
+                        const std::vector<uint8_t> *only) {
   const bool bgr = is_bgr_order(in.format), alpha = has_alpha(in.format);
   auto row_fn = bgr ? (alpha ? anaglyph_pair_row<true, true> : anaglyph_pair_row<true, false>)
                     : (alpha ? anaglyph_pair_row<false, true> : anaglyph_pair_row<false, false>);
@@ -220,6 +222,7 @@ void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const F
   const size_t right = 4 * static_cast<size_t>(pack_detail::view_slot(p, 1) * (in.width / 2));
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y) {
+      if (only && !(*only)[y]) continue;
       const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
       row_fn(am, row + left, row + right, out.plane[0] + static_cast<size_t>(y) * out.stride[0], in.width / 2);
     }
@@ -228,39 +231,105 @@ void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const F
 
 // The frame for input arrangement I: one loop instantiation per arrangement
 // (the per-pixel function inlines into it, as in the kernel).
+// only: the output rows to write (one flag a row), null: all.
 template <StereoInput I>
-void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out) {
+void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
+               const std::vector<uint8_t> *only) {
+  auto wanted = [only](int y) { return !only || (*only)[y]; };
   if (!is_packed_rgb(out.format)) {  // 4:2:0: by 2x2 blocks
     const int bw = (out.width + 1) / 2, bh = (out.height + 1) / 2;
     cv::parallel_for_(cv::Range(0, bh), [&](const cv::Range &rows) {
       for (int by = rows.start; by < rows.end; ++by)
-        for (int bx = 0; bx < bw; ++bx) pack_detail::pack_block_yuv<I>(params, am, in, out, bx, by);
+        if (wanted(2 * by) || (2 * by + 1 < out.height && wanted(2 * by + 1)))
+          for (int bx = 0; bx < bw; ++bx) pack_detail::pack_block_yuv<I>(params, am, in, out, bx, by);
     });
     return;
   }
   if (I == StereoInput::SideBySide && params.layout == PackLayout::Anaglyph && !am.linear_light)
-    return anaglyph_pair_rows(params, am, in, out);
+    return anaglyph_pair_rows(params, am, in, out, only);
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y)
-      for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_detail::pack_pixel_for<I>(params, am, in, x, y));
+      if (wanted(y))
+        for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_detail::pack_pixel_for<I>(params, am, in, x, y));
   });
+}
+
+// The input rows that view rows [a, b] of slot `slot` read: an interval,
+// conservative (a row or two more at most).
+void view_rows_read(StereoInput input, int in_height, int slot, int a, int b, int *lo, int *hi) {
+  switch (input) {
+    case StereoInput::TopBottom:
+      *lo = a + slot * (in_height / 2);
+      *hi = b + slot * (in_height / 2);
+      return;
+    case StereoInput::TopBottomHalf: {
+      const int start = slot == 0 ? 0 : half_split(in_height);
+      *lo = start + a / 2 - 1;
+      *hi = start + b / 2 + 1;
+      return;
+    }
+    case StereoInput::RowInterleaved:
+    case StereoInput::Checkerboard:
+      *lo = a - 1;
+      *hi = b + 1;
+      return;
+    default:
+      *lo = a;
+      *hi = b;
+      return;
+  }
 }
 
 }  // namespace
 
-void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out) {
-  if (!pack_args_valid(params, in, out))
+std::vector<uint8_t> pack_rows_reading(const PackParams &params, int in_width, int in_height,
+                                       const std::vector<uint8_t> &in_rows) {
+  int vw = 0, vh = 0, ow = 0, oh = 0;
+  if (!input_view_size(params.input, in_width, in_height, &vw, &vh)) return {};
+  pack_size(params.layout, vw, vh, &ow, &oh);
+  // prefix[i]: flagged input rows before row i, so an interval is one lookup.
+  std::vector<int> prefix(static_cast<size_t>(in_height) + 1, 0);
+  for (int y = 0; y < in_height; ++y) prefix[y + 1] = prefix[y] + (y < static_cast<int>(in_rows.size()) && in_rows[y]);
+  auto flagged = [&](int lo, int hi) {
+    lo = std::max(lo, 0);
+    hi = std::min(hi, in_height - 1);
+    return lo <= hi && prefix[hi + 1] - prefix[lo] > 0;
+  };
+  std::vector<uint8_t> out(static_cast<size_t>(oh), 0);
+  for (int Y = 0; Y < oh; ++Y) {
+    // The view rows output row Y shows: [a, b].
+    int a = Y, b = Y;
+    if (params.layout == PackLayout::TopBottom && Y >= vh) a = b = Y - vh;
+    if (params.layout == PackLayout::TopBottomHalf) {
+      const int i = Y < half_split(vh) ? Y : Y - half_split(vh);
+      a = 2 * i;
+      b = std::min(2 * i + 1, vh - 1);
+    }
+    for (int slot = 0; slot < 2 && !out[Y]; ++slot) {
+      int lo = 0, hi = 0;
+      view_rows_read(params.input, in_height, slot, a, b, &lo, &hi);
+      out[Y] = flagged(lo, hi);
+    }
+  }
+  return out;
+}
+
+
+void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out) { pack_cpu(params, in, out, nullptr); }
+
+void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out, const std::vector<uint8_t> *rows) {
+  if (!pack_args_valid(params, in, out) || (rows && static_cast<int>(rows->size()) != out.height))
     throw std::invalid_argument("pack_cpu: frames do not match the layout (see pack_args_valid)");
   const AnaglyphMatrices am = anaglyph_matrices(params.glasses, params.method);
   switch (params.input) {
-    case StereoInput::SideBySideHalf: return pack_rows<StereoInput::SideBySideHalf>(params, am, in, out);
-    case StereoInput::TopBottom: return pack_rows<StereoInput::TopBottom>(params, am, in, out);
-    case StereoInput::TopBottomHalf: return pack_rows<StereoInput::TopBottomHalf>(params, am, in, out);
-    case StereoInput::RowInterleaved: return pack_rows<StereoInput::RowInterleaved>(params, am, in, out);
-    case StereoInput::ColumnInterleaved: return pack_rows<StereoInput::ColumnInterleaved>(params, am, in, out);
-    case StereoInput::Checkerboard: return pack_rows<StereoInput::Checkerboard>(params, am, in, out);
+    case StereoInput::SideBySideHalf: return pack_rows<StereoInput::SideBySideHalf>(params, am, in, out, rows);
+    case StereoInput::TopBottom: return pack_rows<StereoInput::TopBottom>(params, am, in, out, rows);
+    case StereoInput::TopBottomHalf: return pack_rows<StereoInput::TopBottomHalf>(params, am, in, out, rows);
+    case StereoInput::RowInterleaved: return pack_rows<StereoInput::RowInterleaved>(params, am, in, out, rows);
+    case StereoInput::ColumnInterleaved: return pack_rows<StereoInput::ColumnInterleaved>(params, am, in, out, rows);
+    case StereoInput::Checkerboard: return pack_rows<StereoInput::Checkerboard>(params, am, in, out, rows);
     case StereoInput::SideBySide:
-    default: return pack_rows<StereoInput::SideBySide>(params, am, in, out);
+    default: return pack_rows<StereoInput::SideBySide>(params, am, in, out, rows);
   }
 }
 

@@ -89,6 +89,10 @@
 #include "enum_name.h"
 #include "frame.h"
 
+#if !defined(__CUDACC__)
+#include <vector>
+#endif
+
 namespace p3d {
 
 enum class PackLayout : int {
@@ -172,6 +176,13 @@ struct PackParams {
   RgbToYuv yuv;  // NV12/I420 output: the output caps' colorimetry
 };
 
+// Field by field: an adaptive stage repacks everything when they differ.
+inline bool operator==(const PackParams &a, const PackParams &b) {
+  return a.layout == b.layout && a.glasses == b.glasses && a.method == b.method && a.swap_eyes == b.swap_eyes &&
+         a.input == b.input && a.input_right_first == b.input_right_first && a.yuv == b.yuv;
+}
+inline bool operator!=(const PackParams &a, const PackParams &b) { return !(a == b); }
+
 // Row-major 3x3 matrices: out.r = m[0]*c.r + m[1]*c.g + m[2]*c.b, ...
 // left_q / right_q: the same in 16.16 fixed point, round(65536 m), which
 // every method but DuboisLinear mixes with (anaglyph_mix_word).
@@ -218,6 +229,17 @@ bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameV
 // Whole frame. out must have pack_size()'s size and the input's format
 // (or NV12/I420); throws std::invalid_argument (writing nothing) when pack_args_valid() fails.
 void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out);
+#if !defined(__CUDACC__)
+// The output rows flagged in `rows` (one flag a row of out) only; the
+// others are left as they are.
+void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &out, const std::vector<uint8_t> *rows);
+// The output rows (one flag a row) that read an input row flagged in
+// in_rows (one flag a row of an in_width x in_height input): what the
+// adaptive stages pack again when those rows changed. Conservative: a row
+// or two beyond the exact set where interleaved or squeezed views mix rows.
+std::vector<uint8_t> pack_rows_reading(const PackParams &params, int in_width, int in_height,
+                                       const std::vector<uint8_t> &in_rows);
+#endif
 
 // ---- per-pixel implementation ----------------------------------------------
 

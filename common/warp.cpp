@@ -209,7 +209,9 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, E
 // hole mask when its mask is sized, and its BackgroundSmooth states and
 // anchors for that fill (sized W x H by the caller).
 // holes[e]: eye e's hole count.
-void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long long holes[2]) {
+// rows: the rows to warp (one flag a row), null: all.
+void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long long holes[2],
+               const std::vector<uint8_t> *rows_wanted) {
   std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
     RowScratch row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
@@ -217,6 +219,7 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long lo
     const std::vector<Keys::Word> &keys = row.keys;
     long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
+      if (rows_wanted && !(*rows_wanted)[y]) continue;
       row.src.load(j, y);
       for (int e = 0; e < 2; ++e) {
         const Eye &eye = eyes[e];
@@ -307,18 +310,29 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, 
   }
 }
 
-void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &s) {
+// rows: the rows to fill (one flag a row), null: all.
+void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &s, const std::vector<uint8_t> *rows) {
   const int R = smooth_fill_radius(eye.shift, j.D), Rx = smooth_fill_radius_x(R);
   // Bands of at least 2R rows, so that finding a run's start at a band's
   // first row (up to R rows up, holes only) stays a small share of the
   // sweep, and short enough that 8 or 16 threads get several bands each
-  // (1080p: 34 bands, 4K: 38).
-  const int band = std::max(32, 2 * R), bands = (j.height + band - 1) / band;
-  cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range &r) {
+  // (1080p: 34 bands, 4K: 38). A band starts anywhere, so the rows asked
+  // for are cut into bands run by run.
+  const int band = std::max(32, 2 * R);
+  std::vector<std::pair<int, int>> bands;
+  for (int y = 0; y < j.height;) {
+    if (rows && !(*rows)[y]) {
+      ++y;
+      continue;
+    }
+    int end = y;
+    while (end < j.height && (!rows || (*rows)[end])) ++end;
+    for (; y < end; y += band) bands.emplace_back(y, std::min(end, y + band));
+  }
+  cv::parallel_for_(cv::Range(0, static_cast<int>(bands.size())), [&](const cv::Range &r) {
     std::vector<ColumnWindow> win(j.width);
     std::vector<SmoothSum> V(j.width), prefix(static_cast<size_t>(j.width) + 1);
-    for (int b = r.start; b < r.end; ++b)
-      smooth_band(j, eye, s, R, Rx, b * band, std::min(j.height, (b + 1) * band), win, V, prefix);
+    for (int b = r.start; b < r.end; ++b) smooth_band(j, eye, s, R, Rx, bands[b].first, bands[b].second, win, V, prefix);
   });
 }
 
@@ -368,9 +382,36 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   return warp_render_cpu(params, src, m, depth, out, scratch);
 }
 
+std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<uint8_t> &rows) {
+  const WarpParams p = warp_sanitize(params);
+  const bool any = std::find(rows.begin(), rows.end(), 1) != rows.end();
+  if (!any) return rows;
+  if (p.fill == HoleFill::NeighborAverage) return std::vector<uint8_t>(rows.size(), 1);
+  if (p.fill != HoleFill::BackgroundSmooth) return rows;
+  // A hole's fill sums the anchors of its column's run within R rows.
+  const float D = disparity_scale(p, width);
+  int R = 0;
+  for (int e = 0; e < 2; ++e) {
+    const float shift = warp_eye_shift(p, D, e);
+    if (shift != 0.f) R = std::max(R, smooth_fill_radius(shift, D));
+  }
+  std::vector<uint8_t> out(rows.size(), 0);
+  const int H = static_cast<int>(rows.size());
+  for (int y = 0; y < H; ++y)
+    if (rows[y]) std::fill(out.begin() + std::max(0, y - R), out.begin() + std::min(H, y + R + 1), 1);
+  return out;
+}
+
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &planes) {
+  return warp_render_cpu(params, src, m, depth, out, planes, nullptr);
+}
+
+long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                          ImageView<const float> depth, const FrameView &out, WarpCpuScratch &planes,
+                          const std::vector<uint8_t> *rows) {
   if (!warp_frames_fit(src, depth, out)) return -1;
+  if (rows && static_cast<int>(rows->size()) != src.height) return -1;
   WarpJob j{warp_sanitize(params), src, m, depth, out, 0.f, src.width, src.height};
   j.D = disparity_scale(j.params, j.width);
   const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
@@ -390,11 +431,16 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
       scratch[e].anchor = planes.smooth_anchor[e].data();
     }
   }
+  // NeighborAverage reaches across the picture: a changed row warps all.
+  if (rows && average && std::find(rows->begin(), rows->end(), 1) != rows->end()) rows = nullptr;
   long long holes[2] = {0, 0};
-  warp_eyes(j, eyes, scratch, holes);
+  warp_eyes(j, eyes, scratch, holes, rows);
+  // The smooth fill of a row reads the rows within R: it runs on the rows
+  // the changed ones reach, whatever their own hole counts.
+  const std::vector<uint8_t> fill_rows = rows ? warp_rows_written(j.params, j.width, *rows) : std::vector<uint8_t>();
   for (int e = 0; e < 2; ++e) {
     if (average && holes[e] > 0) neighbour_average_fill(j, eyes[e], scratch[e].mask, holes[e]);
-    if (smooth && holes[e] > 0) background_smooth_fill(j, eyes[e], scratch[e]);
+    if (smooth && (holes[e] > 0 || rows)) background_smooth_fill(j, eyes[e], scratch[e], rows ? &fill_rows : nullptr);
   }
   return holes[0] + holes[1];
 }

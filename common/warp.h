@@ -144,6 +144,12 @@ struct WarpParams {
   HoleFill fill = HoleFill::BackgroundSmooth;
 };
 
+// Field by field: an adaptive stage recomputes everything when they differ.
+inline bool operator==(const WarpParams &a, const WarpParams &b) {
+  return a.max_disparity == b.max_disparity && a.convergence == b.convergence && a.view == b.view && a.fill == b.fill;
+}
+inline bool operator!=(const WarpParams &a, const WarpParams &b) { return !(a == b); }
+
 // Disparity scale D in pixels for a frame width.
 P3D_HD float disparity_scale(const WarpParams &p, int width) { return p.max_disparity * static_cast<float>(width) / 100.f; }
 
@@ -504,5 +510,22 @@ struct WarpCpuScratch {
 };
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch);
+
+// The adaptive warp: the rows flagged in `rows` (one flag a source row,
+// null: all) are the rows whose source or depth changed since the
+// previous call with this scratch, the same parameters and the same frame
+// geometry; `out` holds that call's output. The flagged rows are warped
+// again and the fill runs over the rows they reach (warp_rows_written());
+// every other pixel of out and of scratch is left as it is, which is what
+// a call over all rows would write there. Returns the holes of the warped
+// rows, or -1 as above (also when rows does not have a flag a row).
+long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                          ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch,
+                          const std::vector<uint8_t> *rows);
+// The output rows of both views that the adaptive warp rewrites when the
+// flagged source rows changed: BackgroundSmooth reaches smooth_fill_radius()
+// rows up and down, NeighborAverage the whole picture, the other fills the
+// row itself.
+std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<uint8_t> &rows);
 
 }  // namespace p3d

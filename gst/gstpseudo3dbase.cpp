@@ -13,9 +13,10 @@
 GST_DEBUG_CATEGORY(gst_pseudo3d_base_debug);
 #define GST_CAT_DEFAULT gst_pseudo3d_base_debug
 
-enum { PROP_0, PROP_DEVICE_ID, PROP_PROCESSING };
+enum { PROP_0, PROP_DEVICE_ID, PROP_PROCESSING, PROP_ADAPTIVE, PROP_REUSE_TOLERANCE };
 #define DEFAULT_DEVICE_ID (-1)
 #define DEFAULT_PROCESSING GST_PSEUDO3D_PROCESSING_AUTO
+#define DEFAULT_ADAPTIVE TRUE
 
 #define gst_pseudo3d_base_parent_class parent_class
 G_DEFINE_ABSTRACT_TYPE_WITH_CODE(GstPseudo3DBase, gst_pseudo3d_base, GST_TYPE_BASE_TRANSFORM,
@@ -31,6 +32,8 @@ static void gst_pseudo3d_base_set_property(GObject *object, guint prop_id, const
   switch (prop_id) {
     case PROP_DEVICE_ID: self->device_id = g_value_get_int(value); break;
     case PROP_PROCESSING: self->processing = static_cast<GstPseudo3DProcessing>(g_value_get_enum(value)); break;
+    case PROP_ADAPTIVE: self->adaptive = g_value_get_boolean(value); break;
+    case PROP_REUSE_TOLERANCE: self->reuse_tolerance = g_value_get_float(value); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
@@ -42,6 +45,8 @@ static void gst_pseudo3d_base_get_property(GObject *object, guint prop_id, GValu
   switch (prop_id) {
     case PROP_DEVICE_ID: g_value_set_int(value, self->device_id); break;
     case PROP_PROCESSING: g_value_set_enum(value, self->processing); break;
+    case PROP_ADAPTIVE: g_value_set_boolean(value, self->adaptive); break;
+    case PROP_REUSE_TOLERANCE: g_value_set_float(value, self->reuse_tolerance); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
@@ -608,6 +613,40 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
                        -1, G_MAXINT, DEFAULT_DEVICE_ID,
                        (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_READY)));
 
+  /**
+   * GstPseudo3DBase:adaptive:
+   *
+   * Work that follows what changed: the stage compares its inputs with the
+   * previous frame's, tile by tile, and recomputes only the output that a
+   * changed tile can reach; an unchanged frame costs a comparison. With
+   * reuse-tolerance 0 the output is byte for byte that of adaptive=false.
+   */
+  g_object_class_install_property(
+      gobject_class, PROP_ADAPTIVE,
+      g_param_spec_boolean("adaptive", "Adaptive",
+                           "Recompute only what changed since the previous frame (tiles of 32x32 pixels and the "
+                           "output they reach); an unchanged frame costs a comparison. With reuse-tolerance 0 the "
+                           "output is byte for byte that of adaptive=false. System memory only: on CUDA memory "
+                           "every frame is computed whole",
+                           DEFAULT_ADAPTIVE,
+                           (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING)));
+  /**
+   * GstPseudo3DBase:reuse-tolerance:
+   *
+   * With adaptive: a tile whose bytes changed by at most this mean
+   * (8-bit levels) since the frame its results come from counts as
+   * unchanged. 0 is exact; camera noise needs a level or two (error
+   * against time in docs/quality.md).
+   */
+  g_object_class_install_property(
+      gobject_class, PROP_REUSE_TOLERANCE,
+      g_param_spec_float("reuse-tolerance", "Reuse tolerance",
+                         "With adaptive: mean change of a tile's bytes (8-bit levels) up to which its previous "
+                         "results are kept; 0 = exact (any changed byte counts). Camera video saves time at 1 or "
+                         "2, for an error measured in docs/quality.md",
+                         0.f, 255.f, 0.f,
+                         (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING)));
+
   element_class->post_message = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_post_message);
 #if HAVE_CUDA
   element_class->set_context = GST_DEBUG_FUNCPTR(gst_pseudo3d_base_set_context);
@@ -637,6 +676,8 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
 static void gst_pseudo3d_base_init(GstPseudo3DBase *self) {
   self->device_id = DEFAULT_DEVICE_ID;
   self->processing = DEFAULT_PROCESSING;
+  self->adaptive = DEFAULT_ADAPTIVE;
+  self->reuse_tolerance = 0.f;
   self->gpu = new p3d::gst::GpuContext();
   gst_video_info_init(&self->in_info);
   gst_video_info_init(&self->out_info);

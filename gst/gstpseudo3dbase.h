@@ -59,6 +59,8 @@ struct _GstPseudo3DBase {
   /* properties (object lock) */
   gint device_id;
   GstPseudo3DProcessing processing;
+  gboolean adaptive;      /* stage_adaptive.h */
+  gfloat reuse_tolerance;
 
   /* private */
   p3d::gst::GpuContext *gpu;

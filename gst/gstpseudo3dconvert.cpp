@@ -61,6 +61,9 @@ static const struct {
 };
 #define PROP_CUDA_DEVICE_ID (G_N_ELEMENTS(kProxied) + 1)
 #define PROP_PROCESSING (G_N_ELEMENTS(kProxied) + 2)
+// The stage properties that every stage has and the bin sets on all of them.
+static const char *const kEveryStage[] = {"adaptive", "reuse-tolerance"};
+#define PROP_EVERY_STAGE (G_N_ELEMENTS(kProxied) + 3)
 #define DEFAULT_PROCESSING GST_PSEUDO3D_PROCESSING_AUTO
 
 struct _GstPseudo3DConvert {
@@ -87,6 +90,8 @@ static void gst_pseudo3d_convert_set_property(GObject *object, guint prop_id, co
     for (GstElement *e : self->stage) g_object_set_property(G_OBJECT(e), "processing", value);
   } else if (prop_id >= 1 && prop_id <= G_N_ELEMENTS(kProxied)) {
     g_object_set_property(G_OBJECT(self->stage[kProxied[prop_id - 1].stage]), kProxied[prop_id - 1].name, value);
+  } else if (prop_id >= PROP_EVERY_STAGE && prop_id < PROP_EVERY_STAGE + G_N_ELEMENTS(kEveryStage)) {
+    for (GstElement *e : self->stage) g_object_set_property(G_OBJECT(e), kEveryStage[prop_id - PROP_EVERY_STAGE], value);
   } else {
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
   }
@@ -100,6 +105,8 @@ static void gst_pseudo3d_convert_get_property(GObject *object, guint prop_id, GV
     g_value_set_enum(value, self->processing);
   } else if (prop_id >= 1 && prop_id <= G_N_ELEMENTS(kProxied)) {
     g_object_get_property(G_OBJECT(self->stage[kProxied[prop_id - 1].stage]), kProxied[prop_id - 1].name, value);
+  } else if (prop_id >= PROP_EVERY_STAGE && prop_id < PROP_EVERY_STAGE + G_N_ELEMENTS(kEveryStage)) {
+    g_object_get_property(G_OBJECT(self->stage[STAGE_DEPTH]), kEveryStage[prop_id - PROP_EVERY_STAGE], value);
   } else {
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
   }
@@ -203,6 +210,9 @@ static void gst_pseudo3d_convert_class_init(GstPseudo3DConvertClass *klass) {
   auto *depth_class = static_cast<GObjectClass *>(g_type_class_ref(GST_TYPE_PSEUDO3D_DEPTH));
   g_object_class_install_property(gobject_class, PROP_CUDA_DEVICE_ID,
                                   p3d::gst::clone_pspec(g_object_class_find_property(depth_class, "cuda-device-id")));
+  for (guint i = 0; i < G_N_ELEMENTS(kEveryStage); ++i)
+    g_object_class_install_property(gobject_class, PROP_EVERY_STAGE + i,
+                                    p3d::gst::clone_pspec(g_object_class_find_property(depth_class, kEveryStage[i])));
   g_type_class_unref(depth_class);
   g_object_class_install_property(
       gobject_class, PROP_PROCESSING,

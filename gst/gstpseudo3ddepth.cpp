@@ -26,6 +26,7 @@
 #include "depth_meta.h"
 #include "depth_plane.h"
 #include "enums.h"
+#include "stage_adaptive.h"
 #include "stage_depth.h"
 #include "stage_gpu.h"
 #include "staged_geometry.h"
@@ -60,6 +61,10 @@ struct DepthState {
   p3d::DepthEstimatorGpu gpu;
 #endif
   p3d::gst::DepthPlanePool pool;
+  // adaptive (stage_adaptive.h): the frame's bytes and the plane of the
+  // previous frame, which an unchanged depth reuses. Streaming thread.
+  p3d::FrameHistory history;
+  p3d::gst::DepthPlanePtr last_plane;
   // method decides the output width: it changes at a frame boundary (object lock).
   p3d::gst::StagedGeometry<GstPseudo3DDepthMethod> method{DEFAULT_METHOD};
 };
@@ -131,6 +136,8 @@ static p3d::DepthParams frame_params(GstPseudo3DDepth *self) {
 #if HAVE_CUDA
     self->state->gpu.reset();
 #endif
+    self->state->history.reset();
+    self->state->last_plane.reset();
   }
   GST_OBJECT_LOCK(self);
   const p3d::DepthParams p = self->params;
@@ -148,6 +155,26 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   if (p3d::gst::depth_fits(base, pseudo3d_buffer_get_depth(buf), path, view.width, view.height))
     return GST_FLOW_OK;
   const p3d::DepthParams params = frame_params(self);
+  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
+  DepthState *state = self->state;
+  if (adaptive.on) {
+    // Only the blocks of changed tiles are summed again; when no block
+    // depth changed the frame gets the previous plane itself.
+    const p3d::ChangeMap changes = state->history.compare(view, adaptive.tolerance);
+    const p3d::TemporalDecision d = state->cpu.estimate_blocks(params, view, &changes);
+    GST_LOG_OBJECT(self, "temporal decision %d, %.0f%% of the tiles changed", static_cast<int>(d),
+                   100.0 * changes.fraction());
+    if (state->cpu.output_changed() || !p3d::gst::depth_fits(base, state->last_plane.get(), path, view.width, view.height)) {
+      p3d::gst::DepthPlanePtr plane = p3d::gst::new_depth(base, state->pool, path, view.width, view.height);
+      if (!plane) return GST_FLOW_ERROR;
+      state->cpu.expand(plane->view());
+      state->last_plane = std::move(plane);
+    }
+    pseudo3d_buffer_set_depth(buf, state->last_plane);
+    return GST_FLOW_OK;
+  }
+  state->history.reset();
+  state->last_plane.reset();
   // On CUDA memory the plane holds a value a block (no full-size copy;
   // depth_plane.h) where the block is a power of two.
   p3d::gst::DepthPlanePtr plane = p3d::gst::new_depth(base, self->state->pool, path, view.width, view.height,
@@ -229,6 +256,8 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
 
 static void release(GstPseudo3DBase *base) {
   DepthState *state = GST_PSEUDO3D_DEPTH(base)->state;
+  state->history.reset();
+  state->last_plane.reset();
   state->cpu = p3d::DepthEstimatorCpu();
 #if HAVE_CUDA
   state->gpu = p3d::DepthEstimatorGpu();

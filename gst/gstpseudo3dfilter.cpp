@@ -19,6 +19,7 @@
 #include "bilateral.h"
 #include "depth_meta.h"
 #include "enums.h"
+#include "stage_adaptive.h"
 #include "stage_depth.h"
 #include "stage_gpu.h"
 #include "video_util.h"
@@ -37,6 +38,18 @@ struct FilterState {
   p3d::BilateralFilterGpu gpu;
 #endif
   p3d::gst::DepthPlanePool pool;
+  // adaptive (stage_adaptive.h), streaming thread: the previous frame's
+  // inputs, parameters and output plane.
+  p3d::gst::InputHistory inputs;
+  p3d::gst::KeptParams<p3d::BilateralParams> params;
+  p3d::gst::DepthPlanePtr last_out;
+  p3d::BilateralScratch scratch;
+
+  void forget() {
+    inputs.reset();
+    params.reset();
+    last_out.reset();
+  }
 };
 
 struct _GstPseudo3DFilter {
@@ -49,6 +62,28 @@ struct _GstPseudo3DFilter {
 G_DEFINE_TYPE(GstPseudo3DFilter, gst_pseudo3d_filter, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dfilter, "pseudo3dfilter", GST_RANK_NONE, GST_TYPE_PSEUDO3D_FILTER);
 
+// The CPU filter with adaptive=true: the tiles within the filter's reach
+// of a changed guide or depth tile are filtered again, the others keep the
+// previous output; no change at all keeps the previous plane itself.
+static GstFlowReturn filter_adaptive(GstPseudo3DFilter *self, GstBuffer *buf, const p3d::FrameView &guide,
+                                     const p3d::BilateralParams &params, float tolerance) {
+  GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
+  FilterState *state = self->state;
+  const p3d::gst::DepthPlanePtr depth = p3d::gst::frame_depth_plane(buf);
+  const p3d::ChangeMap changes = state->inputs.compare(guide, depth, tolerance);
+  const bool whole = state->params.changed(params) || !state->last_out;
+  GST_LOG_OBJECT(self, "%.0f%% of the tiles changed%s", 100.0 * changes.fraction(), whole ? ", filtering all" : "");
+  p3d::gst::DepthPlanePtr out = p3d::gst::new_depth(base, state->pool, GST_PSEUDO3D_PATH_CPU, depth->width, depth->height);
+  if (!out) return GST_FLOW_ERROR;
+  const p3d::ImageView<const float> prev =
+      state->last_out ? p3d::as_const(state->last_out->view()) : p3d::ImageView<const float>();
+  if (p3d::bilateral_filter_changed_cpu(params, guide, p3d::as_const(depth->view()), prev, out->view(),
+                                        whole ? nullptr : &changes, state->scratch))
+    state->last_out = std::move(out);
+  pseudo3d_buffer_set_depth(buf, state->last_out);
+  return GST_FLOW_OK;
+}
+
 static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,
                                 GstVideoFrame *frame) {
   GstPseudo3DFilter *self = GST_PSEUDO3D_FILTER(base);
@@ -58,6 +93,10 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   GST_OBJECT_LOCK(self);
   const p3d::BilateralParams params = self->params;
   GST_OBJECT_UNLOCK(self);
+  if (gst_pseudo3d_base_take_history_reset(base)) self->state->forget();
+  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
+  if (adaptive.on) return filter_adaptive(self, buf, guide, params, adaptive.tolerance);
+  self->state->forget();
   // On CUDA memory the output holds a value a cell of the coarse grid (no
   // full-size copy; depth_plane.h) where the grid step is a power of two.
   const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), depth->width, depth->height);
@@ -81,6 +120,7 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
 
 static void release(GstPseudo3DBase *base) {
   FilterState *state = GST_PSEUDO3D_FILTER(base)->state;
+  state->forget();
 #if HAVE_CUDA
   state->gpu = p3d::BilateralFilterGpu();
 #endif

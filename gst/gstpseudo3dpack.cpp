@@ -42,6 +42,7 @@
 
 #include "caps_geometry.h"
 #include "enums.h"
+#include "stage_adaptive.h"
 #include "stage_gpu.h"
 #include "stereo_caps.h"
 #include "stereo_packing.h"
@@ -61,9 +62,24 @@ enum {
   PROP_INPUT_RIGHT_FIRST,
 };
 
+// adaptive (stage_adaptive.h), streaming thread: the previous frame's
+// input, parameters and output.
+struct PackState {
+  p3d::gst::InputHistory input;
+  p3d::gst::KeptParams<p3d::PackParams> params;
+  p3d::gst::OutputHistory output;
+
+  void forget() {
+    input.reset();
+    params.reset();
+    output.reset();
+  }
+};
+
 struct _GstPseudo3DPack {
   GstPseudo3DBase parent;
   p3d::gst::StereoPacking *packing;
+  PackState *state;
 };
 
 #define gst_pseudo3d_pack_parent_class parent_class
@@ -169,16 +185,30 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
     return p3d::gst::run_gpu(base, "packing the stereo pair", [&] {
       return p3d::pack_gpu(params, src, dst, base->gpu->stream());
     });
-#else
-  (void)path;
 #endif
-  if (!p3d::gst::StereoPacking::pack_cpu(params, src, dst)) {
+  // Adaptive: the output rows that read a changed input row are packed
+  // again, the rest is the previous output.
+  PackState *state = self->state;
+  if (gst_pseudo3d_base_take_history_reset(base)) state->forget();
+  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
+  p3d::ChangeMap changes;
+  bool whole = true;
+  if (adaptive.on) {
+    changes = state->input.compare(src, nullptr, adaptive.tolerance);
+    whole = state->params.changed(params) || !state->output.copy_into(&base->out_info, out);
+  } else {
+    state->forget();
+  }
+  if (!p3d::pack_changed_cpu(params, src, dst, whole ? nullptr : &changes)) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the layout"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
+  if (adaptive.on) state->output.keep(out->buffer, &base->out_info);
   return GST_FLOW_OK;
 }
+
+static void release(GstPseudo3DBase *base) { GST_PSEUDO3D_PACK(base)->state->forget(); }
 
 static void gst_pseudo3d_pack_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(object);
@@ -206,6 +236,7 @@ static void gst_pseudo3d_pack_get_property(GObject *object, guint prop_id, GValu
 
 static void gst_pseudo3d_pack_finalize(GObject *object) {
   delete GST_PSEUDO3D_PACK(object)->packing;
+  delete GST_PSEUDO3D_PACK(object)->state;
   G_OBJECT_CLASS(parent_class)->finalize(object);
 }
 
@@ -252,6 +283,7 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
   base_class->set_info = set_info;
   base_class->frame_boundary = frame_boundary;
   base_class->process = process;
+  base_class->release = release;
 
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_pack_debug, "pseudo3dpack", 0, "pseudo3d stereo packing");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_INPUT_LAYOUT, (GstPluginAPIFlags)0);
@@ -260,6 +292,7 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
 static void gst_pseudo3d_pack_init(GstPseudo3DPack *self) {
   self->packing = new p3d::gst::StereoPacking(GST_BASE_TRANSFORM(self), PROP_PACK, p3d::gst::PairSource::InputFrame,
                                               p3d::gst::kPackDefaultLayout);
+  self->state = new PackState();
   GST_PSEUDO3D_BASE(self)->staged = self->packing->staged();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
 }

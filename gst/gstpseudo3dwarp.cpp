@@ -31,9 +31,12 @@
  */
 #include "gstpseudo3dwarp.h"
 
+#include <tuple>
+
 #include "caps_geometry.h"
 #include "depth_meta.h"
 #include "enums.h"
+#include "stage_adaptive.h"
 #include "stage_depth.h"
 #include "stage_gpu.h"
 #include "stereo_packing.h"
@@ -61,6 +64,17 @@ constexpr p3d::PackLayout kDefaultLayout = p3d::PackLayout::SideBySide;
 
 struct WarpState {
   p3d::WarpCpuScratch cpu;  // the CPU path's planes, reused frame to frame (streaming thread only)
+  // adaptive (stage_adaptive.h), streaming thread: the previous frame's
+  // inputs, parameters and output.
+  p3d::gst::InputHistory inputs;
+  p3d::gst::KeptParams<std::tuple<p3d::WarpParams, p3d::PackParams, p3d::YuvToRgb>> params;
+  p3d::gst::OutputHistory output;
+
+  void forget() {
+    inputs.reset();
+    params.reset();
+    output.reset();
+  }
 #if HAVE_CUDA
   p3d::WarpRendererGpu gpu;
 #endif
@@ -116,6 +130,39 @@ static gboolean frame_boundary(GstPseudo3DBase *base) {
          p3d::gst::StereoPacking::Boundary::Renegotiate;
 }
 
+// The CPU path. With adaptive the rows whose source or depth changed are
+// warped again, the fill runs over the rows they reach and the pack over
+// the output rows those reach; the rest is the previous output.
+static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p3d::FrameView &src,
+                                const p3d::WarpParams &params, const p3d::PackParams &pack, const p3d::YuvToRgb &yuv,
+                                const p3d::gst::AdaptiveSettings &adaptive, GstVideoFrame *out) {
+  GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
+  WarpState *state = self->state;
+  const p3d::gst::DepthPlanePtr depth = p3d::gst::frame_depth_plane(inbuf);
+  const p3d::FrameView dst = p3d::gst::frame_view(out);
+  p3d::ChangeMap changes;
+  bool whole = true;
+  if (adaptive.on) {
+    changes = state->inputs.compare(src, depth, adaptive.tolerance);
+    whole = state->params.changed({params, pack, yuv}) || !state->output.copy_into(&base->out_info, out);
+  } else {
+    state->forget();
+  }
+  // The pair into the output where the layout is the pair itself, else
+  // into the pair buffer (kept from frame to frame), then packed.
+  const p3d::FrameView pair = self->packing->pair_target(pack, src.width, src.height, dst);
+  const long long holes = p3d::warp_pack_changed_cpu(params, pack, src, yuv, p3d::as_const(depth->view()), pair, dst,
+                                                     state->cpu, whole ? nullptr : &changes);
+  if (holes < 0) {
+    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
+                      ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
+    return GST_FLOW_ERROR;
+  }
+  if (adaptive.on) state->output.keep(out->buffer, &base->out_info);
+  GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
+  return GST_FLOW_OK;
+}
+
 static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *inbuf, GstVideoFrame *in,
                              GstVideoFrame *out) {
   GstPseudo3DWarp *self = GST_PSEUDO3D_WARP(base);
@@ -127,33 +174,24 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   GST_OBJECT_UNLOCK(self);
   const p3d::PackParams pack = self->packing->frame_params();
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
-  const p3d::FrameView dst = p3d::gst::frame_view(out);
+  if (gst_pseudo3d_base_take_history_reset(base)) self->state->forget();
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
+    self->state->forget();
+    const p3d::FrameView dst = p3d::gst::frame_view(out);
     return p3d::gst::run_gpu(base, "rendering the views", [&] {
       return self->state->gpu.render_packed(params, pack, src, yuv, p3d::as_const(depth->grid()), dst,
                                             base->gpu->stream());
     });
   }
 #endif
-  // The CPU path: the pair into the output where the layout is the pair
-  // itself, else into the pair buffer, then packed.
-  const p3d::FrameView pair = self->packing->pair_target(pack, src.width, src.height, dst);
-  const long long holes = p3d::warp_render_cpu(params, src, yuv, p3d::as_const(depth->view()), pair, self->state->cpu);
-  if (holes < 0 || !p3d::gst::StereoPacking::pack_cpu(pack, pair, dst)) {
-    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
-                      ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
-    return GST_FLOW_ERROR;
-  }
-  GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
-  return GST_FLOW_OK;
+  return render_cpu(self, inbuf, src, params, pack, yuv, p3d::gst::adaptive_settings(base, path), out);
 }
 
 static void release(GstPseudo3DBase *base) {
+  GST_PSEUDO3D_WARP(base)->state->forget();
 #if HAVE_CUDA
   GST_PSEUDO3D_WARP(base)->state->gpu = p3d::WarpRendererGpu();
-#else
-  (void)base;
 #endif
 }
 

@@ -233,11 +233,4 @@ FrameView StereoPacking::pair_target(const PackParams &p, int view_width, int vi
   return pair;
 }
 
-bool StereoPacking::pack_cpu(const PackParams &p, const FrameView &pair, const FrameView &dst) {
-  if (pair.plane[0] == dst.plane[0]) return true;  // rendered into the output (pair_target)
-  if (!pack_args_valid(p, pair, dst)) return false;
-  p3d::pack_cpu(p, pair, dst);
-  return true;
-}
-
 }  // namespace p3d::gst

@@ -157,9 +157,6 @@ class StereoPacking {
   // the pair in its format, else the pair buffer (in dst's packed RGB
   // format, RGBA for 4:2:0 output).
   FrameView pair_target(const PackParams &p, int view_width, int view_height, const FrameView &dst);
-  // Packs `pair` into dst (nothing to do for a pair rendered into dst);
-  // false, writing nothing, when the frames do not fit p.
-  static bool pack_cpu(const PackParams &p, const FrameView &pair, const FrameView &dst);
 
  private:
   GstBaseTransform *owner_;

@@ -1,0 +1,64 @@
+// The adaptive stages' steps (common/adaptive.h).
+#include "adaptive.h"
+
+namespace p3d {
+
+ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> depth, ImageView<const float> prev_depth,
+                               float tolerance) {
+  ChangeMap changes = frame_.compare(frame, tolerance);
+  if (depth.empty()) return changes;
+  if (prev_depth.empty()) {
+    changes.mark_all();
+  } else if (depth.data != prev_depth.data) {
+    changes.merge(compare_planes(prev_depth, depth));
+  }
+  return changes;
+}
+
+bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth,
+                                  ImageView<const float> prev_out, ImageView<float> out, const ChangeMap *changes,
+                                  BilateralScratch &scratch) {
+  const PixelRect whole{0, 0, depth.width, depth.height};
+  const bool keep = changes && prev_out.width == depth.width && prev_out.height == depth.height && !prev_out.empty();
+  if (!keep) {
+    bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
+    return true;
+  }
+  const int reach = bilateral_reach(params, depth.width, depth.height);
+  const ChangeMap dirty = changes->dilated(reach, reach);
+  if (!dirty.any()) return false;
+  copy_plane_rect(prev_out, out, whole);
+  bilateral_filter_cpu(params, guide, depth, out, dirty.runs(), scratch);
+  return true;
+}
+
+long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack, const FrameView &src,
+                                const YuvToRgb &m, ImageView<const float> depth, const FrameView &pair,
+                                const FrameView &dst, WarpCpuScratch &scratch, const ChangeMap *changes) {
+  const bool pair_is_dst = pair.plane[0] == dst.plane[0];
+  if (!pair_is_dst && !pack_args_valid(pack, pair, dst)) return -1;
+  const std::vector<uint8_t> rows = changes ? changes->rows() : std::vector<uint8_t>();
+  const long long holes = warp_render_cpu(params, src, m, depth, pair, scratch, changes ? &rows : nullptr);
+  if (holes < 0 || pair_is_dst) return holes;
+  if (!changes) {
+    pack_cpu(pack, pair, dst);
+    return holes;
+  }
+  const std::vector<uint8_t> out_rows =
+      pack_rows_reading(pack, pair.width, pair.height, warp_rows_written(params, src.width, rows));
+  pack_cpu(pack, pair, dst, &out_rows);
+  return holes;
+}
+
+bool pack_changed_cpu(const PackParams &params, const FrameView &in, const FrameView &dst, const ChangeMap *changes) {
+  if (!pack_args_valid(params, in, dst)) return false;
+  if (!changes) {
+    pack_cpu(params, in, dst);
+    return true;
+  }
+  const std::vector<uint8_t> rows = pack_rows_reading(params, in.width, in.height, changes->rows());
+  pack_cpu(params, in, dst, &rows);
+  return true;
+}
+
+}  // namespace p3d

@@ -1,0 +1,62 @@
+// The adaptive stages' steps on the CPU (docs/architecture.md, "Adaptive
+// work"): each stage compares its inputs with the previous frame's
+// (change_map.h), recomputes the output that a changed tile can reach and
+// keeps the rest of its previous output. With tolerance 0 each step's
+// output is byte for byte what the stage computes without them. The
+// elements (gst/) and pseudo3d-bench's scene mode call these.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "bilateral.h"
+#include "change_map.h"
+#include "pack.h"
+#include "warp.h"
+
+namespace p3d {
+
+// A stage's inputs of the previous frame: the frame's bytes (a copy) and
+// the depth map, which the caller holds on to (the stages never write a
+// map once they hand it on).
+class StageInputs {
+ public:
+  // The tiles in which this frame, or its depth map when `depth` is given,
+  // differ from the previous call's. prev_depth: the previous call's depth
+  // map (empty: none, every tile counts as changed); the same data pointer
+  // as depth: the same map, unchanged.
+  ChangeMap compare(const FrameView &frame, ImageView<const float> depth, ImageView<const float> prev_depth,
+                    float tolerance);
+  void reset() { frame_.reset(); }
+
+ private:
+  FrameHistory frame_;
+};
+
+// The filter of the tiles within bilateral_reach() of a changed one.
+// changes: the tiles whose guide or depth changed since the call that
+// wrote prev_out (null: prev_out is unknown or other parameters made it).
+// Returns false when the change reaches no tile: out is left untouched and
+// prev_out is this frame's output. Otherwise out holds the whole output,
+// prev_out's values where the change does not reach.
+bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth,
+                                  ImageView<const float> prev_out, ImageView<float> out, const ChangeMap *changes,
+                                  BilateralScratch &scratch);
+
+// The warp and the pack of the rows that a changed source or depth row
+// reaches. changes: the tiles whose source or depth changed since the
+// previous call (null: everything is computed); dst then holds that
+// call's output, and pair (the frame the views are rendered into: dst
+// itself where the layout is the pair, else a buffer kept between calls)
+// its pair. Returns warp_render_cpu()'s hole count, or -1 when the frames
+// do not fit (nothing written).
+long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack, const FrameView &src,
+                                const YuvToRgb &m, ImageView<const float> depth, const FrameView &pair,
+                                const FrameView &dst, WarpCpuScratch &scratch, const ChangeMap *changes);
+
+// The pack of the output rows that read a changed input row. changes: the
+// tiles of the input that changed since the previous call (null: all);
+// dst then holds that call's output. False when the frames do not fit.
+bool pack_changed_cpu(const PackParams &params, const FrameView &in, const FrameView &dst, const ChangeMap *changes);
+
+}  // namespace p3d

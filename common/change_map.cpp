@@ -1,0 +1,197 @@
+// Tile bookkeeping of the adaptive stages (common/change_map.h).
+#include "change_map.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+
+#include <opencv2/core.hpp>
+
+namespace p3d {
+
+ChangeMap::ChangeMap(int width, int height, bool all)
+    : width_(std::max(width, 0)),
+      height_(std::max(height, 0)),
+      tiles_x_(change_tiles(width_)),
+      tiles_y_(change_tiles(height_)),
+      flags_(static_cast<size_t>(tiles_x_) * tiles_y_, all ? 1 : 0) {}
+
+void ChangeMap::mark_pixels(PixelRect r) {
+  r.x0 = std::max(r.x0, 0);
+  r.y0 = std::max(r.y0, 0);
+  r.x1 = std::min(r.x1, width_);
+  r.y1 = std::min(r.y1, height_);
+  if (r.empty()) return;
+  for (int ty = r.y0 / kChangeTile; ty <= (r.y1 - 1) / kChangeTile; ++ty)
+    for (int tx = r.x0 / kChangeTile; tx <= (r.x1 - 1) / kChangeTile; ++tx) mark(tx, ty);
+}
+
+void ChangeMap::mark_all() { std::fill(flags_.begin(), flags_.end(), 1); }
+
+bool ChangeMap::any() const { return std::find(flags_.begin(), flags_.end(), 1) != flags_.end(); }
+
+bool ChangeMap::all() const { return std::find(flags_.begin(), flags_.end(), 0) == flags_.end(); }
+
+double ChangeMap::fraction() const {
+  if (flags_.empty()) return 0.0;
+  return static_cast<double>(std::count(flags_.begin(), flags_.end(), 1)) / static_cast<double>(flags_.size());
+}
+
+void ChangeMap::merge(const ChangeMap &o) {
+  if (!same_geometry(o)) {
+    mark_all();
+    return;
+  }
+  for (size_t i = 0; i < flags_.size(); ++i) flags_[i] |= o.flags_[i];
+}
+
+ChangeMap ChangeMap::dilated(int reach_x, int reach_y) const {
+  // A changed pixel at a tile's edge reaches `reach` pixels into the
+  // tiles beside it: ceil(reach / tile) tiles on either side.
+  const int rx = (std::max(reach_x, 0) + kChangeTile - 1) / kChangeTile;
+  const int ry = (std::max(reach_y, 0) + kChangeTile - 1) / kChangeTile;
+  if (rx == 0 && ry == 0) return *this;
+  ChangeMap across(width_, height_, false), out(width_, height_, false);
+  for (int ty = 0; ty < tiles_y_; ++ty)
+    for (int tx = 0; tx < tiles_x_; ++tx)
+      if (tile(tx, ty))
+        for (int x = std::max(0, tx - rx); x <= std::min(tiles_x_ - 1, tx + rx); ++x) across.mark(x, ty);
+  for (int ty = 0; ty < tiles_y_; ++ty)
+    for (int tx = 0; tx < tiles_x_; ++tx)
+      if (across.tile(tx, ty))
+        for (int y = std::max(0, ty - ry); y <= std::min(tiles_y_ - 1, ty + ry); ++y) out.mark(tx, y);
+  return out;
+}
+
+std::vector<uint8_t> ChangeMap::rows() const {
+  std::vector<uint8_t> rows(static_cast<size_t>(height_), 0);
+  for (int ty = 0; ty < tiles_y_; ++ty) {
+    bool changed = false;
+    for (int tx = 0; tx < tiles_x_ && !changed; ++tx) changed = tile(tx, ty);
+    if (!changed) continue;
+    const PixelRect r = tile_pixels(0, ty, width_, height_);
+    std::fill(rows.begin() + r.y0, rows.begin() + r.y1, 1);
+  }
+  return rows;
+}
+
+std::vector<PixelRect> ChangeMap::runs() const {
+  std::vector<PixelRect> runs;
+  for (int ty = 0; ty < tiles_y_; ++ty)
+    for (int tx = 0; tx < tiles_x_;) {
+      if (!tile(tx, ty)) {
+        ++tx;
+        continue;
+      }
+      const int first = tx;
+      while (tx < tiles_x_ && tile(tx, ty)) ++tx;
+      PixelRect r = tile_pixels(first, ty, width_, height_);
+      r.x1 = tile_pixels(tx - 1, ty, width_, height_).x1;
+      runs.push_back(r);
+    }
+  return runs;
+}
+
+PixelRect tile_pixels(int tx, int ty, int width, int height) {
+  return PixelRect{tx * kChangeTile, ty * kChangeTile, std::min(width, (tx + 1) * kChangeTile),
+                   std::min(height, (ty + 1) * kChangeTile)};
+}
+
+namespace {
+
+// The bytes of plane `plane` that hold the pixels of r: [b0, b1) of each
+// of the rows [r0, r1). 4:2:0 chroma: the samples of r's 2 x 2 blocks
+// (r starts on even coordinates: tiles do).
+struct PlaneBox {
+  int b0, b1, r0, r1;
+};
+PlaneBox plane_box(PixelFormat f, int plane, const PixelRect &r) {
+  if (is_packed_rgb(f)) return PlaneBox{4 * r.x0, 4 * r.x1, r.y0, r.y1};
+  if (plane == 0) return PlaneBox{r.x0, r.x1, r.y0, r.y1};
+  const int c0 = r.x0 / 2, c1 = (r.x1 + 1) / 2, bytes = f == PixelFormat::NV12 ? 2 : 1;
+  return PlaneBox{bytes * c0, bytes * c1, r.y0 / 2, (r.y1 + 1) / 2};
+}
+
+}  // namespace
+
+ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
+  const int n = frame_plane_count(frame.format);
+  const bool fresh = planes_.empty() || frame.format != format_ || frame.width != width_ || frame.height != height_;
+  if (fresh) {
+    format_ = frame.format;
+    width_ = frame.width;
+    height_ = frame.height;
+    planes_.assign(static_cast<size_t>(n), Plane{});
+    for (int p = 0; p < n; ++p) {
+      Plane &h = planes_[p];
+      frame_plane_size(frame.format, frame.width, frame.height, p, &h.row_bytes, &h.rows);
+      h.bytes.resize(static_cast<size_t>(h.row_bytes) * h.rows);
+      for (int y = 0; y < h.rows; ++y)
+        std::memcpy(&h.bytes[static_cast<size_t>(y) * h.row_bytes],
+                    frame.plane[p] + static_cast<size_t>(y) * frame.stride[p], static_cast<size_t>(h.row_bytes));
+    }
+    return ChangeMap(frame.width, frame.height, true);
+  }
+  ChangeMap map(frame.width, frame.height, false);
+  // One task per row of tiles: each tile is compared, and recorded when it
+  // changed, by one thread.
+  cv::parallel_for_(cv::Range(0, map.tiles_y()), [&](const cv::Range &range) {
+    for (int ty = range.start; ty < range.end; ++ty)
+      for (int tx = 0; tx < map.tiles_x(); ++tx) {
+        const PixelRect r = tile_pixels(tx, ty, width_, height_);
+        bool changed = false;
+        uint64_t diff = 0, samples = 0;
+        for (int p = 0; p < n && (tolerance > 0.f || !changed); ++p) {
+          const PlaneBox b = plane_box(format_, p, r);
+          const Plane &h = planes_[p];
+          for (int y = b.r0; y < b.r1 && (tolerance > 0.f || !changed); ++y) {
+            const uint8_t *cur = frame.plane[p] + static_cast<size_t>(y) * frame.stride[p] + b.b0;
+            const uint8_t *old = &h.bytes[static_cast<size_t>(y) * h.row_bytes + b.b0];
+            if (tolerance <= 0.f) {
+              changed = std::memcmp(cur, old, static_cast<size_t>(b.b1 - b.b0)) != 0;
+              continue;
+            }
+            for (int i = 0; i < b.b1 - b.b0; ++i) diff += static_cast<uint64_t>(std::abs(cur[i] - old[i]));
+            samples += static_cast<uint64_t>(b.b1 - b.b0);
+          }
+        }
+        if (tolerance > 0.f)
+          changed = samples > 0 && static_cast<double>(diff) > static_cast<double>(tolerance) * samples;
+        if (!changed) continue;
+        map.mark(tx, ty);
+        for (int p = 0; p < n; ++p) {
+          const PlaneBox b = plane_box(format_, p, r);
+          Plane &h = planes_[p];
+          for (int y = b.r0; y < b.r1; ++y)
+            std::memcpy(&h.bytes[static_cast<size_t>(y) * h.row_bytes + b.b0],
+                        frame.plane[p] + static_cast<size_t>(y) * frame.stride[p] + b.b0,
+                        static_cast<size_t>(b.b1 - b.b0));
+        }
+      }
+  });
+  return map;
+}
+
+ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b) {
+  if (a.width != b.width || a.height != b.height || a.empty()) return ChangeMap(b.width, b.height, true);
+  ChangeMap map(a.width, a.height, false);
+  cv::parallel_for_(cv::Range(0, map.tiles_y()), [&](const cv::Range &range) {
+    for (int ty = range.start; ty < range.end; ++ty)
+      for (int tx = 0; tx < map.tiles_x(); ++tx) {
+        const PixelRect r = tile_pixels(tx, ty, a.width, a.height);
+        for (int y = r.y0; y < r.y1; ++y)
+          if (std::memcmp(a.row(y) + r.x0, b.row(y) + r.x0, sizeof(float) * static_cast<size_t>(r.x1 - r.x0)) != 0) {
+            map.mark(tx, ty);
+            break;
+          }
+      }
+  });
+  return map;
+}
+
+void copy_plane_rect(ImageView<const float> from, ImageView<float> to, PixelRect r) {
+  for (int y = r.y0; y < r.y1; ++y)
+    std::memcpy(to.row(y) + r.x0, from.row(y) + r.x0, sizeof(float) * static_cast<size_t>(r.x1 - r.x0));
+}
+
+}  // namespace p3d

@@ -1,0 +1,111 @@
+// What changed since the previous frame, tile by tile: the bookkeeping of
+// the adaptive stages (docs/architecture.md, "Adaptive work"). A stage
+// compares its inputs with those of the frame before, recomputes the
+// output tiles that a changed input can reach, and keeps the rest of its
+// previous output: with tolerance 0 the output is, byte for byte, what a
+// full computation gives.
+//
+// The picture is cut into kChangeTile x kChangeTile tiles (the last row
+// and column may be partial). A ChangeMap holds one flag a tile. Reach
+// (ChangeMap::dilated) is given in pixels and rounded up to whole tiles,
+// so a dilated map covers every pixel within that reach of a changed one.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "frame.h"
+
+namespace p3d {
+
+// 32 pixels: a multiple of every power-of-two depth block and filter cell
+// up to 32 and even (a 4:2:0 tile holds whole chroma samples); small
+// enough that a cursor or a clock is a few tiles, large enough that the
+// flags of a 4K picture (120 x 68) cost nothing to walk.
+constexpr int kChangeTile = 32;
+
+// A rectangle of pixels [x0, x1) x [y0, y1).
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+};
+
+class ChangeMap {
+ public:
+  ChangeMap() = default;
+  // A width x height picture with every tile changed (all) or none.
+  ChangeMap(int width, int height, bool all);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int tiles_x() const { return tiles_x_; }
+  int tiles_y() const { return tiles_y_; }
+  bool same_geometry(const ChangeMap &o) const { return width_ == o.width_ && height_ == o.height_; }
+
+  bool tile(int tx, int ty) const { return flags_[static_cast<size_t>(ty) * tiles_x_ + tx] != 0; }
+  void mark(int tx, int ty) { flags_[static_cast<size_t>(ty) * tiles_x_ + tx] = 1; }
+  // Marks every tile that a pixel of r (clipped to the picture) lies in.
+  void mark_pixels(PixelRect r);
+  void mark_all();
+
+  bool any() const;
+  bool all() const;
+  // Share of the tiles changed (0..1).
+  double fraction() const;
+
+  // Tiles changed in this map or in o (same geometry; o of another size
+  // marks every tile).
+  void merge(const ChangeMap &o);
+  // Every tile within reach_x pixels across and reach_y down or up of a
+  // changed tile's pixels.
+  ChangeMap dilated(int reach_x, int reach_y) const;
+  // The pixel rows of the changed tiles: one flag a row (height()).
+  std::vector<uint8_t> rows() const;
+  // The changed tiles as rectangles of pixels: in each row of tiles, the
+  // maximal runs of changed tiles, clipped to the picture.
+  std::vector<PixelRect> runs() const;
+
+ private:
+  int width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<uint8_t> flags_;
+};
+
+// Tiles along an axis of `pixels`.
+inline int change_tiles(int pixels) { return (pixels + kChangeTile - 1) / kChangeTile; }
+
+// A rectangle of pixels: the tile's, clipped to a width x height picture.
+PixelRect tile_pixels(int tx, int ty, int width, int height);
+
+// Compares each frame with the one before (a copy kept here) and tells
+// which tiles differ. tolerance 0: a tile differs when any of its bytes
+// does. tolerance t > 0: when the mean |difference| of its bytes (every
+// plane's samples of the tile) exceeds t 8-bit levels; the copy then keeps
+// the bytes of the last frame in which the tile counted as changed, so
+// slow drift adds up until it does.
+class FrameHistory {
+ public:
+  // The tiles of `frame` that differ from the previous frame's. Every
+  // tile, when there is no previous frame or it had another size or
+  // format. Records the changed tiles' bytes as the new reference.
+  ChangeMap compare(const FrameView &frame, float tolerance = 0.f);
+  void reset() { planes_.clear(); }
+
+ private:
+  struct Plane {
+    std::vector<uint8_t> bytes;
+    int row_bytes = 0, rows = 0;
+  };
+  PixelFormat format_ = PixelFormat::RGBA;
+  int width_ = 0, height_ = 0;
+  std::vector<Plane> planes_;
+};
+
+// The tiles in which two float planes of one size differ in any byte
+// (all tiles when their sizes differ).
+ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b);
+
+// Copies the rows and columns of rect r from one float plane to another of
+// the same size.
+void copy_plane_rect(ImageView<const float> from, ImageView<float> to, PixelRect r);
+
+}  // namespace p3d

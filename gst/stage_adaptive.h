@@ -1,0 +1,82 @@
+// The adaptive work of a stage (adaptive=true, the default): what a stage
+// keeps of its inputs and its output from one frame to the next, so that it
+// recomputes only the tiles a change can reach (common/change_map.h). With
+// reuse-tolerance 0 the output is byte for byte that of adaptive=false.
+// The CPU path works this way; on CUDA memory every frame is computed whole.
+#pragma once
+
+#include <gst/video/video.h>
+
+#include "adaptive.h"
+#include "depth_plane.h"
+#include "gstpseudo3dbase.h"
+
+namespace p3d::gst {
+
+// The stage's adaptive settings for this frame, read once: off on the GPU
+// path. tolerance: reuse-tolerance (common/change_map.h FrameHistory).
+struct AdaptiveSettings {
+  bool on = false;
+  float tolerance = 0.f;
+};
+AdaptiveSettings adaptive_settings(GstPseudo3DBase *self, GstPseudo3DPath path);
+
+// A stage's inputs of the previous frame (common/adaptive.h StageInputs),
+// holding on to the depth plane (planes never change once attached).
+class InputHistory {
+ public:
+  // The tiles in which this frame or its depth (a host plane; null: the
+  // stage reads none) differ from the previous call's; every tile after
+  // reset().
+  ChangeMap compare(const FrameView &frame, const DepthPlanePtr &depth, float tolerance);
+  void reset();
+
+ private:
+  StageInputs inputs_;
+  DepthPlanePtr depth_;
+};
+
+// The output buffer of the previous frame (a reference: nobody writes to
+// it while it is held, GStreamer copies it first), for the stages that
+// write a new buffer each frame.
+class OutputHistory {
+ public:
+  OutputHistory() = default;
+  OutputHistory(const OutputHistory &) = delete;
+  OutputHistory &operator=(const OutputHistory &) = delete;
+  ~OutputHistory() { reset(); }
+  // Copies the previous output into `out` (mapped, of `info`); false when
+  // there is none of that size and format.
+  bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;
+  void keep(GstBuffer *out, const GstVideoInfo *info);
+  void reset();
+
+ private:
+  GstBuffer *last_ = nullptr;
+  GstVideoInfo info_;
+};
+
+// The parameters of the previous frame: whatever was kept was made with
+// them, and any change makes the stage compute the whole frame.
+template <typename T>
+class KeptParams {
+ public:
+  // Whether p differs from the previous call's (true at the first call and
+  // after reset()); p becomes the previous.
+  bool changed(const T &p) {
+    const bool differs = !have_ || !(p == last_);
+    last_ = p;
+    have_ = true;
+    return differs;
+  }
+  void reset() { have_ = false; }
+
+ private:
+  T last_{};
+  bool have_ = false;
+};
+
+// The frame's depth plane as the meta holds it (shared), or null.
+DepthPlanePtr frame_depth_plane(GstBuffer *buf);
+
+}  // namespace p3d::gst
