@@ -134,9 +134,23 @@ ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
   }
   ChangeMap map(frame.width, frame.height, false);
   // One task per row of tiles: each tile is compared, and recorded when it
-  // changed, by one thread.
+  // changed, by one thread. Exact comparison first compares the row of
+  // tiles' rows whole, which for the unchanged rows of a frame is one call
+  // a row instead of one a tile and row.
   cv::parallel_for_(cv::Range(0, map.tiles_y()), [&](const cv::Range &range) {
-    for (int ty = range.start; ty < range.end; ++ty)
+    for (int ty = range.start; ty < range.end; ++ty) {
+      if (tolerance <= 0.f) {
+        const PixelRect band = tile_pixels(0, ty, width_, height_);
+        bool same = true;
+        for (int p = 0; p < n && same; ++p) {
+          const PlaneBox b = plane_box(format_, p, PixelRect{0, band.y0, width_, band.y1});
+          const Plane &h = planes_[p];
+          for (int y = b.r0; y < b.r1 && same; ++y)
+            same = std::memcmp(frame.plane[p] + static_cast<size_t>(y) * frame.stride[p],
+                               &h.bytes[static_cast<size_t>(y) * h.row_bytes], static_cast<size_t>(h.row_bytes)) == 0;
+        }
+        if (same) continue;
+      }
       for (int tx = 0; tx < map.tiles_x(); ++tx) {
         const PixelRect r = tile_pixels(tx, ty, width_, height_);
         bool changed = false;
@@ -168,6 +182,7 @@ ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
                         static_cast<size_t>(b.b1 - b.b0));
         }
       }
+    }
   });
   return map;
 }
@@ -175,8 +190,13 @@ ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
 ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b) {
   if (a.width != b.width || a.height != b.height || a.empty()) return ChangeMap(b.width, b.height, true);
   ChangeMap map(a.width, a.height, false);
+  const size_t row_bytes = sizeof(float) * static_cast<size_t>(a.width);
   cv::parallel_for_(cv::Range(0, map.tiles_y()), [&](const cv::Range &range) {
-    for (int ty = range.start; ty < range.end; ++ty)
+    for (int ty = range.start; ty < range.end; ++ty) {
+      const PixelRect band = tile_pixels(0, ty, a.width, a.height);
+      bool same = true;  // whole rows first: one call a row where nothing changed
+      for (int y = band.y0; y < band.y1 && same; ++y) same = std::memcmp(a.row(y), b.row(y), row_bytes) == 0;
+      if (same) continue;
       for (int tx = 0; tx < map.tiles_x(); ++tx) {
         const PixelRect r = tile_pixels(tx, ty, a.width, a.height);
         for (int y = r.y0; y < r.y1; ++y)
@@ -185,6 +205,7 @@ ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b) {
             break;
           }
       }
+    }
   });
   return map;
 }

@@ -224,10 +224,28 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
 
   const bool cut = decision == TemporalDecision::Cut;
   smoothed_.resize(features.size());  // a cut never reads the (then stale) old values
+  // Adaptive: a block row whose smoothed features came out of the last
+  // pass unchanged, with the same features and weight, comes out of this
+  // one unchanged too (the pass is a function of them): it is left out.
+  const bool skip_settled = incremental && !cut && params.feature_smoothing == settled_weight_;
+  settled_rows_.resize(by, 0);
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
-    for (size_t k = static_cast<size_t>(range.start) * row_values; k < static_cast<size_t>(range.end) * row_values; k += 3)
-      smooth_block_feature(cut, params.feature_smoothing, &features[k], &smoothed_[k]);
+    for (int j = range.start; j < range.end; ++j) {
+      const size_t k0 = static_cast<size_t>(j) * row_values, k1 = k0 + row_values;
+      const bool row_touched = incremental && std::find(touched.begin() + static_cast<size_t>(j) * bx,
+                                                        touched.begin() + static_cast<size_t>(j + 1) * bx, 1) !=
+                                                  touched.begin() + static_cast<size_t>(j + 1) * bx;
+      if (skip_settled && settled_rows_[j] && !row_touched) continue;
+      bool settled = true;
+      for (size_t k = k0; k < k1; k += 3) {
+        float s[3] = {smoothed_[k], smoothed_[k + 1], smoothed_[k + 2]};
+        smooth_block_feature(cut, params.feature_smoothing, &features[k], &smoothed_[k]);
+        settled = settled && std::memcmp(s, &smoothed_[k], sizeof s) == 0;
+      }
+      settled_rows_[j] = settled && !cut;
+    }
   });
+  settled_weight_ = params.feature_smoothing;
   have_state_ = true;
   bx_ = bx;
   by_ = by;

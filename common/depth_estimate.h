@@ -281,6 +281,8 @@ class DepthEstimatorCpu {
   bool have_state_ = false;
   bool features_current_ = false;  // features_ holds the previous call's features (adaptive calls)
   bool output_changed_ = true;
+  std::vector<uint8_t> settled_rows_;  // block rows whose last smoothing pass changed nothing
+  float settled_weight_ = -1.f;        // the feature_smoothing of that pass
 };
 
 // Stateless helpers the estimator is built from (exposed for tests and for

@@ -440,7 +440,7 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   const std::vector<uint8_t> fill_rows = rows ? warp_rows_written(j.params, j.width, *rows) : std::vector<uint8_t>();
   for (int e = 0; e < 2; ++e) {
     if (average && holes[e] > 0) neighbour_average_fill(j, eyes[e], scratch[e].mask, holes[e]);
-    if (smooth && (holes[e] > 0 || rows)) background_smooth_fill(j, eyes[e], scratch[e], rows ? &fill_rows : nullptr);
+    if (smooth && eyes[e].shift != 0.f && (holes[e] > 0 || rows)) background_smooth_fill(j, eyes[e], scratch[e], rows ? &fill_rows : nullptr);
   }
   return holes[0] + holes[1];
 }

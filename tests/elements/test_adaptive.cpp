@@ -1,0 +1,289 @@
+// adaptive=true against adaptive=false through the elements: the same
+// sequences of frames (unchanged runs, small changes, big changes, scene
+// cuts) give byte-identical output frames through every stage and through
+// pseudo3dconvert, for several layouts, formats and fills; a property
+// changed between frames, a flush and a caps change give what a fresh
+// element gives; the previous output that a stage keeps is not written to;
+// memory stays flat over a long run of small changes.
+#include <gst/check/gstharness.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "element_helpers.h"
+#include "test_data.h"
+
+using namespace p3d;
+using namespace p3d::test;
+
+namespace {
+
+// A picture with edges for the depth and texture for the warp.
+cv::Mat base_picture(int w, int h, uint32_t seed) {
+  std::mt19937 rng(seed);
+  cv::Mat bgr(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(40 + (x * 150) / w + rng() % 12),
+                                          static_cast<uint8_t>(60 + (y * 130) / h + rng() % 12),
+                                          static_cast<uint8_t>(90 + rng() % 12));
+  for (int i = 0; i < 5; ++i) {
+    const cv::Rect r(static_cast<int>(rng() % w), static_cast<int>(rng() % h), w / 5, h / 4);
+    cv::rectangle(bgr, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
+  }
+  return bgr;
+}
+
+// A sequence of the kinds a stream has: the same frame again, a small
+// object moving, a big change, a cut to another picture and back.
+std::vector<cv::Mat> sequence(int w, int h, uint32_t seed) {
+  std::vector<cv::Mat> frames;
+  cv::Mat cur = base_picture(w, h, seed);
+  std::mt19937 rng(seed + 1);
+  for (int k = 0; k < 14; ++k) {
+    cv::Mat next = cur.clone();
+    switch (k % 7) {
+      case 0: case 1: break;  // unchanged
+      case 2: case 3: {  // a small box moves
+        const cv::Rect r(static_cast<int>(rng() % (w - 12)), static_cast<int>(rng() % (h - 10)), 12, 10);
+        cv::rectangle(next, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
+        break;
+      }
+      case 4: {  // a big change
+        cv::rectangle(next, cv::Rect(w / 4, h / 5, w / 2, h / 2), cv::Scalar(rng() % 256, 30, 200), cv::FILLED);
+        break;
+      }
+      case 5: next = base_picture(w, h, seed + 100 + k); break;  // a cut
+      default: next.at<cv::Vec3b>(h / 2, w / 2) = cv::Vec3b(1, 2, 3); break;  // one pixel
+    }
+    frames.push_back(next);
+    cur = next;
+  }
+  return frames;
+}
+
+// The output bytes of every frame of `frames` pushed through `launch`.
+// between(k, harness) runs before frame k is pushed.
+std::vector<std::vector<uint8_t>> outputs(const std::string &launch, PixelFormat f, const std::vector<cv::Mat> &frames,
+                                          const std::function<void(int, GstHarness *)> &between = {}) {
+  GstHarness *h = gst_harness_new_parse(launch.c_str());
+  gst_harness_set_src_caps_str(h, raw_caps(f, frames[0].cols, frames[0].rows).c_str());
+  std::vector<std::vector<uint8_t>> out;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    if (between) between(static_cast<int>(k), h);
+    GstBuffer *in = buffer_from_frame(HostFrame::from_bgr(frames[k], f));
+    GST_BUFFER_PTS(in) = k * GST_SECOND / 25;
+    GstBuffer *b = gst_harness_push_and_pull(h, in);
+    if (!b) {
+      ADD_FAILURE() << launch << ": no output for frame " << k;
+      break;
+    }
+    GstMapInfo map;
+    gst_buffer_map(b, &map, GST_MAP_READ);
+    out.emplace_back(map.data, map.data + map.size);
+    gst_buffer_unmap(b, &map);
+    gst_buffer_unref(b);
+  }
+  gst_harness_teardown(h);
+  return out;
+}
+
+// The element named "c" in a harness's pipeline.
+GstElement *element_c(GstHarness *hx) {
+  GstElement *c = gst_bin_get_by_name(GST_BIN(hx->element), "c");
+  gst_object_unref(c);  // the pipeline holds it
+  return c;
+}
+
+void expect_same(const std::vector<std::vector<uint8_t>> &a, const std::vector<std::vector<uint8_t>> &b,
+                 const std::string &what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t k = 0; k < a.size(); ++k) EXPECT_TRUE(a[k] == b[k]) << what << ": frame " << k << " differs";
+}
+
+// The launch line with adaptive=<on> on every pseudo3d stage of it.
+std::string with_adaptive(const std::string &chain, bool on) {
+  std::string out;
+  const std::string flag = std::string(" adaptive=") + (on ? "true" : "false");
+  size_t i = 0;
+  while (i <= chain.size()) {
+    const size_t bang = chain.find(" ! ", i);
+    std::string part = chain.substr(i, bang == std::string::npos ? std::string::npos : bang - i);
+    if (part.rfind("pseudo3d", 0) == 0) part += flag;
+    out += part;
+    if (bang == std::string::npos) break;
+    out += " ! ";
+    i = bang + 3;
+  }
+  return out;
+}
+
+struct Case {
+  std::string chain;
+  PixelFormat format;
+};
+
+TEST(AdaptiveElements, SameBytesAsFullComputation) {
+  const int w = 160, h = 100;
+  const std::vector<Case> cases = {
+      {"pseudo3dconvert processing=cpu layout=side-by-side-half", PixelFormat::I420},
+      {"pseudo3ddepth processing=cpu edge-threshold=8 ! pseudo3dfilter processing=cpu ! pseudo3dwarp processing=cpu max-disparity=12", PixelFormat::RGBA},
+      {"pseudo3dconvert processing=cpu layout=anaglyph", PixelFormat::NV12},
+      {"pseudo3dconvert processing=cpu layout=top-bottom-half fill=background", PixelFormat::RGBA},
+      {"pseudo3dconvert processing=cpu layout=row-interleaved fill=neighbor-average", PixelFormat::BGRx},
+      {"pseudo3dconvert processing=cpu layout=checkerboard view=right scale=3", PixelFormat::I420},
+      {"pseudo3ddepth processing=cpu block-size=5 temporal-smoothing=0.3 ! pseudo3dfilter processing=cpu mode=exact ! "
+       "pseudo3dwarp processing=cpu ! pseudo3dpack processing=cpu layout=top-bottom",
+       PixelFormat::RGBA},
+      {"pseudo3ddepth processing=cpu ! pseudo3dfilter processing=cpu ! pseudo3dwarp processing=cpu layout=left "
+       "fill=none ! capsfilter caps=video/x-raw,format=NV12",
+       PixelFormat::RGBx},
+  };
+  for (const Case &c : cases) {
+    const std::vector<cv::Mat> frames = sequence(w, h, 7);
+    const auto full = outputs(with_adaptive(c.chain, false), c.format, frames);
+    const auto adaptive = outputs(with_adaptive(c.chain, true), c.format, frames);
+    expect_same(full, adaptive, c.chain);
+  }
+}
+
+// A property changed between frames: the stage recomputes what it kept.
+TEST(AdaptiveElements, PropertyChangeBetweenFramesInvalidatesWhatWasKept) {
+  const int w = 80, h = 48;
+  const std::vector<cv::Mat> frames = sequence(w, h, 11);
+  const std::string chain = "pseudo3dconvert processing=cpu layout=side-by-side-half name=c";
+  auto change = [](int k, GstHarness *hx) {
+    GstElement *c = element_c(hx);
+    if (k == 3) g_object_set(c, "max-disparity", 6.0f, NULL);
+    if (k == 5) g_object_set(c, "radius", 2, NULL);
+    if (k == 8) g_object_set(c, "fill", 0, NULL);  // background
+    if (k == 9) g_object_set(c, "convergence", 0.2f, NULL);
+    if (k == 11) g_object_set(c, "hypothesis", 1, NULL);  // left-right
+  };
+  const auto full = outputs(with_adaptive(chain, false), PixelFormat::I420, frames, change);
+  expect_same(full, outputs(with_adaptive(chain, true), PixelFormat::I420, frames, change), "property changes");
+  // The changes took effect: without them the last frame differs.
+  EXPECT_FALSE(full.back() == outputs(with_adaptive(chain, false), PixelFormat::I420, frames).back());
+}
+
+// Switching adaptive itself while frames flow changes no byte.
+TEST(AdaptiveElements, TogglingAdaptiveChangesNoByte) {
+  const std::vector<cv::Mat> frames = sequence(64, 40, 5);
+  const std::string chain = "pseudo3dconvert processing=cpu layout=anaglyph name=c";
+  auto toggle = [](int k, GstHarness *hx) {
+    g_object_set(element_c(hx), "adaptive", k % 3 != 1, NULL);
+    gboolean on = FALSE;
+    g_object_get(element_c(hx), "adaptive", &on, NULL);
+    EXPECT_EQ(on, k % 3 != 1);
+  };
+  expect_same(outputs(with_adaptive(chain, false), PixelFormat::NV12, frames),
+              outputs(chain, PixelFormat::NV12, frames, toggle), "adaptive toggled");
+}
+
+// After a flush the output is that of an element that never saw the
+// frames before it.
+TEST(AdaptiveElements, FlushStartsAfresh) {
+  const std::vector<cv::Mat> frames = sequence(64, 40, 3);
+  const std::string chain = "pseudo3dconvert processing=cpu layout=side-by-side-half";
+  auto flush = [](int k, GstHarness *hx) {
+    if (k != 6) return;
+    gst_harness_push_event(hx, gst_event_new_flush_start());
+    gst_harness_push_event(hx, gst_event_new_flush_stop(TRUE));
+    GstSegment seg;
+    gst_segment_init(&seg, GST_FORMAT_TIME);
+    gst_harness_push_event(hx, gst_event_new_segment(&seg));
+  };
+  const auto with_flush = outputs(with_adaptive(chain, true), PixelFormat::I420, frames, flush);
+  const std::vector<cv::Mat> after(frames.begin() + 6, frames.end());
+  const auto fresh = outputs(with_adaptive(chain, false), PixelFormat::I420, after);
+  ASSERT_EQ(with_flush.size(), frames.size());
+  expect_same(std::vector<std::vector<uint8_t>>(with_flush.begin() + 6, with_flush.end()), fresh, "after the flush");
+}
+
+// A caps change mid stream (another size): the kept results of the old
+// size are not used.
+TEST(AdaptiveElements, CapsChangeStartsAfresh) {
+  const std::string launch = "pseudo3dconvert processing=cpu layout=side-by-side-half";
+  GstHarness *h = gst_harness_new_parse(launch.c_str());
+  GstHarness *ref = gst_harness_new_parse((launch + " adaptive=false").c_str());
+  for (const auto &[w, hgt] : {std::pair{64, 40}, std::pair{48, 32}, std::pair{64, 40}}) {
+    for (GstHarness *hx : {h, ref}) gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::I420, w, hgt).c_str());
+    for (const cv::Mat &f : sequence(w, hgt, 9)) {
+      GstBuffer *a = gst_harness_push_and_pull(h, buffer_from_frame(HostFrame::from_bgr(f, PixelFormat::I420)));
+      GstBuffer *b = gst_harness_push_and_pull(ref, buffer_from_frame(HostFrame::from_bgr(f, PixelFormat::I420)));
+      ASSERT_TRUE(a && b);
+      GstMapInfo mb;
+      gst_buffer_map(b, &mb, GST_MAP_READ);
+      EXPECT_EQ(gst_buffer_get_size(a), mb.size);
+      EXPECT_EQ(gst_buffer_memcmp(a, 0, mb.data, mb.size), 0) << w << "x" << hgt;
+      gst_buffer_unmap(b, &mb);
+      gst_buffer_unref(a);
+      gst_buffer_unref(b);
+    }
+  }
+  gst_harness_teardown(h);
+  gst_harness_teardown(ref);
+}
+
+// The output a stage keeps is the one it pushed: a downstream element that
+// writes into its frame (here the test, through a writable copy, as
+// GStreamer makes one) does not change what the next frame starts from.
+TEST(AdaptiveElements, KeptOutputIsNotWrittenDownstream) {
+  const std::vector<cv::Mat> frames = sequence(64, 40, 21);
+  GstHarness *h = gst_harness_new_parse("pseudo3dconvert processing=cpu layout=side-by-side-half");
+  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 64, 40).c_str());
+  std::vector<std::vector<uint8_t>> got;
+  for (const cv::Mat &f : frames) {
+    GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(HostFrame::from_bgr(f, PixelFormat::RGBA)));
+    ASSERT_TRUE(b);
+    b = gst_buffer_make_writable(b);
+    GstMapInfo map;
+    ASSERT_TRUE(gst_buffer_map(b, &map, GST_MAP_READWRITE));
+    got.emplace_back(map.data, map.data + map.size);
+    std::fill(map.data, map.data + map.size, 0x5a);  // scribble over the frame
+    gst_buffer_unmap(b, &map);
+    gst_buffer_unref(b);
+  }
+  gst_harness_teardown(h);
+  expect_same(outputs("pseudo3dconvert processing=cpu layout=side-by-side-half adaptive=false", PixelFormat::RGBA,
+                      frames),
+              got, "scribbled downstream");
+}
+
+long resident_kib() {
+  long pages = 0, resident = 0;
+  FILE *f = std::fopen("/proc/self/statm", "r");
+  if (!f) return -1;
+  if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = -1;
+  std::fclose(f);
+  return resident < 0 ? -1 : resident * 4;
+}
+
+// 3000 frames of small changes: what the stages keep is one frame's worth,
+// so the resident memory after the first hundred frames stays put.
+TEST(AdaptiveElements, MemoryStaysFlatOverALongRun) {
+  const int w = 64, h = 48;
+  GstHarness *hx = gst_harness_new_parse("pseudo3dconvert processing=cpu layout=anaglyph");
+  gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::I420, w, h).c_str());
+  cv::Mat pic = base_picture(w, h, 2);
+  long after_warmup = 0;
+  for (int k = 0; k < 3000; ++k) {
+    cv::rectangle(pic, cv::Rect(k % (w - 8), (k / 7) % (h - 8), 8, 8), cv::Scalar(k % 256, 90, 200), cv::FILLED);
+    GstBuffer *b = gst_harness_push_and_pull(hx, buffer_from_frame(HostFrame::from_bgr(pic, PixelFormat::I420)));
+    ASSERT_TRUE(b);
+    gst_buffer_unref(b);
+    if (k == 100) after_warmup = resident_kib();
+  }
+  const long end = resident_kib();
+  gst_harness_teardown(hx);
+  if (after_warmup < 0 || end < 0) GTEST_SKIP() << "/proc/self/statm unreadable";
+  EXPECT_LT(end - after_warmup, 2048) << "resident memory grew from " << after_warmup << " KiB to " << end << " KiB";
+}
+
+}  // namespace
