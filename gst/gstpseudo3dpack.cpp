@@ -204,7 +204,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (adaptive.on) state->output.keep(out->buffer, &base->out_info);
+  if (adaptive.on && (whole || changes.any())) state->output.keep(&base->out_info, out);
   return GST_FLOW_OK;
 }
 

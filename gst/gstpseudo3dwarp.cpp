@@ -158,7 +158,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (adaptive.on) state->output.keep(out->buffer, &base->out_info);
+  if (adaptive.on && (whole || changes.any())) state->output.keep(&base->out_info, out);
   GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
   return GST_FLOW_OK;
 }

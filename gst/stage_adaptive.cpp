@@ -1,5 +1,7 @@
 #include "stage_adaptive.h"
 
+#include <cstring>
+
 #include "depth_meta.h"
 
 namespace p3d::gst {
@@ -25,25 +27,39 @@ void InputHistory::reset() {
   depth_.reset();
 }
 
+namespace {
+
+// Copies plane `plane`'s rows between a mapped frame (its strides) and a
+// packed copy (rows back to back): into the frame, or out of it.
+void copy_rows(const GstVideoFrame *frame, guint plane, const uint8_t *from, uint8_t *to, bool into_frame) {
+  const gsize row = static_cast<gsize>(GST_VIDEO_FRAME_COMP_WIDTH(frame, plane)) *
+                    GST_VIDEO_FRAME_COMP_PSTRIDE(frame, plane);
+  const gint stride = GST_VIDEO_FRAME_PLANE_STRIDE(frame, plane);
+  for (gint y = 0; y < GST_VIDEO_FRAME_COMP_HEIGHT(frame, plane); ++y) {
+    if (into_frame)
+      std::memcpy(to + static_cast<gsize>(y) * stride, from + static_cast<gsize>(y) * row, row);
+    else
+      std::memcpy(to + static_cast<gsize>(y) * row, from + static_cast<gsize>(y) * stride, row);
+  }
+}
+
+}  // namespace
+
 bool OutputHistory::copy_into(const GstVideoInfo *info, GstVideoFrame *out) const {
-  if (!last_ || !gst_video_info_is_equal(info, &info_)) return false;
-  GstVideoFrame prev;
-  if (!gst_video_frame_map(&prev, &info_, last_, GST_MAP_READ)) return false;
-  const gboolean copied = gst_video_frame_copy(out, &prev);
-  gst_video_frame_unmap(&prev);
-  return copied;
+  if (!valid_ || !gst_video_info_is_equal(info, &info_)) return false;
+  for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(out); ++p)
+    copy_rows(out, p, planes_[p].data(), static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(out, p)), true);
+  return true;
 }
 
-void OutputHistory::keep(GstBuffer *out, const GstVideoInfo *info) {
-  GstBuffer *old = last_;
-  last_ = gst_buffer_ref(out);
+void OutputHistory::keep(const GstVideoInfo *info, const GstVideoFrame *out) {
   info_ = *info;
-  if (old) gst_buffer_unref(old);
-}
-
-void OutputHistory::reset() {
-  if (last_) gst_buffer_unref(last_);
-  last_ = nullptr;
+  for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(out); ++p) {
+    planes_[p].resize(static_cast<size_t>(GST_VIDEO_FRAME_COMP_WIDTH(out, p)) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, p) *
+                      GST_VIDEO_FRAME_COMP_HEIGHT(out, p));
+    copy_rows(out, p, static_cast<const uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(out, p)), planes_[p].data(), false);
+  }
+  valid_ = true;
 }
 
 DepthPlanePtr frame_depth_plane(GstBuffer *buf) {

@@ -7,6 +7,9 @@
 
 #include <gst/video/video.h>
 
+#include <cstdint>
+#include <vector>
+
 #include "adaptive.h"
 #include "depth_plane.h"
 #include "gstpseudo3dbase.h"
@@ -36,24 +39,23 @@ class InputHistory {
   DepthPlanePtr depth_;
 };
 
-// The output buffer of the previous frame (a reference: nobody writes to
-// it while it is held, GStreamer copies it first), for the stages that
-// write a new buffer each frame.
+// The output of the previous frame, for the stages that write a new
+// buffer each frame: a copy of its pixels. (Holding the buffer itself
+// would keep one buffer of a downstream pool out of circulation, which
+// hangs a pool with a fixed number of buffers.)
 class OutputHistory {
  public:
-  OutputHistory() = default;
-  OutputHistory(const OutputHistory &) = delete;
-  OutputHistory &operator=(const OutputHistory &) = delete;
-  ~OutputHistory() { reset(); }
   // Copies the previous output into `out` (mapped, of `info`); false when
   // there is none of that size and format.
   bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;
-  void keep(GstBuffer *out, const GstVideoInfo *info);
-  void reset();
+  // Keeps a copy of `out` (mapped, of `info`) as the previous output.
+  void keep(const GstVideoInfo *info, const GstVideoFrame *out);
+  void reset() { valid_ = false; }
 
  private:
-  GstBuffer *last_ = nullptr;
+  bool valid_ = false;
   GstVideoInfo info_;
+  std::vector<uint8_t> planes_[GST_VIDEO_MAX_PLANES];
 };
 
 // The parameters of the previous frame: whatever was kept was made with

@@ -232,8 +232,8 @@ TEST(AdaptiveElements, CapsChangeStartsAfresh) {
 }
 
 // The output a stage keeps is the one it pushed: a downstream element that
-// writes into its frame (here the test, through a writable copy, as
-// GStreamer makes one) does not change what the next frame starts from.
+// writes into the frame it was given (here the test) does not change what
+// the next frame starts from.
 TEST(AdaptiveElements, KeptOutputIsNotWrittenDownstream) {
   const std::vector<cv::Mat> frames = sequence(64, 40, 21);
   GstHarness *h = gst_harness_new_parse("pseudo3dconvert processing=cpu layout=side-by-side-half");
