@@ -27,6 +27,10 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
   const int reach = bilateral_reach(params, depth.width, depth.height);
   const ChangeMap dirty = changes->dilated(reach, reach);
   if (!dirty.any()) return false;
+  if (dirty.all()) {  // nothing of prev_out survives
+    bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
+    return true;
+  }
   copy_plane_rect(prev_out, out, whole);
   bilateral_filter_cpu(params, guide, depth, out, dirty.runs(), scratch);
   return true;

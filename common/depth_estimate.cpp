@@ -211,16 +211,21 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   }
   const TemporalDecision decision = temporal_decision(same_grid, diff, params);
   // The reference becomes this frame's features. Adaptive calls copy them,
-  // since the next call updates features_ in place; others trade buffers.
+  // since the next call updates features_ in place; others, and a frame
+  // that changed every block (the next one likely does too), trade buffers.
+  const bool all_touched =
+      incremental ? std::find(touched.begin(), touched.end(), 0) == touched.end() : !changes || changes->all();
+  bool features_current = changes != nullptr;
   if (decision != TemporalDecision::Reuse) {
-    if (changes) {
+    if (changes && !all_touched) {
       ref_features_ = features_;
     } else {
       ref_features_.swap(features_);
+      features_current = false;
     }
   }
-  features_current_ = changes != nullptr;
   const std::vector<float> &features = decision != TemporalDecision::Reuse ? ref_features_ : features_;
+  features_current_ = features_current;
 
   const bool cut = decision == TemporalDecision::Cut;
   smoothed_.resize(features.size());  // a cut never reads the (then stale) old values

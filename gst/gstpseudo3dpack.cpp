@@ -195,7 +195,8 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   bool whole = true;
   if (adaptive.on) {
     changes = state->input.compare(src, nullptr, adaptive.tolerance);
-    whole = state->params.changed(params) || !state->output.copy_into(&base->out_info, out);
+    // Every tile changed: nothing of the previous output survives.
+    whole = state->params.changed(params) || changes.all() || !state->output.copy_into(&base->out_info, out);
   } else {
     state->forget();
   }

@@ -144,7 +144,9 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   bool whole = true;
   if (adaptive.on) {
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
-    whole = state->params.changed({params, pack, yuv}) || !state->output.copy_into(&base->out_info, out);
+    // Every tile changed: nothing of the previous output survives.
+    whole = state->params.changed({params, pack, yuv}) || changes.all() ||
+            !state->output.copy_into(&base->out_info, out);
   } else {
     state->forget();
   }
