@@ -328,6 +328,7 @@ void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &
     int end = y;
     while (end < j.height && (!rows || (*rows)[end])) ++end;
     for (; y < end; y += band) bands.emplace_back(y, std::min(end, y + band));
+    y = end;
   }
   cv::parallel_for_(cv::Range(0, static_cast<int>(bands.size())), [&](const cv::Range &r) {
     std::vector<ColumnWindow> win(j.width);
