@@ -15,6 +15,15 @@
 //            itself, as pseudo3dwarp with a layout does: on the GPU fused
 //            where WarpRendererGpu::render_packed can, else the pair then pack)
 //   chain    depth + filter + warp-pack
+//
+// Scene mode (--scenes): instead of the stages on rotating inputs, the CPU
+// chain over generated sequences (still picture, screen content, the
+// vtest.avi camera, pan, snow, cuts; scenes.h) with the adaptive stages off
+// and on, as the elements run them (scene_bench.h): ms a frame of each, the
+// adaptive chain's cost relative to adaptive=false, whether its output is
+// byte for byte the same (PSNR where a reuse tolerance lets it differ), the
+// share of tiles that changed and the time per stage. CPU only: the
+// adaptive stages do not run on CUDA memory.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -34,13 +43,14 @@
 #include <unistd.h>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "build_version.h"
 #include "bench_gpu.h"  // types only unless P3D_BENCH_GPU
 #include "cli_args.h"
 #include "pack.h"
 #include "json_line.h"
+#include "scene_bench.h"
+#include "scenes.h"
 
 namespace p3d::bench {
 namespace {
@@ -48,10 +58,6 @@ namespace {
 constexpr int kFrames = 4;  // distinct inputs the timings rotate through
 constexpr int kExitUsage = 64;
 constexpr int kExitNoGpu = 2;
-
-struct Size {
-  int width, height;
-};
 
 struct Options {
   bool want_cpu = true, want_gpu = true, device_given = false;
@@ -65,6 +71,7 @@ struct Options {
   size_t copy_bytes = size_t{1} << 30;
   std::string out_path = "bench-results.jsonl";
   std::string argv;
+  SceneOptions scene;  // scene mode where scene.scenes is not empty
 };
 
 // ---- command line -----------------------------------------------------------
@@ -85,6 +92,16 @@ std::string name_of(const p3d::EnumName<E> (&table)[N], E value) {
 }
 
 const std::vector<Size> kDefaultSizes = {{1280, 720}, {1920, 1080}, {3840, 2160}, {7680, 4320}};
+// Scene mode: the sizes the adaptive stages' goals are set at. Not 8K by
+// default: a scene run holds every frame of a sequence in memory (1.5 GB
+// for 30 frames of 8K I420).
+const std::vector<Size> kDefaultSceneSizes = {{1920, 1080}, {3840, 2160}};
+
+std::string scene_list() {
+  std::string list;
+  for (const std::string &k : scene_kinds()) list += (list.empty() ? "" : ", ") + k;
+  return list;
+}
 
 void print_usage(std::ostream &os) {
   os << "Usage: pseudo3d-bench [options]\n"
@@ -109,7 +126,18 @@ void print_usage(std::ostream &os) {
         "  --copy-mib N            size of the device-to-device copy (default 1024)\n"
         "  --quick                 smoke test: 3 iterations, 1280x720 and 1920x1080\n"
         "  --out FILE              JSON lines appended here (default bench-results.jsonl)\n"
-        "Exit status: 0 ok, 1 runtime/CUDA error, 2 GPU requested but none usable, 64 bad usage.\n";
+        "Scene mode (CPU only; --size (default 1920x1080,3840x2160), --format, --layout, the stage\n"
+        "options, --cpu-threads and --out apply, --iterations, --warmup and --copy-mib do not):\n"
+        "  --scenes LIST           time the adaptive stages against adaptive=false over generated\n"
+        "                          sequences, comma separated, or all: "
+     << scene_list() << "\n"
+     << "  --frames N              frames a sequence (default 30; the first is the warm-up)\n"
+        "  --rounds N              runs of each sequence (default 1); each frame's time is its shortest,\n"
+        "                          the work without what other load on the machine added\n"
+        "  --tolerance LIST        reuse tolerances to run, comma separated (default 0)\n"
+        "  --video FILE            the camera scene's video (default data/vtest.avi of the source tree)\n"
+        "Exit status: 0 ok, 1 runtime/CUDA error (scene mode: also an adaptive output that differs\n"
+        "at tolerance 0), 2 GPU requested but none usable (or with --scenes), 64 bad usage.\n";
 }
 
 const p3d::tools::Cli kCli("pseudo3d-bench", print_usage, kExitUsage);
@@ -123,14 +151,44 @@ float parse_float(const std::string &opt, const std::string &v) {
   return f;
 }
 
-void parse_sizes(const std::string &v, std::vector<Size> *sizes) {
+std::vector<std::string> split_list(const std::string &v) {
+  std::vector<std::string> items;
   std::stringstream ss(v);
   std::string item;
-  while (std::getline(ss, item, ',')) {
+  while (std::getline(ss, item, ',')) items.push_back(item);
+  return items;
+}
+
+void parse_sizes(const std::string &v, std::vector<Size> *sizes) {
+  for (const std::string &item : split_list(v)) {
     const size_t x = item.find_first_of("xX");
     if (x == std::string::npos) usage_error("--size wants WxH, got '" + item + "'");
     sizes->push_back({parse_int("--size", item.substr(0, x), 1, 65536), parse_int("--size", item.substr(x + 1), 1, 65536)});
   }
+}
+
+void parse_scenes(const std::string &v, std::vector<std::string> *scenes) {
+  for (const std::string &item : split_list(v)) {
+    const std::vector<std::string> &kinds = scene_kinds();
+    if (item == "all")
+      scenes->insert(scenes->end(), kinds.begin(), kinds.end());
+    else if (std::find(kinds.begin(), kinds.end(), item) != kinds.end())
+      scenes->push_back(item);
+    else
+      usage_error("unknown scene '" + item + "' (" + scene_list() + ", all)");
+  }
+}
+
+// Reuse tolerances: mean |difference| in 8-bit levels (change_map.h).
+std::vector<float> parse_tolerances(const std::string &v) {
+  std::vector<float> tolerances;
+  for (const std::string &item : split_list(v)) {
+    const float t = parse_float("--tolerance", item);
+    if (t < 0.f || t > 255.f) usage_error("--tolerance wants levels in 0..255, got '" + item + "'");
+    tolerances.push_back(t);
+  }
+  if (tolerances.empty()) usage_error("--tolerance wants at least one value");
+  return tolerances;
 }
 
 template <typename T>
@@ -150,6 +208,7 @@ E parse_name(const std::string &opt, const std::string &v, const p3d::EnumName<E
 Options parse_args(int argc, char **argv) {
   Options o;
   o.params.filter = default_filter_params();  // what pseudo3dfilter runs by default
+  o.scene.video = P3D_BENCH_VIDEO;
   bool quick = false;
   kCli.parse(argc, argv, "--quick", &o.argv, [&]() { quick = true; }, [&](const std::string &a, const std::string &v) {
     if (a == "--device") {
@@ -186,6 +245,16 @@ Options parse_args(int argc, char **argv) {
       o.copy_bytes = static_cast<size_t>(parse_int(a, v, 1, 65536)) << 20;
     } else if (a == "--out") {
       o.out_path = v;
+    } else if (a == "--scenes") {
+      parse_scenes(v, &o.scene.scenes);
+    } else if (a == "--frames") {
+      o.scene.frames = parse_int(a, v, 2, 100000);
+    } else if (a == "--rounds") {
+      o.scene.rounds = parse_int(a, v, 1, 1000);
+    } else if (a == "--tolerance") {
+      o.scene.tolerances = parse_tolerances(v);
+    } else if (a == "--video") {
+      o.scene.video = v;
     } else {
       usage_error("unknown option " + a);
     }
@@ -194,7 +263,7 @@ Options parse_args(int argc, char **argv) {
     if (o.iterations == 0) o.iterations = 3;
     if (o.sizes.empty()) o.sizes = {{1280, 720}, {1920, 1080}};
   }
-  if (o.sizes.empty()) o.sizes = kDefaultSizes;
+  if (o.sizes.empty()) o.sizes = o.scene.scenes.empty() ? kDefaultSizes : kDefaultSceneSizes;
   return o;
 }
 
@@ -204,48 +273,6 @@ int cpu_iterations(const Options &o, Size s) {
 }
 
 // ---- synthetic input ----------------------------------------------------------
-
-// A smooth picture with edges, different per frame k but related like
-// consecutive video frames: colour ramps whose phase moves with k, a few
-// rectangles and discs that drift, and mild Gaussian noise. Region grouping,
-// the guide's edges and the warp's disocclusions then all have work to do.
-cv::Mat synthetic_bgr(int w, int h, int k) {
-  cv::Mat img(h, w, CV_8UC3);
-  const float phase = 0.07f * static_cast<float>(k);
-  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      const float fy = static_cast<float>(y) / static_cast<float>(h);
-      cv::Vec3b *row = img.ptr<cv::Vec3b>(y);
-      for (int x = 0; x < w; ++x) {
-        const float fx = static_cast<float>(x) / static_cast<float>(w);
-        const float t = fx * 0.8f + fy * 0.3f + phase;
-        row[x] = cv::Vec3b(cv::saturate_cast<uint8_t>(40.f + 150.f * fx),
-                           cv::saturate_cast<uint8_t>(60.f + 130.f * fy),
-                           cv::saturate_cast<uint8_t>(30.f + 190.f * (t - std::floor(t))));
-      }
-    }
-  });
-  cv::RNG layout(12345);  // same shapes in every frame, drifting with k
-  const int drift = std::max(1, w / 200) * k;
-  for (int i = 0; i < 8; ++i) {
-    const int x0 = layout.uniform(0, w), y0 = layout.uniform(0, h);
-    const int rw = layout.uniform(w / 20 + 1, w / 4 + 2), rh = layout.uniform(h / 20 + 1, h / 4 + 2);
-    const cv::Scalar colour(layout.uniform(0, 256), layout.uniform(0, 256), layout.uniform(0, 256));
-    const int dir = i % 2 ? 1 : -1;
-    cv::rectangle(img, cv::Rect(x0 + dir * drift, y0, rw, rh), colour, cv::FILLED);
-  }
-  for (int i = 0; i < 3; ++i) {
-    const cv::Point c(layout.uniform(0, w) + drift, layout.uniform(0, h));
-    const int r = layout.uniform(std::min(w, h) / 30 + 1, std::min(w, h) / 8 + 2);
-    cv::circle(img, c, r, cv::Scalar(layout.uniform(0, 256), layout.uniform(0, 256), layout.uniform(0, 256)),
-               cv::FILLED, cv::LINE_AA);
-  }
-  cv::Mat noise(h, w, CV_16SC3);
-  cv::RNG(1000 + k).fill(noise, cv::RNG::NORMAL, 0, 3);
-  cv::Mat noisy;
-  cv::add(img, noise, noisy, cv::noArray(), CV_8UC3);
-  return noisy;
-}
 
 std::vector<HostFrame> make_frames(PixelFormat format, Size s) {
   std::vector<HostFrame> frames;
@@ -350,6 +377,9 @@ class Reporter {
       j.str("git", git);
     j.str("args", o_.argv).str("format", name_of(kFormats, o_.format));
     out_ << j.text() << "\n" << std::flush;
+  }
+
+  void table_header() {
     std::printf("%-8s %-9s %-6s %10s %10s %9s %8s %6s\n", "stage", "size", "device", "median ms", "min ms", "fps",
                 "GB/s", "share");
     std::fflush(stdout);
@@ -571,6 +601,12 @@ int resolve_devices(Options &o) {
 
 int run(int argc, char **argv) {
   Options o = parse_args(argc, argv);
+  const bool scene_mode = !o.scene.scenes.empty();
+  if (scene_mode && o.device_given && o.want_gpu) {
+    std::cerr << "pseudo3d-bench: the GPU is not measured in scene mode (the adaptive stages run on the CPU only)\n";
+    return kExitNoGpu;
+  }
+  if (scene_mode) o.want_gpu = false;
   const int early = resolve_devices(o);
   if (early >= 0) return early;
   if (o.cpu_threads > 0) cv::setNumThreads(o.cpu_threads);
@@ -581,8 +617,16 @@ int run(int argc, char **argv) {
     return 1;
   }
   Reporter rep(o, out);
-  rep.header(utc_now("%Y%m%dT%H%M%SZ") + "-" + std::to_string(getpid()), utc_now("%Y-%m-%dT%H:%M:%SZ"),
-             git_version());
+  const std::string run_id = utc_now("%Y%m%dT%H%M%SZ") + "-" + std::to_string(getpid());
+  const std::string date = utc_now("%Y-%m-%dT%H:%M:%SZ");
+  rep.header(run_id, date, git_version());
+  if (scene_mode) {
+    const int status = run_scenes(o.scene, o.params, o.format, o.sizes, {run_id, date, git_version(),
+                                  name_of(kFormats, o.format)}, out);
+    std::cout << "results appended to " << o.out_path << "\n";
+    return status;
+  }
+  rep.table_header();
 
 #ifdef P3D_BENCH_GPU
   GpuContext gpu;
