@@ -3,6 +3,10 @@
 
 namespace p3d {
 
+namespace {
+constexpr double kWholeFilterShare = 0.75;
+}  // namespace
+
 ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> depth, ImageView<const float> prev_depth,
                                float tolerance) {
   ChangeMap changes = frame_.compare(frame, tolerance);
@@ -27,7 +31,9 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
   const int reach = bilateral_reach(params, depth.width, depth.height);
   const ChangeMap dirty = changes->dilated(reach, reach);
   if (!dirty.any()) return false;
-  if (dirty.all()) {  // nothing of prev_out survives
+  // Where most tiles changed, one pass over the picture costs less than
+  // the rectangles (each reads a margin of its reach) and the copy.
+  if (dirty.fraction() > kWholeFilterShare) {
     bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
     return true;
   }

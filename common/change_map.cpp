@@ -87,7 +87,14 @@ std::vector<PixelRect> ChangeMap::runs() const {
       while (tx < tiles_x_ && tile(tx, ty)) ++tx;
       PixelRect r = tile_pixels(first, ty, width_, height_);
       r.x1 = tile_pixels(tx - 1, ty, width_, height_).x1;
-      runs.push_back(r);
+      // The same columns as a run of the row of tiles above: one rectangle.
+      auto above = std::find_if(runs.begin(), runs.end(), [&r](const PixelRect &a) {
+        return a.y1 == r.y0 && a.x0 == r.x0 && a.x1 == r.x1;
+      });
+      if (above != runs.end())
+        above->y1 = r.y1;
+      else
+        runs.push_back(r);
     }
   return runs;
 }

@@ -62,7 +62,8 @@ class ChangeMap {
   // The pixel rows of the changed tiles: one flag a row (height()).
   std::vector<uint8_t> rows() const;
   // The changed tiles as rectangles of pixels: in each row of tiles, the
-  // maximal runs of changed tiles, clipped to the picture.
+  // maximal runs of changed tiles, clipped to the picture; a run with the
+  // columns of one in the row of tiles above extends that rectangle down.
   std::vector<PixelRect> runs() const;
 
  private:

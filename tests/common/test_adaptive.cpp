@@ -6,7 +6,8 @@
 //    within the reach rounded up to whole tiles (so every pixel within the
 //    reach of a changed pixel), clipped at the picture's edges, and reach 0
 //    is the identity; rows() and runs() describe the changed tiles exactly
-//    on odd sizes (runs maximal, clipped, in order, not overlapping).
+//    on odd sizes (runs maximal, clipped, in order, not overlapping, merged
+//    down where the rows of tiles below repeat them).
 //    compare_planes() and copy_plane_rect() do what they say, bitwise.
 //  * FrameHistory: the first frame, a new size or format and reset() give
 //    every tile; an unchanged frame none; one changed byte of any plane of
@@ -343,29 +344,36 @@ TEST(AdaptiveChangeMap, RowsAndRunsOnOddSizes) {
           const PixelRect &r = runs[i];
           SCOPED_TRACE(rect_text(r));
           ASSERT_FALSE(r.empty());
-          // One row of tiles, whole tiles, clipped to the picture.
-          const int ty = r.y0 / kChangeTile, tx0 = r.x0 / kChangeTile, tx1 = change_tiles(r.x1);
-          EXPECT_EQ(r.y0, ty * kChangeTile);
-          EXPECT_EQ(r.y1, std::min(sz.height, (ty + 1) * kChangeTile));
+          // Whole tiles, clipped to the picture; each of its rows of
+          // tiles holds a maximal run of changed tiles.
+          const int ty0 = r.y0 / kChangeTile, ty1 = change_tiles(r.y1);
+          const int tx0 = r.x0 / kChangeTile, tx1 = change_tiles(r.x1);
+          EXPECT_EQ(r.y0, ty0 * kChangeTile);
+          EXPECT_EQ(r.y1, std::min(sz.height, ty1 * kChangeTile));
           EXPECT_EQ(r.x0, tx0 * kChangeTile);
           EXPECT_EQ(r.x1, std::min(sz.width, tx1 * kChangeTile));
-          for (int tx = tx0; tx < tx1; ++tx) {
-            EXPECT_TRUE(m.tile(tx, ty));
-            EXPECT_FALSE(covered.tile(tx, ty)) << "runs overlap";
-            covered.mark(tx, ty);
-            ++tiles;
+          auto maximal_run = [&](int ty) {
+            for (int tx = tx0; tx < tx1; ++tx)
+              if (!m.tile(tx, ty)) return false;
+            return (tx0 == 0 || !m.tile(tx0 - 1, ty)) && (tx1 == m.tiles_x() || !m.tile(tx1, ty));
+          };
+          for (int ty = ty0; ty < ty1; ++ty) {
+            EXPECT_TRUE(maximal_run(ty)) << "row of tiles " << ty;
+            for (int tx = tx0; tx < tx1; ++tx) {
+              EXPECT_FALSE(covered.tile(tx, ty)) << "runs overlap";
+              covered.mark(tx, ty);
+              ++tiles;
+            }
           }
-          // Maximal: no changed tile just before or after.
-          if (tx0 > 0) {
-            EXPECT_FALSE(m.tile(tx0 - 1, ty));
-          }
-          if (tx1 < m.tiles_x()) {
-            EXPECT_FALSE(m.tile(tx1, ty));
+          // Merged down as far as the same run goes: the row of tiles
+          // above holds no run with these columns.
+          if (ty0 > 0) {
+            EXPECT_FALSE(maximal_run(ty0 - 1));
           }
           // In order: row by row, left to right.
           if (i > 0) {
             const PixelRect &q = runs[i - 1];
-            EXPECT_TRUE(q.y0 < r.y0 || (q.y0 == r.y0 && q.x1 < r.x0));
+            EXPECT_TRUE(q.y0 < r.y0 || (q.y0 == r.y0 && q.x1 <= r.x0));
           }
         }
         EXPECT_TRUE(same_tiles(covered, m));

@@ -83,7 +83,8 @@ AdaptiveChain::AdaptiveChain(const StageParams &p, int width, int height, PixelF
       depth_pool_(width, height, 2),
       filter_pool_(width, height, 2),
       target_(p.pack, width, height, input),
-      out_{target_.new_output(), target_.new_output()} {}
+      out_(target_.new_output()),
+      kept_(target_.new_output()) {}
 
 void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
   ChangeMap input, filter_changes, warp_changes;
@@ -131,19 +132,19 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
 }
 
 // gstpseudo3dwarp.cpp render_cpu: a new output buffer that starts as a copy
-// of the previous one, the rows a change reaches warped and packed again.
+// of the previous output (unless every tile changed), the rows a change
+// reaches warped and packed again, and the output copied when it changed.
 void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *changes) {
   const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
   *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
   warp_depth_ = depth;
-  const bool whole = !have_output_;
-  const int next = 1 - current_;
-  if (!whole) copy_frame(out_[current_], out_[next]);
-  current_ = next;
-  const FrameView dst = out_[current_].view();
+  const bool whole = !have_output_ || changes->all();
+  if (!whole) copy_frame(kept_, out_);
+  const FrameView dst = out_.view();
   if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst, warp_scratch_,
                             whole ? nullptr : changes) < 0)
     warp_failed();
+  if (whole || changes->any()) copy_frame(out_, kept_);
   have_output_ = true;
   if (whole) changes->mark_all();
 }

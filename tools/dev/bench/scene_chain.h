@@ -95,7 +95,7 @@ class AdaptiveChain {
  public:
   AdaptiveChain(const StageParams &p, int width, int height, PixelFormat input, float tolerance);
   void frame(const FrameView &src, StageMs *ms);
-  const HostFrame &output() const { return out_[current_]; }
+  const HostFrame &output() const { return out_; }
   // The last frame's shares of the picture that the stages took as
   // changed (1 on a whole frame): the depth stage's tiles (the input), the
   // filter's and the warp's tiles (input or depth), and the source rows the
@@ -125,13 +125,13 @@ class AdaptiveChain {
   Plane filter_depth_, filter_last_;
   PlanePool filter_pool_;
   BilateralScratch filter_scratch_;
-  // pseudo3dwarp: its inputs, the output buffers (the previous one is what
-  // the element keeps), the pair and the warp's state.
+  // pseudo3dwarp: its inputs, the output buffer and the copy of the
+  // previous output the element keeps (gst/stage_adaptive.h OutputHistory),
+  // the pair and the warp's state.
   StageInputs warp_inputs_;
   Plane warp_depth_;
   WarpTarget target_;
-  HostFrame out_[2];
-  int current_ = 0;
+  HostFrame out_, kept_;  // the new output buffer; the element's copy of the previous output
   bool have_output_ = false;
   WarpCpuScratch warp_scratch_;
   Shares shares_;
