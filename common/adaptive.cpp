@@ -10,7 +10,7 @@ constexpr double kWholeFilterShare = 0.75;
 ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> depth, ImageView<const float> prev_depth,
                                float tolerance) {
   ChangeMap changes = frame_.compare(frame, tolerance);
-  if (depth.empty()) return changes;
+  if (depth.empty() || changes.all()) return changes;  // nothing left for the depth to add
   if (prev_depth.empty()) {
     changes.mark_all();
   } else if (depth.data != prev_depth.data) {

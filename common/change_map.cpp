@@ -32,6 +32,15 @@ bool ChangeMap::any() const { return std::find(flags_.begin(), flags_.end(), 1) 
 
 bool ChangeMap::all() const { return std::find(flags_.begin(), flags_.end(), 0) == flags_.end(); }
 
+bool ChangeMap::all_rows() const {
+  for (int ty = 0; ty < tiles_y_; ++ty) {
+    bool changed = false;
+    for (int tx = 0; tx < tiles_x_ && !changed; ++tx) changed = tile(tx, ty);
+    if (!changed) return false;
+  }
+  return true;
+}
+
 double ChangeMap::fraction() const {
   if (flags_.empty()) return 0.0;
   return static_cast<double>(std::count(flags_.begin(), flags_.end(), 1)) / static_cast<double>(flags_.size());

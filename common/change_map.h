@@ -50,6 +50,8 @@ class ChangeMap {
 
   bool any() const;
   bool all() const;
+  // Whether every row of tiles holds a changed tile (rows() all set).
+  bool all_rows() const;
   // Share of the tiles changed (0..1).
   double fraction() const;
 

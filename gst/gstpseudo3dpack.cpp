@@ -195,8 +195,8 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   bool whole = true;
   if (adaptive.on) {
     changes = state->input.compare(src, nullptr, adaptive.tolerance);
-    // Every tile changed: nothing of the previous output survives.
-    whole = state->params.changed(params) || changes.all() || !state->output.copy_into(&base->out_info, out);
+    // A change in every row of tiles: nothing of the previous output survives.
+    whole = state->params.changed(params) || changes.all_rows() || !state->output.copy_into(&base->out_info, out);
   } else {
     state->forget();
   }
@@ -205,7 +205,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (adaptive.on && (whole || changes.any())) state->output.keep(&base->out_info, out);
+  if (adaptive.on) state->output.update(&base->out_info, out, changes, whole);
   return GST_FLOW_OK;
 }
 

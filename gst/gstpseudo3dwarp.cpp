@@ -144,8 +144,9 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   bool whole = true;
   if (adaptive.on) {
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
-    // Every tile changed: nothing of the previous output survives.
-    whole = state->params.changed({params, pack, yuv}) || changes.all() ||
+    // A change in every row of tiles: nothing of the previous output
+    // survives (the warp redoes whole rows).
+    whole = state->params.changed({params, pack, yuv}) || changes.all_rows() ||
             !state->output.copy_into(&base->out_info, out);
   } else {
     state->forget();
@@ -160,7 +161,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (adaptive.on && (whole || changes.any())) state->output.keep(&base->out_info, out);
+  if (adaptive.on) state->output.update(&base->out_info, out, changes, whole);
   GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
   return GST_FLOW_OK;
 }

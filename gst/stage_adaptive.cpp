@@ -52,7 +52,14 @@ bool OutputHistory::copy_into(const GstVideoInfo *info, GstVideoFrame *out) cons
   return true;
 }
 
-void OutputHistory::keep(const GstVideoInfo *info, const GstVideoFrame *out) {
+void OutputHistory::update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole) {
+  const bool first = !seen_;
+  seen_ = true;
+  if (changes.all_rows() && !first) {
+    valid_ = false;
+    return;
+  }
+  if (!whole && !changes.any()) return;  // the copy holds these pixels already
   info_ = *info;
   for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(out); ++p) {
     planes_[p].resize(static_cast<size_t>(GST_VIDEO_FRAME_COMP_WIDTH(out, p)) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, p) *

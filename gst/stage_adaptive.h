@@ -48,12 +48,16 @@ class OutputHistory {
   // Copies the previous output into `out` (mapped, of `info`); false when
   // there is none of that size and format.
   bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;
-  // Keeps a copy of `out` (mapped, of `info`) as the previous output.
-  void keep(const GstVideoInfo *info, const GstVideoFrame *out);
-  void reset() { valid_ = false; }
+  // After a frame: keeps a copy of `out` (mapped, of `info`) where it
+  // changed (whole, or `changes` has a tile). Not after a frame that
+  // changed every row of tiles, the stream's first apart: its successor
+  // likely does too and would not read it (a frame that changes less
+  // after such a run is computed whole).
+  void update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole);
+  void reset() { valid_ = seen_ = false; }
 
  private:
-  bool valid_ = false;
+  bool valid_ = false, seen_ = false;
   GstVideoInfo info_;
   std::vector<uint8_t> planes_[GST_VIDEO_MAX_PLANES];
 };

@@ -138,14 +138,21 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
   const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
   *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
   warp_depth_ = depth;
-  const bool whole = !have_output_ || changes->all();
+  const bool whole = !have_output_ || changes->all_rows();
   if (!whole) copy_frame(kept_, out_);
   const FrameView dst = out_.view();
   if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst, warp_scratch_,
                             whole ? nullptr : changes) < 0)
     warp_failed();
-  if (whole || changes->any()) copy_frame(out_, kept_);
-  have_output_ = true;
+  // gst/stage_adaptive.cpp OutputHistory::update.
+  const bool first = !seen_;
+  seen_ = true;
+  if (changes->all_rows() && !first) {
+    have_output_ = false;
+  } else if (whole || changes->any()) {
+    copy_frame(out_, kept_);
+    have_output_ = true;
+  }
   if (whole) changes->mark_all();
 }
 

@@ -132,7 +132,7 @@ class AdaptiveChain {
   Plane warp_depth_;
   WarpTarget target_;
   HostFrame out_, kept_;  // the new output buffer; the element's copy of the previous output
-  bool have_output_ = false;
+  bool have_output_ = false, seen_ = false;
   WarpCpuScratch warp_scratch_;
   Shares shares_;
 };
