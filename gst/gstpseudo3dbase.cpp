@@ -635,15 +635,15 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
    *
    * With adaptive: a tile whose bytes changed by at most this mean
    * (8-bit levels) since the frame its results come from counts as
-   * unchanged. 0 is exact; camera noise needs a level or two (error
-   * against time in docs/quality.md).
+   * unchanged. 0 is exact; above 0 the output departs from
+   * adaptive=false's (error against time in docs/quality.md).
    */
   g_object_class_install_property(
       gobject_class, PROP_REUSE_TOLERANCE,
       g_param_spec_float("reuse-tolerance", "Reuse tolerance",
                          "With adaptive: mean change of a tile's bytes (8-bit levels) up to which its previous "
-                         "results are kept; 0 = exact (any changed byte counts). Camera video saves time at 1 or "
-                         "2, for an error measured in docs/quality.md",
+                         "results are kept; 0 = exact (any changed byte counts). Above 0 the output departs from "
+                         "adaptive=false's: error against time in docs/quality.md",
                          0.f, 255.f, 0.f,
                          (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING)));
 

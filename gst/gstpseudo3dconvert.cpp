@@ -18,6 +18,11 @@
  * untouched). Otherwise the stages run on the CPU. The choice is made when
  * the element goes from NULL to READY.
  *
+ * On the CPU each stage computes only what changed since the previous
+ * frame (adaptive=true, the default, byte for byte the output of
+ * adaptive=false): a still picture or a paused video costs a comparison a
+ * frame. reuse-tolerance trades error for time on camera video.
+ *
  * ## Example launch lines
  * |[
  * gst-launch-1.0 playbin uri=file:///path/movie.mp4 video-filter="pseudo3dconvert layout=anaglyph"

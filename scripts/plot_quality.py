@@ -522,6 +522,7 @@ def report(rows, md, png_rel, data_rel):
         "",
         *flicker_section(rows),
         "",
+        *hand_written(md, "reuse-tolerance.md"),
     ]
     with open(md, "w") as f:
         f.write("\n".join(parts))
