@@ -10,7 +10,7 @@
 //  * the output caps and size for the geometry being negotiated, and the
 //    parameters each frame is packed with: the geometry of the negotiated
 //    caps with their 4:2:0 conversion, glasses and method as set now;
-//  * the CPU pack, with the pair buffer of a stage that renders its pair.
+//  * the pair buffer of a stage that renders its pair on the CPU.
 // The stage keeps what is its own: its other properties, its input caps,
 // its refusals, pseudo3dpack's pass-through, the GPU calls.
 #pragma once
