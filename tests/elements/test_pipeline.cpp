@@ -359,8 +359,10 @@ namespace {
   const rlimit rl{limit, limit};
   if (vm_kb == 0 || setrlimit(RLIMIT_AS, &rl) != 0) std::exit(2);
   const std::string err = run_to_eos(
-      "videotestsrc num-buffers=1 ! video/x-raw,format=RGBA,width=8192,height=4096 ! pseudo3ddepth processing=cpu ! "
-      "pseudo3dwarp processing=cpu ! fakesink",
+      // adaptive=false: the stages' copies of their last frame would take
+      // the headroom before the output frame is allocated.
+      "videotestsrc num-buffers=1 ! video/x-raw,format=RGBA,width=8192,height=4096 ! pseudo3ddepth processing=cpu "
+      "adaptive=false ! pseudo3dwarp processing=cpu adaptive=false ! fakesink",
       120);
   std::fprintf(stderr, "error: %s\n", err.c_str());
   std::exit(err.find("Could not allocate a 16384x4096 output frame (268435456 bytes)") != std::string::npos ? 0 : 1);
