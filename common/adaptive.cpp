@@ -24,16 +24,12 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
                                   BilateralScratch &scratch) {
   const PixelRect whole{0, 0, depth.width, depth.height};
   const bool keep = changes && prev_out.width == depth.width && prev_out.height == depth.height && !prev_out.empty();
-  if (!keep) {
-    bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
-    return true;
-  }
   const int reach = bilateral_reach(params, depth.width, depth.height);
-  const ChangeMap dirty = changes->dilated(reach, reach);
-  if (!dirty.any()) return false;
+  const ChangeMap dirty = keep ? changes->dilated(reach, reach) : ChangeMap();
+  if (keep && !dirty.any()) return false;
   // Where most tiles changed, one pass over the picture costs less than
   // the rectangles (each reads a margin of its reach) and the copy.
-  if (dirty.fraction() > kWholeFilterShare) {
+  if (!keep || dirty.fraction() > kWholeFilterShare) {
     bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
     return true;
   }

@@ -32,12 +32,14 @@ bool ChangeMap::any() const { return std::find(flags_.begin(), flags_.end(), 1) 
 
 bool ChangeMap::all() const { return std::find(flags_.begin(), flags_.end(), 0) == flags_.end(); }
 
+bool ChangeMap::row_changed(int ty) const {
+  const auto first = flags_.begin() + static_cast<size_t>(ty) * tiles_x_;
+  return std::find(first, first + tiles_x_, 1) != first + tiles_x_;
+}
+
 bool ChangeMap::all_rows() const {
-  for (int ty = 0; ty < tiles_y_; ++ty) {
-    bool changed = false;
-    for (int tx = 0; tx < tiles_x_ && !changed; ++tx) changed = tile(tx, ty);
-    if (!changed) return false;
-  }
+  for (int ty = 0; ty < tiles_y_; ++ty)
+    if (!row_changed(ty)) return false;
   return true;
 }
 
@@ -75,9 +77,7 @@ ChangeMap ChangeMap::dilated(int reach_x, int reach_y) const {
 std::vector<uint8_t> ChangeMap::rows() const {
   std::vector<uint8_t> rows(static_cast<size_t>(height_), 0);
   for (int ty = 0; ty < tiles_y_; ++ty) {
-    bool changed = false;
-    for (int tx = 0; tx < tiles_x_ && !changed; ++tx) changed = tile(tx, ty);
-    if (!changed) continue;
+    if (!row_changed(ty)) continue;
     const PixelRect r = tile_pixels(0, ty, width_, height_);
     std::fill(rows.begin() + r.y0, rows.begin() + r.y1, 1);
   }

@@ -50,7 +50,9 @@ class ChangeMap {
 
   bool any() const;
   bool all() const;
-  // Whether every row of tiles holds a changed tile (rows() all set).
+  // Whether row of tiles ty holds a changed tile; whether every row does
+  // (rows() all set).
+  bool row_changed(int ty) const;
   bool all_rows() const;
   // Share of the tiles changed (0..1).
   double fraction() const;

@@ -176,9 +176,14 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   // others have the same pixels, so the same sums).
   const bool incremental = changes && same_grid && features_current_ && changes->width() == W &&
                            changes->height() == H;
-  std::vector<uint8_t> touched;
+  std::vector<uint8_t> touched, row_touched;  // one flag a block; one a block row
   if (incremental) {
     touched = blocks_touched(*changes, B, bx, by);
+    row_touched.resize(by);
+    for (int j = 0; j < by; ++j)
+      row_touched[j] = std::find(touched.begin() + static_cast<size_t>(j) * bx,
+                                 touched.begin() + static_cast<size_t>(j + 1) * bx, 1) !=
+                       touched.begin() + static_cast<size_t>(j + 1) * bx;
     block_features_cpu(frame, B, features_, &touched);
   } else {
     block_features_cpu(frame, B, features_);
@@ -193,9 +198,7 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
     row_diff_.resize(by);
     cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
       for (int j = range.start; j < range.end; ++j) {
-        if (incremental && std::find(touched.begin() + static_cast<size_t>(j) * bx,
-                                     touched.begin() + static_cast<size_t>(j + 1) * bx, 1) ==
-                               touched.begin() + static_cast<size_t>(j + 1) * bx) {
+        if (incremental && !row_touched[j]) {
           if (last_decision_ != TemporalDecision::Reuse) row_diff_[j] = 0;
           continue;
         }
@@ -237,10 +240,7 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
     for (int j = range.start; j < range.end; ++j) {
       const size_t k0 = static_cast<size_t>(j) * row_values, k1 = k0 + row_values;
-      const bool row_touched = incremental && std::find(touched.begin() + static_cast<size_t>(j) * bx,
-                                                        touched.begin() + static_cast<size_t>(j + 1) * bx, 1) !=
-                                                  touched.begin() + static_cast<size_t>(j + 1) * bx;
-      if (skip_settled && settled_rows_[j] && !row_touched) continue;
+      if (skip_settled && settled_rows_[j] && !row_touched[j]) continue;
       bool settled = true;
       for (size_t k = k0; k < k1; k += 3) {
         float s[3] = {smoothed_[k], smoothed_[k + 1], smoothed_[k + 2]};
