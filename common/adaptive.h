@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bilateral.h"
+#include "bars.h"
 #include "change_map.h"
 #include "pack.h"
 #include "warp.h"
@@ -50,9 +51,13 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
 // itself where the layout is the pair, else a buffer kept between calls)
 // its pair. Returns warp_render_cpu()'s hole count, or -1 when the frames
 // do not fit (nothing written).
+//
+// active: the views rendered inside a rect only (bars.h, ActiveArea).
 long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack, const FrameView &src,
                                 const YuvToRgb &m, ImageView<const float> depth, const FrameView &pair,
-                                const FrameView &dst, WarpCpuScratch &scratch, const ChangeMap *changes);
+                                const FrameView &dst, WarpCpuScratch &scratch, const ChangeMap *changes,
+                                const ActiveArea *active = nullptr);
+
 
 // The pack of the output rows that read a changed input row. changes: the
 // tiles of the input that changed since the previous call (null: all);

@@ -108,6 +108,17 @@ std::vector<PixelRect> ChangeMap::runs() const {
   return runs;
 }
 
+ChangeMap ChangeMap::cropped(PixelRect r) const {
+  ChangeMap sub(r.width(), r.height(), false);
+  for (int ty = 0; ty < tiles_y_; ++ty)
+    for (int tx = 0; tx < tiles_x_; ++tx) {
+      if (!tile(tx, ty)) continue;
+      const PixelRect p = tile_pixels(tx, ty, width_, height_);
+      sub.mark_pixels(PixelRect{p.x0 - r.x0, p.y0 - r.y0, p.x1 - r.x0, p.y1 - r.y0});
+    }
+  return sub;
+}
+
 PixelRect tile_pixels(int tx, int ty, int width, int height) {
   return PixelRect{tx * kChangeTile, ty * kChangeTile, std::min(width, (tx + 1) * kChangeTile),
                    std::min(height, (ty + 1) * kChangeTile)};

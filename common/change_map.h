@@ -24,12 +24,6 @@ namespace p3d {
 // flags of a 4K picture (120 x 68) cost nothing to walk.
 constexpr int kChangeTile = 32;
 
-// A rectangle of pixels [x0, x1) x [y0, y1).
-struct PixelRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  bool empty() const { return x1 <= x0 || y1 <= y0; }
-};
-
 class ChangeMap {
  public:
   ChangeMap() = default;
@@ -63,6 +57,9 @@ class ChangeMap {
   // Every tile within reach_x pixels across and reach_y down or up of a
   // changed tile's pixels.
   ChangeMap dilated(int reach_x, int reach_y) const;
+  // The map of the picture inside r (within this picture): its tiles, cut
+  // from r's corner, are marked where a changed tile of this map overlaps.
+  ChangeMap cropped(PixelRect r) const;
   // The pixel rows of the changed tiles: one flag a row (height()).
   std::vector<uint8_t> rows() const;
   // The changed tiles as rectangles of pixels: in each row of tiles, the

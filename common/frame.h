@@ -33,6 +33,26 @@ struct FrameView {
   int stride[3] = {0, 0, 0};
 };
 
+// The part of a frame inside r (r within the frame; for 4:2:0 formats
+// x0 and y0 even, so that the part starts on a chroma sample).
+inline FrameView sub_frame(FrameView f, PixelRect r) {
+  if (is_packed_rgb(f.format)) {
+    f.plane[0] += static_cast<size_t>(r.y0) * f.stride[0] + 4 * r.x0;
+  } else {
+    f.plane[0] += static_cast<size_t>(r.y0) * f.stride[0] + r.x0;
+    const size_t chroma_row = static_cast<size_t>(r.y0 / 2);
+    if (f.format == PixelFormat::NV12) {
+      f.plane[1] += chroma_row * f.stride[1] + r.x0;  // x0/2 pairs of 2 bytes
+    } else {
+      f.plane[1] += chroma_row * f.stride[1] + r.x0 / 2;
+      f.plane[2] += chroma_row * f.stride[2] + r.x0 / 2;
+    }
+  }
+  f.width = r.width();
+  f.height = r.height();
+  return f;
+}
+
 // Whether every row of plane `plane` starts `bytes`-aligned (its start and
 // its stride are multiples of it): the host-side check the kernels' word
 // and vector paths take once per launch.

@@ -58,6 +58,25 @@ struct DepthGrid {
   P3D_HD bool empty() const { return cells.empty() || width <= 0 || height <= 0; }
 };
 
+// A rectangle of pixels [x0, x1) x [y0, y1).
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  P3D_HD bool empty() const { return x1 <= x0 || y1 <= y0; }
+  P3D_HD int width() const { return x1 - x0; }
+  P3D_HD int height() const { return y1 - y0; }
+};
+P3D_HD PixelRect whole_picture(int width, int height) { return PixelRect{0, 0, width, height}; }
+P3D_HD bool operator==(const PixelRect &a, const PixelRect &b) {
+  return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1;
+}
+P3D_HD bool operator!=(const PixelRect &a, const PixelRect &b) { return !(a == b); }
+
+// The part of a view inside r (r lies within the view).
+template <typename T>
+P3D_HD ImageView<T> sub_image(const ImageView<T> &v, PixelRect r) {
+  return ImageView<T>{v.row(r.y0) + r.x0, r.width(), r.height(), v.pitch};
+}
+
 // Cells along an axis of `pixels` at a shift.
 P3D_HD int grid_cells(int pixels, int shift) {
   return static_cast<int>((static_cast<long long>(pixels) + (1LL << shift) - 1) >> shift);
@@ -71,6 +90,19 @@ P3D_HD DepthGrid<T> full_grid(const ImageView<T> &v) {
 template <typename T>
 P3D_HD DepthGrid<const T> as_const(const DepthGrid<T> &g) {
   return DepthGrid<const T>{as_const(g.cells), g.width, g.height, g.shift};
+}
+// The part of a grid's picture inside r, whose corner (x0, y0) must lie
+// on a cell corner (multiples of 2^shift; sub_grid_fits).
+template <typename T>
+P3D_HD bool sub_grid_fits(const DepthGrid<T> &g, PixelRect r) {
+  const int cell = 1 << g.shift;
+  return r.x0 % cell == 0 && r.y0 % cell == 0;
+}
+template <typename T>
+P3D_HD DepthGrid<T> sub_grid(const DepthGrid<T> &g, PixelRect r) {
+  const PixelRect cells{r.x0 >> g.shift, r.y0 >> g.shift, (r.x0 >> g.shift) + grid_cells(r.width(), g.shift),
+                        (r.y0 >> g.shift) + grid_cells(r.height(), g.shift)};
+  return DepthGrid<T>{sub_image(g.cells, cells), r.width(), r.height(), g.shift};
 }
 // Whether g's cells have the size its picture and shift call for.
 template <typename T>

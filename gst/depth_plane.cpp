@@ -1,5 +1,7 @@
 #include "depth_plane.h"
 
+#include <algorithm>
+
 namespace p3d::gst {
 
 DepthPlane::~DepthPlane() {
@@ -21,6 +23,39 @@ ImageView<float> DepthPlane::view() {
   if (on_device) return ImageView<float>{device.as<float>(), w, h, device.pitch()};
 #endif
   return ImageView<float>{host.data(), w, h, static_cast<size_t>(w) * sizeof(float)};
+}
+
+#if HAVE_CUDA
+bool DepthPlane::set_active(PixelRect rect, cudaStream_t stream, std::string *error) {
+#else
+bool DepthPlane::set_active(PixelRect rect, std::nullptr_t, std::string *) {
+#endif
+  active = rect;
+  if (!cropped()) return true;
+  const ImageView<float> cells = view();
+  // The bands outside, in cells: above, below, left and right of the rect.
+  const PixelRect in{rect.x0 >> shift, rect.y0 >> shift, grid_cells(rect.x1, shift), grid_cells(rect.y1, shift)};
+  const PixelRect bands[4] = {{0, 0, cells.width, in.y0},
+                              {0, in.y1, cells.width, cells.height},
+                              {0, in.y0, in.x0, in.y1},
+                              {in.x1, in.y0, cells.width, in.y1}};
+  for (const PixelRect &b : bands) {
+    if (b.empty()) continue;
+#if HAVE_CUDA
+    if (on_device) {
+      // 0.0f is all-zero bytes.
+      const cudaError_t e = cudaMemset2DAsync(cells.row(b.y0) + b.x0, cells.pitch, 0, b.width() * sizeof(float),
+                                              b.height(), stream);
+      if (e != cudaSuccess) {
+        if (error) *error = std::string("cudaMemset2DAsync: ") + cudaGetErrorString(e);
+        return false;
+      }
+      continue;
+    }
+#endif
+    for (int y = b.y0; y < b.y1; ++y) std::fill(cells.row(y) + b.x0, cells.row(y) + b.x1, 0.f);
+  }
+  return true;
 }
 
 DepthPlanePool::DepthPlanePool() : state_(std::make_shared<State>()) {}
@@ -81,6 +116,7 @@ DepthPlanePtr DepthPlanePool::acquire(int width, int height, int shift, std::nul
       }
     }
   }
+  plane->active = whole_picture(width, height);
   // Back into the pool when the last user lets go (if the pool still lives).
   std::weak_ptr<State> weak = state_;
   return DepthPlanePtr(plane.release(), [weak](DepthPlane *p) {

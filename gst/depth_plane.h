@@ -33,6 +33,11 @@ struct DepthPlane {
   // stages and the meta's scaling read them per pixel.
   int shift = 0;
   bool on_device = false;
+  // The picture between letterbox or pillarbox bars (common/bars.h) that
+  // the depth was estimated on; outside it the plane holds 0 (on a grid,
+  // the cells the rect's last row and column reach belong to the rect).
+  // The whole picture unless pseudo3ddepth cropped the bars.
+  PixelRect active;
   std::vector<float> host;  // row-major, pitch = width * 4, when !on_device
 #if HAVE_CUDA
   DeviceBuffer device;              // pitched, when on_device
@@ -43,6 +48,16 @@ struct DepthPlane {
   // the full-size map at shift 0.
   ImageView<float> view();
   DepthGrid<float> grid() { return DepthGrid<float>{view(), width, height, shift}; }
+  bool cropped() const { return !active.empty() && active != whole_picture(width, height); }
+  PixelRect active_rect() const { return cropped() ? active : whole_picture(width, height); }
+  // Sets the active rect and writes 0 to the cells outside it (whose
+  // corners lie on cells: sub_grid_fits), on `stream` for a device plane.
+  // False when the device refused the write (*error says why).
+#if HAVE_CUDA
+  bool set_active(PixelRect rect, cudaStream_t stream, std::string *error);
+#else
+  bool set_active(PixelRect rect, std::nullptr_t stream, std::string *error);
+#endif
 };
 
 using DepthPlanePtr = std::shared_ptr<DepthPlane>;

@@ -68,3 +68,7 @@ P3D_DEFINE_ENUM(gst_pseudo3d_processing_get_type, "GstPseudo3DProcessing",
                 {GST_PSEUDO3D_PROCESSING_AUTO, "GPU when a CUDA device and nvcodec are available, else CPU", "auto"},
                 {GST_PSEUDO3D_PROCESSING_CPU, "CPU (CUDA-memory input still runs on the GPU)", "cpu"},
                 {GST_PSEUDO3D_PROCESSING_GPU, "GPU; an error if none is available", "gpu"})
+
+P3D_DEFINE_ENUM(gst_pseudo3d_crop_bars_get_type, "GstPseudo3DCropBars",
+                {GST_PSEUDO3D_CROP_BARS_OFF, "The whole frame", "off"},
+                {GST_PSEUDO3D_CROP_BARS_AUTO, "Find letterbox and pillarbox bars and leave them out", "auto"})

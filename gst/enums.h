@@ -31,6 +31,11 @@ typedef enum {
   GST_PSEUDO3D_PROCESSING_GPU = 2
 } GstPseudo3DProcessing;
 
+// pseudo3ddepth's crop-bars property.
+#define GST_TYPE_PSEUDO3D_CROP_BARS (gst_pseudo3d_crop_bars_get_type())
+GType gst_pseudo3d_crop_bars_get_type(void);
+typedef enum { GST_PSEUDO3D_CROP_BARS_OFF = 0, GST_PSEUDO3D_CROP_BARS_AUTO = 1 } GstPseudo3DCropBars;
+
 // pseudo3ddepth's method property.
 typedef enum { GST_PSEUDO3D_DEPTH_METHOD_EDGES = 0, GST_PSEUDO3D_DEPTH_METHOD_RGBD = 1 } GstPseudo3DDepthMethod;
 

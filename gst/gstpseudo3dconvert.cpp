@@ -58,6 +58,7 @@ static const struct {
   const char *name;
 } kProxied[] = {
     {STAGE_DEPTH, "method"},          {STAGE_DEPTH, "hypothesis"},      {STAGE_DEPTH, "temporal-smoothing"},
+    {STAGE_DEPTH, "crop-bars"},
     {STAGE_FILTER, "radius"},         {STAGE_FILTER, "sigma-space"},    {STAGE_FILTER, "sigma-range"},
     {STAGE_FILTER, "scale"},
     {STAGE_WARP, "max-disparity"},    {STAGE_WARP, "convergence"},      {STAGE_WARP, "view"},

@@ -21,6 +21,7 @@
 #include <cstring>
 #include <memory>
 
+#include "bars.h"
 #include "caps_geometry.h"
 #include "depth_estimate.h"
 #include "depth_meta.h"
@@ -33,6 +34,7 @@
 #include "video_util.h"
 
 #if HAVE_CUDA
+#include "bars_gpu.h"
 #include "depth_estimate_gpu.h"
 #endif
 
@@ -51,9 +53,11 @@ enum {
   PROP_FEATURE_SMOOTHING,
   PROP_STATIC_THRESHOLD,
   PROP_CUT_THRESHOLD,
+  PROP_CROP_BARS,
 };
 
 #define DEFAULT_METHOD GST_PSEUDO3D_DEPTH_METHOD_EDGES
+#define DEFAULT_CROP_BARS GST_PSEUDO3D_CROP_BARS_AUTO
 
 struct DepthState {
   p3d::DepthEstimatorCpu cpu;
@@ -65,6 +69,15 @@ struct DepthState {
   // previous frame, which an unchanged depth reuses. Streaming thread.
   p3d::FrameHistory history;
   p3d::gst::DepthPlanePtr last_plane;
+  // crop-bars (common/bars.h), streaming thread: the bars decided from
+  // the frames so far, and the rect the last frame's depth was estimated
+  // in (the estimator's history is of that picture).
+  p3d::BarTracker bars;
+  p3d::BarCounts counts;
+  p3d::PixelRect estimated_rect;
+#if HAVE_CUDA
+  p3d::BarCountsGpu bar_counts_gpu;
+#endif
   // method decides the output width: it changes at a frame boundary (object lock).
   p3d::gst::StagedGeometry<GstPseudo3DDepthMethod> method{DEFAULT_METHOD};
 };
@@ -72,6 +85,7 @@ struct DepthState {
 struct _GstPseudo3DDepth {
   GstPseudo3DBase parent;
   p3d::DepthParams params;  // object lock
+  GstPseudo3DCropBars crop_bars;  // object lock
   DepthState *state;
 };
 
@@ -138,11 +152,84 @@ static p3d::DepthParams frame_params(GstPseudo3DDepth *self) {
 #endif
     self->state->history.reset();
     self->state->last_plane.reset();
+    self->state->bars.reset();
   }
   GST_OBJECT_LOCK(self);
   const p3d::DepthParams p = self->params;
   GST_OBJECT_UNLOCK(self);
   return p;
+}
+
+// Whether crop-bars=auto (object lock taken here).
+static bool crop_bars(GstPseudo3DDepth *self) {
+  GST_OBJECT_LOCK(self);
+  const bool crop = self->crop_bars == GST_PSEUDO3D_CROP_BARS_AUTO;
+  GST_OBJECT_UNLOCK(self);
+  return crop;
+}
+
+// With crop-bars=auto: this frame's bar counts, into the tracker. On the
+// GPU the counts come back before the depth is queued (a wait for one small
+// kernel and a copy of a few kilobytes). unchanged: the frame's bytes are
+// the previous frame's (adaptive), whose counts are taken again.
+static GstFlowReturn observe_bars(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::FrameView &view,
+                                  bool unchanged) {
+  GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
+  DepthState *state = self->state;
+  if (unchanged && state->counts.rows.size() == static_cast<size_t>(view.height) &&
+      state->counts.cols.size() == static_cast<size_t>(view.width)) {
+    state->bars.observe(state->counts);
+    return GST_FLOW_OK;
+  }
+  const int luma_threshold = p3d::bar_luma_threshold(p3d::gst::yuv_params(&base->in_info));
+#if HAVE_CUDA
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    p3d::CudaStatus st = state->bar_counts_gpu.count(view, luma_threshold, base->gpu->stream());
+    if (st.ok() && state->bar_counts_gpu.take(&state->counts, &st)) state->bars.observe(state->counts);
+    return st.ok() ? GST_FLOW_OK : p3d::gst::post_cuda_error(base, st, "counting the bars");
+  }
+#else
+  (void)path;
+#endif
+  p3d::bar_counts_cpu(view, luma_threshold, &state->counts);
+  state->bars.observe(state->counts);
+  return GST_FLOW_OK;
+}
+
+// The rect this frame's depth is estimated in: with crop-bars=auto the
+// bars decided from the frames so far, this one included (the whole
+// picture until a measure is adopted); the whole picture where the rect's
+// corner is not on a cell of the GPU's block grid (block-size over
+// kBarAlign). A new rect restarts the estimator's history, which belongs
+// to the previous picture (*moved says so).
+static p3d::PixelRect frame_rect(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::DepthParams &params,
+                                 const p3d::FrameView &view, bool crop, bool *moved) {
+  DepthState *state = self->state;
+  if (!crop) state->bars.reset();
+  p3d::PixelRect rect = state->bars.active(view.width, view.height);
+  const int shift = path == GST_PSEUDO3D_PATH_GPU ? p3d::block_grid_shift(params, rect.width(), rect.height()) : 0;
+  if (rect.x0 % (1 << shift) != 0 || rect.y0 % (1 << shift) != 0) rect = p3d::whole_picture(view.width, view.height);
+  *moved = rect != state->estimated_rect;
+  if (*moved) {
+    if (!state->estimated_rect.empty())
+      GST_DEBUG_OBJECT(self, "active picture %dx%d at %d,%d", rect.width(), rect.height(), rect.x0, rect.y0);
+    state->cpu.reset();
+#if HAVE_CUDA
+    state->gpu.reset();
+#endif
+    state->last_plane.reset();
+    state->estimated_rect = rect;
+  }
+  return rect;
+}
+
+// A new plane for this frame's depth, active rect set (the outside 0).
+static p3d::gst::DepthPlanePtr new_plane(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::FrameView &view,
+                                         p3d::PixelRect rect, int shift) {
+  GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
+  p3d::gst::DepthPlanePtr plane = p3d::gst::new_depth(base, self->state->pool, path, view.width, view.height, shift);
+  if (plane && !p3d::gst::set_active(base, plane.get(), rect)) plane.reset();
+  return plane;
 }
 
 // method=edges: frame unchanged, depth attached.
@@ -154,20 +241,30 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   // fits (another size or memory) is replaced by a fresh estimate.
   if (p3d::gst::depth_fits(base, pseudo3d_buffer_get_depth(buf), path, view.width, view.height))
     return GST_FLOW_OK;
-  const p3d::DepthParams params = frame_params(self);
+  // Automatic block sizes are the frame's, inside bars too.
+  const p3d::DepthParams params = p3d::frame_scaled(frame_params(self), view.width, view.height);
+  const bool crop = crop_bars(self);
   const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
   DepthState *state = self->state;
+  p3d::ChangeMap changes;
+  if (adaptive.on) changes = state->history.compare(view, adaptive.tolerance);
+  if (crop && observe_bars(self, path, view, adaptive.on && !changes.any()) != GST_FLOW_OK) return GST_FLOW_ERROR;
+  bool moved = false;
+  const p3d::PixelRect rect = frame_rect(self, path, params, view, crop, &moved);
+  const p3d::FrameView active = p3d::sub_frame(view, rect);
   if (adaptive.on) {
     // Only the blocks of changed tiles are summed again; when no block
-    // depth changed the frame gets the previous plane itself.
-    const p3d::ChangeMap changes = state->history.compare(view, adaptive.tolerance);
-    const p3d::TemporalDecision d = state->cpu.estimate_blocks(params, view, &changes);
+    // depth changed the frame gets the previous plane itself. A moved
+    // rect starts over (frame_rect restarted the estimator): every tile.
+    if (moved) changes.mark_all();
+    const p3d::ChangeMap active_changes = changes.cropped(rect);
+    const p3d::TemporalDecision d = state->cpu.estimate_blocks(params, active, &active_changes);
     GST_LOG_OBJECT(self, "temporal decision %d, %.0f%% of the tiles changed", static_cast<int>(d),
                    100.0 * changes.fraction());
     if (state->cpu.output_changed() || !p3d::gst::depth_fits(base, state->last_plane.get(), path, view.width, view.height)) {
-      p3d::gst::DepthPlanePtr plane = p3d::gst::new_depth(base, state->pool, path, view.width, view.height);
+      p3d::gst::DepthPlanePtr plane = new_plane(self, path, view, rect, 0);
       if (!plane) return GST_FLOW_ERROR;
-      state->cpu.expand(plane->view());
+      state->cpu.expand(p3d::sub_image(plane->view(), rect));
       state->last_plane = std::move(plane);
     }
     pseudo3d_buffer_set_depth(buf, state->last_plane);
@@ -177,41 +274,23 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   state->last_plane.reset();
   // On CUDA memory the plane holds a value a block (no full-size copy;
   // depth_plane.h) where the block is a power of two.
-  p3d::gst::DepthPlanePtr plane = p3d::gst::new_depth(base, self->state->pool, path, view.width, view.height,
-                                                              p3d::block_grid_shift(params, view.width, view.height));
+  p3d::gst::DepthPlanePtr plane =
+      new_plane(self, path, view, rect, p3d::block_grid_shift(params, rect.width(), rect.height()));
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
     const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&] {
-      return self->state->gpu.estimate(params, view, plane->grid(), base->gpu->stream());
+      return state->gpu.estimate(params, active, p3d::sub_grid(plane->grid(), rect), base->gpu->stream());
     });
     if (ret != GST_FLOW_OK) return ret;
   } else
 #endif
   {
-    const p3d::TemporalDecision d = self->state->cpu.estimate(params, view, plane->view());
+    const p3d::TemporalDecision d = state->cpu.estimate(params, active, p3d::sub_image(plane->view(), rect));
     GST_LOG_OBJECT(self, "temporal decision %d", static_cast<int>(d));
   }
   pseudo3d_buffer_set_depth(buf, std::move(plane));
   return GST_FLOW_OK;
-}
-
-// Sub-view of the right half of an RGBD frame (set_info checked that the
-// offset is a whole chroma sample for 4:2:0 formats).
-static p3d::FrameView right_half(p3d::FrameView v, int half) {
-  if (p3d::is_packed_rgb(v.format)) {
-    v.plane[0] += 4 * half;
-  } else {
-    v.plane[0] += half;
-    if (v.format == p3d::PixelFormat::NV12) {
-      v.plane[1] += half;  // half/2 chroma pairs of 2 bytes
-    } else {
-      v.plane[1] += half / 2;
-      v.plane[2] += half / 2;
-    }
-  }
-  v.width = half;
-  return v;
 }
 
 // method=rgbd: copy the colour half, attach the grey half as depth.
@@ -220,7 +299,9 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
                              GstVideoFrame *out) {
   GstPseudo3DDepth *self = GST_PSEUDO3D_DEPTH(base);
   const int half = GST_VIDEO_FRAME_WIDTH(out);
-  const p3d::FrameView grey = right_half(p3d::gst::frame_view(in), half);
+  // The grey half: set_info checked that it starts on a chroma sample.
+  const p3d::FrameView grey =
+      p3d::sub_frame(p3d::gst::frame_view(in), p3d::PixelRect{half, 0, 2 * half, GST_VIDEO_FRAME_HEIGHT(in)});
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   p3d::gst::DepthPlanePtr plane =
       p3d::gst::new_depth(base, self->state->pool, path, half, GST_VIDEO_FRAME_HEIGHT(out));
@@ -258,9 +339,12 @@ static void release(GstPseudo3DBase *base) {
   DepthState *state = GST_PSEUDO3D_DEPTH(base)->state;
   state->history.reset();
   state->last_plane.reset();
+  state->bars.reset();
+  state->estimated_rect = p3d::PixelRect();
   state->cpu = p3d::DepthEstimatorCpu();
 #if HAVE_CUDA
   state->gpu = p3d::DepthEstimatorGpu();
+  state->bar_counts_gpu.reset();
 #endif
   state->pool.clear();
 }
@@ -282,6 +366,7 @@ static void gst_pseudo3d_depth_set_property(GObject *object, guint prop_id, cons
     case PROP_FEATURE_SMOOTHING: self->params.feature_smoothing = g_value_get_float(value); break;
     case PROP_STATIC_THRESHOLD: self->params.static_threshold = g_value_get_float(value); break;
     case PROP_CUT_THRESHOLD: self->params.cut_threshold = g_value_get_float(value); break;
+    case PROP_CROP_BARS: self->crop_bars = static_cast<GstPseudo3DCropBars>(g_value_get_enum(value)); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
@@ -302,6 +387,7 @@ static void gst_pseudo3d_depth_get_property(GObject *object, guint prop_id, GVal
     case PROP_FEATURE_SMOOTHING: g_value_set_float(value, self->params.feature_smoothing); break;
     case PROP_STATIC_THRESHOLD: g_value_set_float(value, self->params.static_threshold); break;
     case PROP_CUT_THRESHOLD: g_value_set_float(value, self->params.cut_threshold); break;
+    case PROP_CROP_BARS: g_value_set_enum(value, self->crop_bars); break;
     default: G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec); break;
   }
   GST_OBJECT_UNLOCK(self);
@@ -389,6 +475,16 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
                          "depth history is dropped",
                          0.f, 255.f, d.cut_threshold, flags));
 
+  g_object_class_install_property(
+      gobject_class, PROP_CROP_BARS,
+      g_param_spec_enum("crop-bars", "Crop bars",
+                        "Letterbox and pillarbox bars: auto finds black bars on opposite sides over several frames "
+                        "(a fade to black, a dark sky or a subtitle in a bar keeps the decision; a scene cut or new "
+                        "caps decide afresh) and estimates depth on the picture between them only, so that no depth "
+                        "edge comes from a bar; pseudo3dfilter and pseudo3dwarp then work on that picture too and "
+                        "leave the bars as they are, unshifted in both views. off: the whole frame",
+                        GST_TYPE_PSEUDO3D_CROP_BARS, DEFAULT_CROP_BARS, flags));
+
   gst_element_class_set_static_metadata(element_class, "pseudo3d depth estimation", "Filter/Effect/Video",
                                         "Estimates a depth map (or reads it from RGBD frames) and attaches it to "
                                         "each frame for pseudo-stereo rendering",
@@ -408,10 +504,12 @@ static void gst_pseudo3d_depth_class_init(GstPseudo3DDepthClass *klass) {
   GST_DEBUG_CATEGORY_INIT(gst_pseudo3d_depth_debug, "pseudo3ddepth", 0, "pseudo3d depth estimation");
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_DEPTH_METHOD, (GstPluginAPIFlags)0);
   gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_HYPOTHESIS, (GstPluginAPIFlags)0);
+  gst_type_mark_as_plugin_api(GST_TYPE_PSEUDO3D_CROP_BARS, (GstPluginAPIFlags)0);
 }
 
 static void gst_pseudo3d_depth_init(GstPseudo3DDepth *self) {
   self->params = p3d::DepthParams();
+  self->crop_bars = DEFAULT_CROP_BARS;
   self->state = new DepthState();
   GST_PSEUDO3D_BASE(self)->staged = &self->state->method;
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), DEFAULT_METHOD == GST_PSEUDO3D_DEPTH_METHOD_EDGES);

@@ -16,6 +16,9 @@
  */
 #include "gstpseudo3dfilter.h"
 
+#include <tuple>
+
+#include "bars.h"
 #include "bilateral.h"
 #include "depth_meta.h"
 #include "enums.h"
@@ -41,7 +44,7 @@ struct FilterState {
   // adaptive (stage_adaptive.h), streaming thread: the previous frame's
   // inputs, parameters and output plane.
   p3d::gst::InputHistory inputs;
-  p3d::gst::KeptParams<p3d::BilateralParams> params;
+  p3d::gst::KeptParams<std::tuple<p3d::BilateralParams, p3d::PixelRect>> params;
   p3d::gst::DepthPlanePtr last_out;
   p3d::BilateralScratch scratch;
 
@@ -66,22 +69,38 @@ GST_ELEMENT_REGISTER_DEFINE(pseudo3dfilter, "pseudo3dfilter", GST_RANK_NONE, GST
 // of a changed guide or depth tile are filtered again, the others keep the
 // previous output; no change at all keeps the previous plane itself.
 static GstFlowReturn filter_adaptive(GstPseudo3DFilter *self, GstBuffer *buf, const p3d::FrameView &guide,
-                                     const p3d::BilateralParams &params, float tolerance) {
+                                     const p3d::BilateralParams &params, p3d::PixelRect rect, float tolerance) {
   GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
   FilterState *state = self->state;
   const p3d::gst::DepthPlanePtr depth = p3d::gst::frame_depth_plane(buf);
   const p3d::ChangeMap changes = state->inputs.compare(guide, depth, tolerance);
-  const bool whole = state->params.changed(params) || !state->last_out;
+  const bool whole = state->params.changed({params, rect}) || !state->last_out;
   GST_LOG_OBJECT(self, "%.0f%% of the tiles changed%s", 100.0 * changes.fraction(), whole ? ", filtering all" : "");
   p3d::gst::DepthPlanePtr out = p3d::gst::new_depth(base, state->pool, GST_PSEUDO3D_PATH_CPU, depth->width, depth->height);
-  if (!out) return GST_FLOW_ERROR;
+  if (!out || !p3d::gst::set_active(base, out.get(), rect)) return GST_FLOW_ERROR;
   const p3d::ImageView<const float> prev =
-      state->last_out ? p3d::as_const(state->last_out->view()) : p3d::ImageView<const float>();
-  if (p3d::bilateral_filter_changed_cpu(params, guide, p3d::as_const(depth->view()), prev, out->view(),
-                                        whole ? nullptr : &changes, state->scratch))
+      state->last_out ? p3d::sub_image(p3d::as_const(state->last_out->view()), rect) : p3d::ImageView<const float>();
+  const p3d::ChangeMap active_changes = changes.cropped(rect);
+  if (p3d::bilateral_filter_changed_cpu(params, p3d::sub_frame(guide, rect),
+                                        p3d::sub_image(p3d::as_const(depth->view()), rect), prev,
+                                        p3d::sub_image(out->view(), rect), whole ? nullptr : &active_changes,
+                                        state->scratch))
     state->last_out = std::move(out);
   pseudo3d_buffer_set_depth(buf, state->last_out);
   return GST_FLOW_OK;
+}
+
+// The filter runs on the picture its depth was estimated on (the depth
+// plane's active rect: pseudo3ddepth's crop-bars). On the GPU, where the
+// rect's corner is not on a cell of the depth's or the output's grid, it
+// runs on the whole frame.
+static p3d::PixelRect filter_rect(GstPseudo3DPath path, p3d::gst::DepthPlane *depth,
+                                  const p3d::BilateralParams &params) {
+  const p3d::PixelRect rect = depth->active_rect(), whole = p3d::whole_picture(depth->width, depth->height);
+  if (path != GST_PSEUDO3D_PATH_GPU || rect == whole) return rect;
+  const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), rect.width(), rect.height());
+  const p3d::DepthGrid<float> grid = depth->grid();
+  return p3d::sub_grid_fits(grid, rect) && rect.x0 % (1 << shift) == 0 && rect.y0 % (1 << shift) == 0 ? rect : whole;
 }
 
 static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,
@@ -91,28 +110,33 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   p3d::gst::DepthPlane *depth = p3d::gst::frame_depth(base, buf, path, guide.width, guide.height);
   if (!depth) return GST_FLOW_ERROR;
   GST_OBJECT_LOCK(self);
-  const p3d::BilateralParams params = self->params;
+  // The automatic grid step is the frame's, inside bars too.
+  const p3d::BilateralParams params = p3d::frame_scaled(self->params, guide.width, guide.height);
   GST_OBJECT_UNLOCK(self);
   if (gst_pseudo3d_base_take_history_reset(base)) self->state->forget();
+  const p3d::PixelRect rect = filter_rect(path, depth, params);
   const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
-  if (adaptive.on) return filter_adaptive(self, buf, guide, params, adaptive.tolerance);
+  if (adaptive.on) return filter_adaptive(self, buf, guide, params, rect, adaptive.tolerance);
   self->state->forget();
   // On CUDA memory the output holds a value a cell of the coarse grid (no
   // full-size copy; depth_plane.h) where the grid step is a power of two.
-  const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), depth->width, depth->height);
+  const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), rect.width(), rect.height());
   p3d::gst::DepthPlanePtr out =
       p3d::gst::new_depth(base, self->state->pool, path, depth->width, depth->height, shift);
-  if (!out) return GST_FLOW_ERROR;
+  if (!out || !p3d::gst::set_active(base, out.get(), rect)) return GST_FLOW_ERROR;
+  const p3d::FrameView active = p3d::sub_frame(guide, rect);
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
     const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&] {
-      return self->state->gpu.run(params, guide, p3d::as_const(depth->grid()), out->grid(), base->gpu->stream());
+      return self->state->gpu.run(params, active, p3d::sub_grid(p3d::as_const(depth->grid()), rect),
+                                  p3d::sub_grid(out->grid(), rect), base->gpu->stream());
     });
     if (ret != GST_FLOW_OK) return ret;
   } else
 #endif
   {
-    p3d::bilateral_filter_cpu(params, guide, p3d::as_const(depth->view()), out->view());
+    p3d::bilateral_filter_cpu(params, active, p3d::sub_image(p3d::as_const(depth->view()), rect),
+                              p3d::sub_image(out->view(), rect));
   }
   pseudo3d_buffer_set_depth(buf, std::move(out));
   return GST_FLOW_OK;

@@ -44,6 +44,7 @@
 #include "warp.h"
 
 #if HAVE_CUDA
+#include "bars_gpu.h"
 #include "warp_gpu.h"
 #endif
 
@@ -67,8 +68,11 @@ struct WarpState {
   // adaptive (stage_adaptive.h), streaming thread: the previous frame's
   // inputs, parameters and output.
   p3d::gst::InputHistory inputs;
-  p3d::gst::KeptParams<std::tuple<p3d::WarpParams, p3d::PackParams, p3d::YuvToRgb>> params;
+  p3d::gst::KeptParams<std::tuple<p3d::WarpParams, p3d::PackParams, p3d::YuvToRgb, p3d::PixelRect>> params;
   p3d::gst::OutputHistory output;
+  // The views of a picture narrower than the frame (pillarbox bars), kept
+  // from frame to frame like the pair buffer.
+  std::vector<uint8_t> active_pair;
 
   void forget() {
     inputs.reset();
@@ -77,6 +81,7 @@ struct WarpState {
   }
 #if HAVE_CUDA
   p3d::WarpRendererGpu gpu;
+  p3d::ActiveWarpGpu active_gpu;
 #endif
 };
 
@@ -135,7 +140,7 @@ static gboolean frame_boundary(GstPseudo3DBase *base) {
 // the output rows those reach; the rest is the previous output.
 static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p3d::FrameView &src,
                                 const p3d::WarpParams &params, const p3d::PackParams &pack, const p3d::YuvToRgb &yuv,
-                                const p3d::gst::AdaptiveSettings &adaptive, GstVideoFrame *out) {
+                                p3d::PixelRect rect, const p3d::gst::AdaptiveSettings &adaptive, GstVideoFrame *out) {
   GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
   WarpState *state = self->state;
   const p3d::gst::DepthPlanePtr depth = p3d::gst::frame_depth_plane(inbuf);
@@ -146,7 +151,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
     // A change in every row of tiles: nothing of the previous output
     // survives (the warp redoes whole rows).
-    whole = state->params.changed({params, pack, yuv}) || changes.all_rows() ||
+    whole = state->params.changed({params, pack, yuv, rect}) || changes.all_rows() ||
             !state->output.copy_into(&base->out_info, out);
   } else {
     state->forget();
@@ -154,8 +159,16 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   // The pair into the output where the layout is the pair itself, else
   // into the pair buffer (kept from frame to frame), then packed.
   const p3d::FrameView pair = self->packing->pair_target(pack, src.width, src.height, dst);
+  p3d::ActiveArea active{rect, pair};
+  active.pair.width = 2 * rect.width();
+  active.pair.height = rect.height();
+  active.pair.stride[0] = 4 * active.pair.width;
+  if (rect.x0 != 0 || rect.x1 != src.width) {  // a pillarbox: the views are placed from their own buffer
+    state->active_pair.resize(static_cast<size_t>(active.pair.stride[0]) * active.pair.height);
+    active.pair.plane[0] = state->active_pair.data();
+  }
   const long long holes = p3d::warp_pack_changed_cpu(params, pack, src, yuv, p3d::as_const(depth->view()), pair, dst,
-                                                     state->cpu, whole ? nullptr : &changes);
+                                                     state->cpu, whole ? nullptr : &changes, &active);
   if (holes < 0) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
@@ -178,23 +191,33 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   const p3d::PackParams pack = self->packing->frame_params();
   const p3d::YuvToRgb yuv = p3d::gst::yuv_params(&base->in_info);
   if (gst_pseudo3d_base_take_history_reset(base)) self->state->forget();
+  // The views are rendered from the picture the depth was estimated on
+  // (pseudo3ddepth's crop-bars); on the GPU from the whole frame where the
+  // rect's corner is not on a cell of the depth's grid.
+  p3d::PixelRect rect = depth->active_rect();
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
+    const p3d::PixelRect whole = p3d::whole_picture(src.width, src.height);
     self->state->forget();
     const p3d::FrameView dst = p3d::gst::frame_view(out);
+    const p3d::DepthGrid<const float> grid = p3d::as_const(depth->grid());
+    if (!p3d::sub_grid_fits(grid, rect)) rect = whole;
     return p3d::gst::run_gpu(base, "rendering the views", [&] {
-      return self->state->gpu.render_packed(params, pack, src, yuv, p3d::as_const(depth->grid()), dst,
-                                            base->gpu->stream());
+      if (rect != whole)
+        return self->state->active_gpu.render(self->state->gpu, params, pack, src, yuv, grid, rect, dst,
+                                              base->gpu->stream());
+      return self->state->gpu.render_packed(params, pack, src, yuv, grid, dst, base->gpu->stream());
     });
   }
 #endif
-  return render_cpu(self, inbuf, src, params, pack, yuv, p3d::gst::adaptive_settings(base, path), out);
+  return render_cpu(self, inbuf, src, params, pack, yuv, rect, p3d::gst::adaptive_settings(base, path), out);
 }
 
 static void release(GstPseudo3DBase *base) {
   GST_PSEUDO3D_WARP(base)->state->forget();
 #if HAVE_CUDA
   GST_PSEUDO3D_WARP(base)->state->gpu = p3d::WarpRendererGpu();
+  GST_PSEUDO3D_WARP(base)->state->active_gpu = p3d::ActiveWarpGpu();
 #endif
 }
 

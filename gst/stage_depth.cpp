@@ -63,4 +63,17 @@ DepthPlanePtr new_depth(GstPseudo3DBase *self, DepthPlanePool &pool, GstPseudo3D
   return plane;
 }
 
+bool set_active(GstPseudo3DBase *self, DepthPlane *plane, PixelRect rect) {
+  std::string error;
+#if HAVE_CUDA
+  const bool ok = plane->set_active(rect, plane->on_device ? self->gpu->stream() : nullptr, &error);
+#else
+  const bool ok = plane->set_active(rect, nullptr, &error);
+#endif
+  if (!ok)
+    GST_ELEMENT_ERROR(self, RESOURCE, FAILED, ("Could not clear the depth map outside the active picture"),
+                      ("%s", error.c_str()));
+  return ok;
+}
+
 }  // namespace p3d::gst

@@ -25,4 +25,7 @@ DepthPlane *frame_depth(GstPseudo3DBase *self, GstBuffer *buf, GstPseudo3DPath p
 DepthPlanePtr new_depth(GstPseudo3DBase *self, DepthPlanePool &pool, GstPseudo3DPath path, int width, int height,
                         int shift = 0);
 
+// DepthPlane::set_active on the stage's stream; posts an element error and
+// returns false when the device refuses it.
+bool set_active(GstPseudo3DBase *self, DepthPlane *plane, PixelRect rect);
 }  // namespace p3d::gst

@@ -1018,6 +1018,24 @@ TEST(AdaptivePack, ChangedTilesGiveTheFullPack) {
         }
 }
 
+// cropped(r): a tile of the picture inside r is marked exactly when one of
+// its pixels lies in a changed tile of the whole picture (brute force over
+// pixels), for rects on and off the tile grid.
+TEST(ChangeMapCropped, MarksTheTilesOverlappingAChange) {
+  std::mt19937 rng(21);
+  for (int k = 0; k < 40; ++k) {
+    const ChangeMap whole = random_map(150, 97, rng, 0.2);
+    const int x0 = uniform(rng, 0, 60), y0 = uniform(rng, 0, 40);
+    const PixelRect r{x0, y0, uniform(rng, x0 + 1, 150), uniform(rng, y0 + 1, 97)};
+    const ChangeMap got = whole.cropped(r);
+    ChangeMap want(r.width(), r.height(), false);
+    for (int y = r.y0; y < r.y1; ++y)
+      for (int x = r.x0; x < r.x1; ++x)
+        if (whole.tile(x / kChangeTile, y / kChangeTile)) want.mark((x - r.x0) / kChangeTile, (y - r.y0) / kChangeTile);
+    EXPECT_TRUE(same_tiles(got, want)) << rect_text(r);
+  }
+}
+
 // ---- warp and pack -----------------------------------------------------------------
 
 // Depth of flat rectangles on a ramp: disocclusions beside them, in runs of
@@ -1038,6 +1056,7 @@ struct WarpPackCase {
   WarpParams warp;
   PackParams pack;
   PixelFormat src_format, out_format;
+  PixelRect active;  // the views rendered inside it (bars.h); empty: the whole picture
 };
 
 std::string warp_case_text(const WarpPackCase &c) {
@@ -1063,6 +1082,10 @@ class WarpPackRun {
     out_ = HostFrame(c.out_format, out_w_, out_h_, 3);
     pair_.fill(0x3C);
     out_.fill(0xC3);
+    if (!c.active.empty()) {
+      active_pair_ = HostFrame(pair_format_, 2 * c.active.width(), c.active.height(), 4);
+      active_pair_.fill(0x69);
+    }
   }
 
   // One frame: the first computes everything, later ones the changes
@@ -1073,12 +1096,26 @@ class WarpPackRun {
     HostFrame pair_full(pair_format_, 2 * w_, h_, 2), out_full(c_.out_format, out_w_, out_h_, 1);
     pair_full.fill(0xA5);
     out_full.fill(0x5A);
-    const long long holes_full = warp_render_cpu(c_.warp, src.view(), m_, cview(depth), pair_full.view());
-    if (!pair_is_out_) pack_cpu(c_.pack, pair_full.view(), out_full.view());
+    long long holes_full;
+    const bool cropped = !c_.active.empty();
+    if (cropped) {  // the full computation with the rect: from nothing, as ActiveWarp tests prove it
+      HostFrame active_full(pair_format_, 2 * c_.active.width(), c_.active.height(), 0);
+      WarpCpuScratch fresh;
+      const ActiveArea area{c_.active, active_full.view()};
+      const FrameView full_pair = pair_is_out_ ? out_full.view() : pair_full.view();
+      holes_full = warp_pack_changed_cpu(c_.warp, c_.pack, src.view(), m_, cview(depth), full_pair, out_full.view(),
+                                         fresh, nullptr, &area);
+      if (pair_is_out_) pair_full = out_full;
+    } else {
+      holes_full = warp_render_cpu(c_.warp, src.view(), m_, cview(depth), pair_full.view());
+      if (!pair_is_out_) pack_cpu(c_.pack, pair_full.view(), out_full.view());
+    }
     HostFrame next = out_;
     const FrameView pair = pair_is_out_ ? next.view() : pair_.view();
+    const ActiveArea area{c_.active, active_pair_.view()};
     const long long holes = warp_pack_changed_cpu(c_.warp, c_.pack, src.view(), m_, cview(depth), pair, next.view(),
-                                                  scratch_, prev_depth_.empty() ? nullptr : &changes);
+                                                  scratch_, prev_depth_.empty() ? nullptr : &changes,
+                                                  cropped ? &area : nullptr);
     const bool first = prev_depth_.empty();
     prev_depth_ = depth;
     out_ = next;
@@ -1102,7 +1139,7 @@ class WarpPackRun {
   int w_, h_, out_w_ = 0, out_h_ = 0;
   bool pair_is_out_ = false;
   PixelFormat pair_format_ = PixelFormat::RGBA;
-  HostFrame pair_, out_;
+  HostFrame pair_, out_, active_pair_;
   WarpCpuScratch scratch_;
   StageInputs inputs_;
   cv::Mat prev_depth_;
@@ -1218,6 +1255,23 @@ TEST(AdaptiveWarpPack, ChangedTilesGiveTheFullWarpAndPack) {
           EXPECT_TRUE(run_warp_sequence(c, seed + index));
         }
   EXPECT_EQ(pair_is_out, 4 * 3 - 2);  // every fill and view with the pair as the output
+}
+
+// The same inside bars (warp_pack_changed_cpu with an ActiveArea): a
+// letterbox, rendered into the pair's rows, and a pillarbox and both,
+// rendered apart and placed; changes fall inside and outside the rect.
+TEST(AdaptiveWarpPack, ChangedTilesGiveTheFullWarpAndPackInsideBars) {
+  uint32_t seed = 3900;
+  int index = 0;
+  const PixelRect rects[] = {{0, 16, 97, 56}, {16, 0, 80, 67}, {8, 8, 88, 64}};
+  for (const HoleFill fill : kAllFills)
+    for (const PackLayout layout : kAllLayouts)
+      for (const bool yuv : {false, true}) {
+        WarpPackCase c = sweep_case(fill, StereoView::Both, layout, yuv, index++);
+        c.active = rects[index % 3];
+        SCOPED_TRACE(warp_case_text(c) + " rect " + rect_text(c.active));
+        EXPECT_TRUE(run_warp_sequence(c, seed + index));
+      }
 }
 
 // In a child process: one changed pixel after a first frame in a minimal

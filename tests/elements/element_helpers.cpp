@@ -118,6 +118,7 @@ DepthPlaneInfo buffer_depth_info(GstBuffer *buf) {
     i.width = d->width;
     i.height = d->height;
     i.shift = d->shift;
+    i.active = d->active_rect();
   }
   return i;
 }

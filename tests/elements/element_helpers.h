@@ -35,6 +35,7 @@ cv::Mat buffer_depth(GstBuffer *buf);
 struct DepthPlaneInfo {
   bool present = false, on_device = false;
   int width = 0, height = 0, shift = 0;
+  PixelRect active;  // the plane's active_rect()
 };
 DepthPlaneInfo buffer_depth_info(GstBuffer *buf);
 // Runs a launch line to EOS (timeout in seconds); returns the error message

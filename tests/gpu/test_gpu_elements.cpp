@@ -233,6 +233,32 @@ TEST(GpuChainReal, VtestVideoMatchesCpu) {
   expect_same(gpu, cpu, "vtest");
 }
 
+// crop-bars on CUDA memory: letterboxed and pillarboxed frames (the bar
+// counts come back from the device), at 720p and 4K, against the CPU chain
+// frame by frame.
+TEST(GpuChainBars, MatchesCpuChain) {
+  struct Bars {
+    int w, h, rows, cols;
+  };
+  for (const Bars b : {Bars{1280, 720, 88, 0}, Bars{960, 720, 0, 120}, Bars{3840, 2160, 280, 0}}) {
+    std::vector<HostFrame> frames;
+    for (uint32_t s = 0; s < 4; ++s) {
+      const HostFrame inner = picture(PixelFormat::NV12, b.w - 2 * b.cols, b.h - 2 * b.rows, 500 + s);
+      cv::Mat bgr;
+      cv::cvtColor(inner.to_bgra(), bgr, cv::COLOR_BGRA2BGR);
+      cv::copyMakeBorder(bgr, bgr, b.rows, b.rows, b.cols, b.cols, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+      frames.push_back(HostFrame::from_bgr(bgr, PixelFormat::NV12));
+    }
+    for (const char *layout : {"anaglyph", "side-by-side-half"}) {
+      const std::string what = std::to_string(b.w) + "x" + std::to_string(b.h) + " bars " + std::to_string(b.rows) +
+                               "/" + std::to_string(b.cols) + " " + layout;
+      const auto gpu = run_chain(chain(kDevice, layout, "BGRA"), PixelFormat::NV12, b.w, b.h, frames);
+      const auto cpu = run_chain(chain(kCpu, layout, "BGRA"), PixelFormat::NV12, b.w, b.h, frames);
+      expect_same(gpu, cpu, what);
+    }
+  }
+}
+
 // The bin on system memory: processing=gpu (cudaupload ! stages ! cudadownload
 // inside) gives the CPU bin's output exactly.
 TEST(GpuConvertBin, SystemMemoryOnGpuMatchesCpu) {

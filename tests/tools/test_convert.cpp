@@ -728,6 +728,38 @@ TEST_F(Convert, PhotoDepthOutIsWhatPseudo3dDepthOutWrites) {
   EXPECT_GT(hi - lo, 0.2 * 65535) << "a depth map, not a flat picture";
 }
 
+// A photo in pillarbox bars: by default (crop-bars=auto) its depth map is
+// 0 in the bars and the picture's alone between them; --crop-bars off
+// estimates the whole frame, bars included; a value that is not a name is
+// refused with the names.
+TEST_F(Convert, PhotoInBarsCropBarsAutoAndOff) {
+  cv::Mat picture(120, 192, CV_8UC3, cv::Scalar(0, 0, 0));
+  cv::RNG rng(12);
+  for (int y = 0; y < picture.rows; y += 8)
+    for (int x = 32; x < 160; x += 8)
+      picture(cv::Rect(x, y, 8, 8)).setTo(cv::Scalar(rng.uniform(60, 220), rng.uniform(60, 220), rng.uniform(60, 220)));
+  const std::string in = fx().dir + "/pillar.png", out = fx().dir + "/pillar-sbs.png",
+                    depth = fx().dir + "/pillar-depth.png";
+  ASSERT_TRUE(cv::imwrite(in, picture));
+  const cv::Rect left_bar(0, 0, 32, 120), right_bar(160, 0, 32, 120);
+  for (const char *crop : {"auto", "off"}) {
+    g_remove(out.c_str());
+    g_remove(depth.c_str());
+    const ToolRun r = run_convert({in, out, "--depth-out", depth, "--crop-bars", crop, "--quiet"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const cv::Mat got = cv::imread(depth, cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(got.type(), CV_16UC1);
+    const double bars = std::max(cv::norm(got(left_bar), cv::NORM_INF), cv::norm(got(right_bar), cv::NORM_INF));
+    if (std::string(crop) == "auto")
+      EXPECT_EQ(bars, 0.0) << "the bars' depth";
+    else
+      EXPECT_GT(bars, 0.0) << "the bars estimated as picture";
+  }
+  const ToolRun bad = run_convert({in, out, "--crop-bars", "sideways", "--force", "--quiet"});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("auto"), std::string::npos) << bad.err;
+}
+
 TEST_F(Convert, PhotoMpoHoldsTwoDisparityImages) {
   const std::string in = make_rotated_jpeg(fx().dir), out = fx().dir + "/photo.mpo";
   g_remove(out.c_str());

@@ -34,7 +34,7 @@ struct StageOption {
 };
 const StageOption kStageOptions[] = {
     {"layout", true},        {"glasses", true},     {"anaglyph-method", true}, {"swap-eyes", false},
-    {"max-disparity", true}, {"convergence", true}, {"hypothesis", true},
+    {"max-disparity", true}, {"convergence", true}, {"hypothesis", true},    {"crop-bars", true},
 };
 
 // x264/x265 preset names, fastest first; the NVENC encoders get theirs
@@ -154,6 +154,8 @@ void print_usage(FILE *f) {
       "  --max-disparity P     parallax in percent of the width (default 3)\n"
       "  --convergence C       depth on the screen plane, 0 (far) to 1 (near) (default 0.5)\n"
       "  --hypothesis H        %s\n"
+      "  --crop-bars auto|off  leave letterbox and pillarbox bars out of the 3D, black and flat\n"
+      "                        in both views (default auto)\n"
       "Video options:\n"
       "  --codec h264|h265     (default h264)\n"
       "  --crf N               constant quality, lower is better (default 20 for H.264, 24 for H.265)\n"

@@ -15,7 +15,7 @@ const struct {
 } kOwners[] = {
     {"layout", "pseudo3dpack"},        {"glasses", "pseudo3dpack"},   {"anaglyph-method", "pseudo3dpack"},
     {"swap-eyes", "pseudo3dpack"},     {"max-disparity", "pseudo3dwarp"}, {"convergence", "pseudo3dwarp"},
-    {"hypothesis", "pseudo3ddepth"},
+    {"hypothesis", "pseudo3ddepth"},   {"crop-bars", "pseudo3ddepth"},
 };
 
 const char *owner_of(const std::string &property) {

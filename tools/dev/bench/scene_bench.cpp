@@ -64,6 +64,7 @@ struct SceneResult {
   int frames = 0, rounds = 1;
   Series off, on;
   AdaptiveChain::Shares changed;  // means over the timed frames
+  bool compared = true;  // false: the on chain is meant to differ (measure_crop)
   int identical_frames = 0;
   int first_mismatch = -1;  // frame number, -1: none
   std::string mismatch_at;
@@ -73,35 +74,34 @@ struct SceneResult {
   bool identical() const { return first_mismatch < 0; }
 };
 
-// One round: a new chain of each kind over the sequence, frame by frame in
-// turn, which of them first alternating. Both then meet the same load of a
-// shared machine (in turn a frame apart, not a sequence apart) and, on
-// average, the same state of its caches. Frame 0 is the warm-up: each
-// chain's first frame (whole, and the one that maps its buffers), untimed;
-// frames 1..n-1 are timed, every one a change from the frame before as a
-// stream meets it. after(full, adaptive, k) sees each frame's outputs.
-template <class After>
-void run_round(const StageParams &p, const std::vector<HostFrame> &frames, float tolerance, SceneResult *r,
-               After after) {
-  const int w = frames[0].width(), h = frames[0].height();
-  FullChain full(p, w, h, frames[0].format());
-  AdaptiveChain adaptive(p, w, h, frames[0].format(), tolerance);
+// One round: a new chain of each kind over the sequence (make_off() and
+// make_on() build them), frame by frame in turn, which of them first
+// alternating. Both then meet the same load of a shared machine (in turn a
+// frame apart, not a sequence apart) and, on average, the same state of
+// its caches. Frame 0 is the warm-up: each chain's first frame (whole, and
+// the one that maps its buffers), untimed; frames 1..n-1 are timed, every
+// one a change from the frame before as a stream meets it. after(off, on,
+// k) sees each frame's outputs.
+template <class MakeOff, class MakeOn, class After>
+void run_round(const std::vector<HostFrame> &frames, SceneResult *r, MakeOff make_off, MakeOn make_on, After after) {
+  auto off_chain = make_off();
+  auto on_chain = make_on();
   std::vector<StageMs> off, on;
   for (size_t k = 0; k < frames.size(); ++k) {
     const FrameView f = frames[k].view();
     StageMs off_ms, on_ms;
     if (k % 2) {
-      full.frame(f, &off_ms);
-      adaptive.frame(f, &on_ms);
+      off_chain.frame(f, &off_ms);
+      on_chain.frame(f, &on_ms);
     } else {
-      adaptive.frame(f, &on_ms);
-      full.frame(f, &off_ms);
+      on_chain.frame(f, &on_ms);
+      off_chain.frame(f, &off_ms);
     }
     if (k > 0) {
       off.push_back(off_ms);
       on.push_back(on_ms);
     }
-    after(full, adaptive, k);
+    after(off_chain, on_chain, k);
   }
   r->off.keep_shortest(off);
   r->on.keep_shortest(on);
@@ -143,7 +143,11 @@ SceneResult measure(const StageParams &p, const std::vector<HostFrame> &frames, 
   r.rounds = rounds;
   double psnr_sum = 0;
   int differing = 0;
-  run_round(p, frames, tolerance, &r, [&](const FullChain &full, const AdaptiveChain &adaptive, size_t k) {
+  const int w = frames[0].width(), h = frames[0].height();
+  const PixelFormat format = frames[0].format();
+  auto make_full = [&] { return FullChain(p, w, h, format); };
+  auto make_adaptive = [&] { return AdaptiveChain(p, w, h, format, tolerance); };
+  run_round(frames, &r, make_full, make_adaptive, [&](const FullChain &full, const AdaptiveChain &adaptive, size_t k) {
     if (k > 0) {
       const AdaptiveChain::Shares &s = adaptive.shares();
       r.changed.input += s.input;
@@ -166,17 +170,33 @@ SceneResult measure(const StageParams &p, const std::vector<HostFrame> &frames, 
     r.psnr_min = std::min(r.psnr_min, db);
   });
   for (int i = 1; i < rounds; ++i)
-    run_round(p, frames, tolerance, &r, [](const FullChain &, const AdaptiveChain &, size_t) {});
+    run_round(frames, &r, make_full, make_adaptive, [](const FullChain &, const AdaptiveChain &, size_t) {});
   if (differing > 0) r.psnr_mean = psnr_sum / differing;
   const double timed = std::max(1, r.frames - 1);
   for (double *share : {&r.changed.input, &r.changed.filter, &r.changed.warp, &r.changed.warp_rows}) *share /= timed;
   return r;
 }
 
+// The letterbox scene: crop-bars=auto ("on") against off, both with
+// adaptive=false; the outputs differ by design (the bars are left out of
+// the 3D), so they are not compared.
+SceneResult measure_crop(const StageParams &p, const std::vector<HostFrame> &frames, int rounds) {
+  SceneResult r;
+  r.frames = static_cast<int>(frames.size());
+  r.rounds = rounds;
+  r.compared = false;
+  const int w = frames[0].width(), h = frames[0].height();
+  const PixelFormat format = frames[0].format();
+  for (int i = 0; i < rounds; ++i)
+    run_round(frames, &r, [&] { return FullChain(p, w, h, format, false); },
+              [&] { return FullChain(p, w, h, format, true); }, [](const FullChain &, const FullChain &, size_t) {});
+  return r;
+}
+
 // ---- output ---------------------------------------------------------------------------
 
 void print_header() {
-  std::printf("%-7s %-9s %4s %7s %6s %7s %8s %7s %8s %7s %5s %13s  %-20s %-20s\n", "scene", "size", "tol", "changed",
+  std::printf("%-9s %-9s %4s %7s %6s %7s %8s %7s %8s %7s %5s %13s  %-20s %-20s\n", "scene", "size", "tol", "changed",
               "rows", "off med", "off mean", "on med", "on mean", "on/off", "same", "PSNR mean/min",
               "off ms depth/filt/warp", "on ms depth/filt/warp");
   std::fflush(stdout);
@@ -193,10 +213,11 @@ void print_row(const SceneResult &r) {
   char size[32], psnr_text[32] = "-";
   std::snprintf(size, sizeof size, "%dx%d", r.size.width, r.size.height);
   if (!r.identical()) std::snprintf(psnr_text, sizeof psnr_text, "%.1f/%.1f", r.psnr_mean, r.psnr_min);
-  std::printf("%-7s %-9s %4g %6.1f%% %5.1f%% %7.1f %8.1f %7.1f %8.1f %6.1f%% %5s %13s  %-20s %-20s\n", r.scene.c_str(),
+  std::printf("%-9s %-9s %4g %6.1f%% %5.1f%% %7.1f %8.1f %7.1f %8.1f %6.1f%% %5s %13s  %-20s %-20s\n", r.scene.c_str(),
               size, r.tolerance, 100.0 * r.changed.input, 100.0 * r.changed.warp_rows, r.off.median(), r.off.mean(),
               r.on.median(), r.on.mean(), r.ratio(),
-              r.identical() ? "yes" : "no", psnr_text, stages_text(r.off).c_str(), stages_text(r.on).c_str());
+              !r.compared ? "n/a" : r.identical() ? "yes" : "no", psnr_text, stages_text(r.off).c_str(),
+              stages_text(r.on).c_str());
   if (!r.identical())
     std::printf("  first difference: frame %d, %s (%d of %d frames identical)\n", r.first_mismatch,
                 r.mismatch_at.c_str(), r.identical_frames, r.frames);
@@ -223,8 +244,11 @@ void emit(const SceneResult &r, const StageParams &p, const SceneRunInfo &info, 
   j.num("warp_rows", r.changed.warp_rows);
   j.num("off_median_ms", r.off.median()).num("off_mean_ms", r.off.mean());
   j.num("on_median_ms", r.on.median()).num("on_mean_ms", r.on.mean()).num("ratio_pct", r.ratio());
-  j.raw("identical", r.identical() ? "true" : "false").integer("identical_frames", r.identical_frames);
-  if (r.identical())
+  j.str("on", r.compared ? "adaptive=true" : "crop-bars=auto");
+  j.str("off", r.compared ? "adaptive=false" : "crop-bars=off");
+  j.raw("identical", !r.compared ? "null" : r.identical() ? "true" : "false");
+  j.integer("identical_frames", r.identical_frames);
+  if (r.identical() || !r.compared)
     j.raw("first_mismatch_frame", "null");
   else
     j.integer("first_mismatch_frame", r.first_mismatch).str("first_mismatch_at", r.mismatch_at);
@@ -244,7 +268,8 @@ int run_scenes(const SceneOptions &o, const StageParams &p, PixelFormat format, 
   std::printf("scene mode: the CPU chain (depth, filter, warp + pack), adaptive off and on in turn frame by frame;\n"
               "%d frames a sequence, the first the warm-up; ms a frame, the shortest of %d round(s).\n"
               "changed: input tiles that differ from the frame before; rows: source rows the warp renders again;\n"
-              "on/off: mean on / mean off; same: every output byte equal to adaptive=false's\n",
+              "on/off: mean on / mean off; same: every output byte equal to adaptive=false's\n"
+              "letterbox: on is crop-bars=auto, off crop-bars=off, both adaptive=false (changed: n/a)\n",
               o.frames, o.rounds);
   print_header();
   bool mismatch_at_zero = false;
@@ -257,13 +282,14 @@ int run_scenes(const SceneOptions &o, const StageParams &p, PixelFormat format, 
         continue;
       }
       for (const float tolerance : o.tolerances) {
-        SceneResult r = measure(p, frames, tolerance, o.rounds);
+        SceneResult r = scene == "letterbox" ? measure_crop(p, frames, o.rounds) : measure(p, frames, tolerance, o.rounds);
         r.scene = scene;
         r.size = s;
         r.note = note;
         print_row(r);
         emit(r, p, info, out);
-        if (tolerance == 0.f && !r.identical()) mismatch_at_zero = true;
+        if (tolerance == 0.f && r.compared && !r.identical()) mismatch_at_zero = true;
+        if (!r.compared) break;  // no tolerance in it: one row
       }
     }
   }

@@ -29,6 +29,15 @@ void copy_frame(const HostFrame &from, HostFrame &to) {
 
 void warp_failed() { throw std::runtime_error("the warp's frames do not fit"); }
 
+// DepthPlane::set_active: 0 in the plane outside r.
+void zero_outside(cv::Mat &plane, PixelRect r) {
+  if (r == whole_picture(plane.cols, plane.rows)) return;
+  plane.rowRange(0, r.y0).setTo(cv::Scalar(0));
+  plane.rowRange(r.y1, plane.rows).setTo(cv::Scalar(0));
+  plane(cv::Rect(0, r.y0, r.x0, r.height())).setTo(cv::Scalar(0));
+  plane(cv::Rect(r.x1, r.y0, plane.cols - r.x1, r.height())).setTo(cv::Scalar(0));
+}
+
 }  // namespace
 
 // ---- the warp's frames -------------------------------------------------------------
@@ -43,22 +52,52 @@ HostFrame WarpTarget::new_output() const { return HostFrame(format_, out_width_,
 
 // ---- adaptive=false --------------------------------------------------------------------
 
-FullChain::FullChain(const StageParams &p, int width, int height, PixelFormat input)
-    : p_(p),
+namespace {
+
+// The stages' automatic sizes are the frame's (frame_scaled), as the
+// elements make them.
+StageParams frame_scaled(StageParams p, int width, int height) {
+  p.depth = p3d::frame_scaled(p.depth, width, height);
+  p.filter = p3d::frame_scaled(p.filter, width, height);
+  return p;
+}
+
+}  // namespace
+
+FullChain::FullChain(const StageParams &p, int width, int height, PixelFormat input, bool crop)
+    : p_(frame_scaled(p, width, height)),
+      crop_(crop),
       depth_(height, width, CV_32FC1, cv::Scalar(0)),
       filtered_(height, width, CV_32FC1, cv::Scalar(0)),
       target_(p.pack, width, height, input),
-      out_(target_.new_output()) {}
+      out_(target_.new_output()),
+      rect_(whole_picture(width, height)) {}
 
 void FullChain::frame(const FrameView &src, StageMs *ms) {
   Stopwatch sw;
-  estimator_.estimate(p_.depth, src, depth_view_of(depth_));
+  if (crop_) {
+    bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_);
+    bars_.observe(counts_);
+  }
+  const PixelRect rect = crop_ ? bars_.active(src.width, src.height) : whole_picture(src.width, src.height);
+  if (rect != rect_) {  // pseudo3ddepth's frame_rect: a new picture, a new history; 0 outside
+    estimator_.reset();
+    depth_.setTo(cv::Scalar(0));
+    filtered_.setTo(cv::Scalar(0));
+    if (rect.x0 != 0 || rect.x1 != src.width)
+      active_pair_ = HostFrame(target_.pair(out_.view()).format, 2 * rect.width(), rect.height());
+    rect_ = rect;
+  }
+  const FrameView active = sub_frame(src, rect);
+  estimator_.estimate(p_.depth, active, sub_image(depth_view_of(depth_), rect));
   ms->depth = sw.lap();
-  bilateral_filter_cpu(p_.filter, src, const_view(depth_), depth_view_of(filtered_));
+  bilateral_filter_cpu(p_.filter, active, sub_image(const_view(depth_), rect), sub_image(depth_view_of(filtered_), rect));
   ms->filter = sw.lap();
   const FrameView dst = out_.view(), pair = target_.pair(dst);
-  if (warp_render_cpu(p_.warp, src, p_.yuv, const_view(filtered_), pair, warp_scratch_) < 0) warp_failed();
-  if (!target_.pair_is_output()) pack_cpu(p_.pack, pair, dst);
+  const ActiveArea area{rect, active_pair_.view()};
+  if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(filtered_), pair, dst, warp_scratch_, nullptr,
+                            &area) < 0)
+    warp_failed();
   ms->warp = sw.lap();
 }
 
@@ -78,7 +117,7 @@ PlanePool::Plane PlanePool::acquire() {
 // Two planes a pool: the one the stage last handed on (which the next stage
 // still holds as its previous input) and the new one.
 AdaptiveChain::AdaptiveChain(const StageParams &p, int width, int height, PixelFormat input, float tolerance)
-    : p_(p),
+    : p_(frame_scaled(p, width, height)),
       tolerance_(tolerance),
       depth_pool_(width, height, 2),
       filter_pool_(width, height, 2),
@@ -100,15 +139,29 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
              rows.empty() ? 0.0 : static_cast<double>(std::count(rows.begin(), rows.end(), 1)) / rows.size()};
 }
 
-// gstpseudo3ddepth.cpp process_ip: only the blocks of changed tiles are
-// summed again; when no block depth changed the frame gets the previous
-// plane itself.
+// gstpseudo3ddepth.cpp process_ip: the bars counted (again only where the
+// frame changed) and decided; only the blocks of changed tiles are summed
+// again; when no block depth changed the frame gets the previous plane
+// itself. A new rect starts the estimator and the planes over.
 AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *changes) {
   *changes = depth_history_.compare(src, tolerance_);
-  estimator_.estimate_blocks(p_.depth, src, changes);
+  if (changes->any() || counts_.rows.empty()) bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_);
+  bars_.observe(counts_);
+  const PixelRect rect = bars_.active(src.width, src.height);
+  if (rect != rect_) {
+    estimator_.reset();
+    depth_last_.reset();
+    rect_ = rect;
+    changes->mark_all();
+    if (rect.x0 != 0 || rect.x1 != src.width)
+      active_pair_ = HostFrame(target_.pair(out_.view()).format, 2 * rect.width(), rect.height());
+  }
+  const ChangeMap active_changes = changes->cropped(rect);
+  estimator_.estimate_blocks(p_.depth, sub_frame(src, rect), &active_changes);
   if (estimator_.output_changed() || !depth_last_) {
     Plane plane = depth_pool_.acquire();
-    estimator_.expand(depth_view_of(*plane));
+    zero_outside(*plane, rect);
+    estimator_.expand(sub_image(depth_view_of(*plane), rect));
     depth_last_ = std::move(plane);
   }
   return depth_last_;
@@ -116,16 +169,21 @@ AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *chang
 
 // gstpseudo3dfilter.cpp filter_adaptive: the tiles a changed guide or depth
 // reaches are filtered into a new plane holding the rest of the previous
-// output; none reached: the previous output itself.
+// output; none reached: the previous output itself. Inside the rect.
 AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &depth, ChangeMap *changes) {
   const ImageView<const float> prev_depth = filter_depth_ ? const_view(*filter_depth_) : ImageView<const float>();
   *changes = filter_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
   filter_depth_ = depth;
-  const bool whole = !filter_last_;
+  const bool whole = !filter_last_ || filter_rect_ != rect_;
+  filter_rect_ = rect_;
   Plane out = filter_pool_.acquire();
-  const ImageView<const float> prev_out = filter_last_ ? const_view(*filter_last_) : ImageView<const float>();
-  if (bilateral_filter_changed_cpu(p_.filter, src, const_view(*depth), prev_out, depth_view_of(*out),
-                                   whole ? nullptr : changes, filter_scratch_))
+  zero_outside(*out, rect_);
+  const ImageView<const float> prev_out =
+      filter_last_ ? sub_image(const_view(*filter_last_), rect_) : ImageView<const float>();
+  const ChangeMap active_changes = changes->cropped(rect_);
+  if (bilateral_filter_changed_cpu(p_.filter, sub_frame(src, rect_), sub_image(const_view(*depth), rect_), prev_out,
+                                   sub_image(depth_view_of(*out), rect_), whole ? nullptr : &active_changes,
+                                   filter_scratch_))
     filter_last_ = std::move(out);
   if (whole) changes->mark_all();
   return filter_last_;
@@ -138,11 +196,13 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
   const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
   *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
   warp_depth_ = depth;
-  const bool whole = !have_output_ || changes->all_rows();
+  const bool whole = !have_output_ || changes->all_rows() || warp_rect_ != rect_;
+  warp_rect_ = rect_;
   if (!whole) copy_frame(kept_, out_);
   const FrameView dst = out_.view();
+  const ActiveArea area{rect_, active_pair_.view()};
   if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst, warp_scratch_,
-                            whole ? nullptr : changes) < 0)
+                            whole ? nullptr : changes, &area) < 0)
     warp_failed();
   // gst/stage_adaptive.cpp OutputHistory::update.
   const bool first = !seen_;

@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 
 #include "adaptive.h"
+#include "bars.h"
 #include "bench_gpu.h"  // StageParams
 #include "depth_estimate.h"
 #include "host_frame.h"
@@ -61,19 +62,27 @@ class WarpTarget {
   HostFrame pair_;
 };
 
+// crop: crop-bars=auto, as pseudo3ddepth, pseudo3dfilter and pseudo3dwarp
+// run it: the bars decided from the frames so far (BarTracker, the
+// counts taken with the depth), each stage on the picture between them.
 class FullChain {
  public:
-  FullChain(const StageParams &p, int width, int height, PixelFormat input);
+  FullChain(const StageParams &p, int width, int height, PixelFormat input, bool crop = false);
   void frame(const FrameView &src, StageMs *ms);
   const HostFrame &output() const { return out_; }
 
  private:
   StageParams p_;
+  bool crop_;
   DepthEstimatorCpu estimator_;
   cv::Mat depth_, filtered_;
   WarpTarget target_;
   HostFrame out_;
   WarpCpuScratch warp_scratch_;
+  BarTracker bars_;
+  BarCounts counts_;
+  PixelRect rect_;
+  HostFrame active_pair_;  // the views of a rect narrower than the frame
 };
 
 // Depth planes of one size, recycled once nobody holds them: the elements'
@@ -91,6 +100,7 @@ class PlanePool {
   std::vector<Plane> planes_;
 };
 
+// With crop-bars=auto, the elements' default, as FullChain's crop.
 class AdaptiveChain {
  public:
   AdaptiveChain(const StageParams &p, int width, int height, PixelFormat input, float tolerance);
@@ -115,14 +125,20 @@ class AdaptiveChain {
 
   StageParams p_;
   float tolerance_;
-  // pseudo3ddepth: the frame history, the estimator and the last plane.
+  // pseudo3ddepth: the frame history, the estimator and the last plane;
+  // the bars and the rect the depth was estimated in.
   FrameHistory depth_history_;
   DepthEstimatorCpu estimator_;
   PlanePool depth_pool_;
   Plane depth_last_;
+  BarTracker bars_;
+  BarCounts counts_;
+  PixelRect rect_;
+  HostFrame active_pair_;
   // pseudo3dfilter: its inputs (the depth plane held), its last output.
   StageInputs filter_inputs_;
   Plane filter_depth_, filter_last_;
+  PixelRect filter_rect_;
   PlanePool filter_pool_;
   BilateralScratch filter_scratch_;
   // pseudo3dwarp: its inputs, the output buffer and the copy of the
@@ -132,6 +148,7 @@ class AdaptiveChain {
   Plane warp_depth_;
   WarpTarget target_;
   HostFrame out_, kept_;  // the new output buffer; the element's copy of the previous output
+  PixelRect warp_rect_;
   bool have_output_ = false, seen_ = false;
   WarpCpuScratch warp_scratch_;
   Shares shares_;

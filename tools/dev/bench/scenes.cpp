@@ -53,7 +53,7 @@ cv::Mat synthetic_bgr(int w, int h, int k, uint64_t layout_seed) {
 }
 
 const std::vector<std::string> &scene_kinds() {
-  static const std::vector<std::string> kinds = {"still", "screen", "camera", "pan", "snow", "cuts"};
+  static const std::vector<std::string> kinds = {"still", "screen", "camera", "pan", "snow", "cuts", "letterbox"};
   return kinds;
 }
 
@@ -245,6 +245,17 @@ bool make_scene(const std::string &kind, Size s, int n, PixelFormat format, cons
     make = snow_frames(s);
   } else if (kind == "cuts") {
     make = cut_frames(s);
+  } else if (kind == "letterbox") {
+    // A 2.39:1 film (the pan) in black bars: its height a multiple of 8,
+    // as encoders store such films (1920 x 800, 3840 x 1608).
+    const int active = std::min(s.height, static_cast<int>(std::lround(s.width / 2.39 / 8)) * 8);
+    const int top = (s.height - active) / 2;
+    const FrameFn film = pan_frames(Size{s.width, active}, n);
+    make = [film, top, s, active](int k) {
+      cv::Mat framed;
+      cv::copyMakeBorder(film(k), framed, top, s.height - active - top, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+      return framed;
+    };
   } else {
     *why = "unknown scene '" + kind + "'";
     return false;

@@ -30,7 +30,9 @@ cv::Mat synthetic_bgr(int w, int h, int k, uint64_t layout_seed = 12345);
 //   camera  vtest.avi (static camera, people walking), resized;
 //   pan     a large picture panned a few pixels a frame;
 //   snow    new random noise every frame;
-//   cuts    moving pictures that cut to an unrelated one every few frames.
+//   cuts    moving pictures that cut to an unrelated one every few frames;
+//   letterbox  the pan as a 2.39:1 film in black bars (timed crop-bars=auto
+//           against off, scene_bench.h).
 const std::vector<std::string> &scene_kinds();
 
 // n frames of `kind` at size s in `format` into *frames. video: the file the

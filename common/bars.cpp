@@ -1,0 +1,223 @@
+#include "bars.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+
+#include <opencv2/core.hpp>
+
+namespace p3d {
+
+namespace {
+
+// The bright pixels of row y into *row and the column counts `cols`.
+void count_row(const FrameView &f, int y, int luma_threshold, uint32_t *row, uint32_t *cols) {
+  uint32_t n = 0;
+  if (is_packed_rgb(f.format)) {
+    for (int x = 0; x < f.width; ++x) {
+      const uint32_t bright = bar_pixel_bright(f, x, y, luma_threshold);
+      n += bright;
+      cols[x] += bright;
+    }
+  } else {
+    // Y' compared straight: bar_pixel_bright() for 4:2:0, in a loop the
+    // compiler vectorises.
+    const uint8_t *luma = f.plane[0] + static_cast<size_t>(y) * f.stride[0];
+    for (int x = 0; x < f.width; ++x) {
+      const uint32_t bright = static_cast<int>(luma[x]) > luma_threshold;
+      n += bright;
+      cols[x] += bright;
+    }
+  }
+  *row = n;
+}
+
+}  // namespace
+
+// Bands of rows in parallel, each with column counts of its own, added up
+// at the end (integers: the order does not matter).
+void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *counts) {
+  counts->rows.assign(static_cast<size_t>(frame.height), 0);
+  counts->cols.assign(static_cast<size_t>(frame.width), 0);
+  constexpr int kBandRows = 64;
+  const int bands = (frame.height + kBandRows - 1) / kBandRows;
+  std::vector<std::vector<uint32_t>> band_cols(static_cast<size_t>(bands));
+  cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range &range) {
+    for (int b = range.start; b < range.end; ++b) {
+      std::vector<uint32_t> &cols = band_cols[static_cast<size_t>(b)];
+      cols.assign(static_cast<size_t>(frame.width), 0);
+      for (int y = b * kBandRows; y < std::min(frame.height, (b + 1) * kBandRows); ++y)
+        count_row(frame, y, luma_threshold, &counts->rows[static_cast<size_t>(y)], cols.data());
+    }
+  });
+  for (const std::vector<uint32_t> &cols : band_cols)
+    for (int x = 0; x < frame.width; ++x) counts->cols[static_cast<size_t>(x)] += cols[static_cast<size_t>(x)];
+}
+
+namespace {
+
+// Pixels [x0, x1) of row y of the source into both views of the pair:
+// load_rgba's bytes as store_rgba writes them, two pixels a chroma sample.
+void source_into_views(const FrameView &src, const YuvToRgb &m, int y, int x0, int x1, const FrameView &pair) {
+  uint8_t *left = pair.plane[0] + static_cast<size_t>(y) * pair.stride[0];
+  uint8_t *right = left + 4 * static_cast<size_t>(src.width);
+  const bool bgr = is_bgr_order(pair.format);
+  auto put = [&](int x, uint32_t w) {
+    if (bgr) w = swap_rb_word(w);
+    std::memcpy(left + 4 * static_cast<size_t>(x), &w, 4);
+    std::memcpy(right + 4 * static_cast<size_t>(x), &w, 4);
+  };
+  int x = x0;
+  if (x < x1 && x % 2) {  // an odd start: one pixel
+    put(x, rgba_word(load_rgba(src, x, y, m)));
+    ++x;
+  }
+  for (; x + 1 < x1; x += 2) {
+    uint32_t w[2] = {0, 0};
+    load_rgba_pair_words(src, x, y, m, w);
+    put(x, w[0]);
+    put(x + 1, w[1]);
+  }
+  if (x < x1) put(x, rgba_word(load_rgba(src, x, y, m)));
+}
+
+}  // namespace
+
+void views_outside_cpu(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
+                       const std::vector<uint8_t> *rows) {
+  cv::parallel_for_(cv::Range(0, src.height), [&](const cv::Range &range) {
+    for (int y = range.start; y < range.end; ++y) {
+      if (rows && !(*rows)[y]) continue;
+      if (y < active.y0 || y >= active.y1) {
+        source_into_views(src, m, y, 0, src.width, pair);
+        continue;
+      }
+      source_into_views(src, m, y, 0, active.x0, pair);
+      source_into_views(src, m, y, active.x1, src.width, pair);
+    }
+  });
+}
+
+void place_active_pair_cpu(const FrameView &active_pair, PixelRect active, const FrameView &pair,
+                           const std::vector<uint8_t> *rows) {
+  const int view_width = pair.width / 2, w = active.width();
+  for (int y = 0; y < active.height(); ++y) {
+    if (rows && !(*rows)[y]) continue;
+    const uint8_t *from = active_pair.plane[0] + static_cast<size_t>(y) * active_pair.stride[0];
+    uint8_t *to = pair.plane[0] + static_cast<size_t>(active.y0 + y) * pair.stride[0];
+    std::memcpy(to + 4 * active.x0, from, 4 * static_cast<size_t>(w));
+    std::memcpy(to + 4 * (view_width + active.x0), from + 4 * static_cast<size_t>(w), 4 * static_cast<size_t>(w));
+  }
+}
+
+DepthParams frame_scaled(const DepthParams &p, int frame_width, int frame_height) {
+  DepthParams s = p;
+  if (p.block_size == 0) s.block_size = effective_block_size(p, frame_width, frame_height);
+  return s;
+}
+
+BilateralParams frame_scaled(const BilateralParams &p, int frame_width, int frame_height) {
+  BilateralParams s = p;
+  if (p.scale == 0) s.scale = bilateral_effective_scale(bilateral_sanitize(p), frame_width, frame_height);
+  return s;
+}
+
+WarpParams active_warp_params(const WarpParams &params, int frame_width, int active_width) {
+  WarpParams p = params;
+  if (active_width > 0 && active_width < frame_width)
+    p.max_disparity = std::min(kMaxDisparityPercent, params.max_disparity * static_cast<float>(frame_width) /
+                                                         static_cast<float>(active_width));
+  return p;
+}
+
+namespace {
+
+// The first and one past the last index whose count is over `allowed`
+// (first == last: none).
+void picture_span(const std::vector<uint32_t> &counts, uint32_t allowed, int *first, int *last) {
+  const int n = static_cast<int>(counts.size());
+  int a = 0, b = n;
+  while (a < n && counts[a] <= allowed) ++a;
+  while (b > a && counts[b - 1] <= allowed) --b;
+  *first = a;
+  *last = b;
+}
+
+int align_down(int v) { return v / kBarAlign * kBarAlign; }
+
+// Bars on opposite sides of about equal size (a letterbox, a pillarbox or
+// both), the picture at least half the frame each way.
+bool plausible(const PixelRect &r, int width, int height) {
+  if (r.empty() || 2 * r.width() < width || 2 * r.height() < height) return false;
+  const int slack_x = std::max(2 * kBarAlign, width / 32), slack_y = std::max(2 * kBarAlign, height / 32);
+  return std::abs(r.x0 - (width - r.x1)) <= slack_x && std::abs(r.y0 - (height - r.y1)) <= slack_y;
+}
+
+}  // namespace
+
+PixelRect measure_active_rect(const BarCounts &counts) {
+  const int width = static_cast<int>(counts.cols.size()), height = static_cast<int>(counts.rows.size());
+  int y0, y1, x0, x1;
+  picture_span(counts.rows, static_cast<uint32_t>(width / 64), &y0, &y1);
+  picture_span(counts.cols, static_cast<uint32_t>(height / 64), &x0, &x1);
+  if (y0 >= y1 || x0 >= x1) return PixelRect{};
+  return PixelRect{align_down(x0), align_down(y0), x1, y1};
+}
+
+void BarTracker::observe(const BarCounts &counts) {
+  const int width = static_cast<int>(counts.cols.size()), height = static_cast<int>(counts.rows.size());
+  if (width != width_ || height != height_) {
+    reset();
+    width_ = width;
+    height_ = height;
+  }
+  // A scene cut: the rows' bright counts moved by an eighth of the frame's
+  // pixels from one frame to the next.
+  bool cut = false;
+  if (last_rows_.size() == counts.rows.size()) {
+    long long moved = 0;
+    for (size_t y = 0; y < counts.rows.size(); ++y)
+      moved += std::llabs(static_cast<long long>(counts.rows[y]) - static_cast<long long>(last_rows_[y]));
+    cut = 8 * moved > static_cast<long long>(width) * height;
+  }
+  last_rows_ = counts.rows;
+  const PixelRect measured = measure_active_rect(counts);
+  if (!plausible(measured, width, height)) {
+    candidate_frames_ = 0;
+    return;
+  }
+  if (!decided_ || cut) {
+    active_ = measured;
+    decided_ = true;
+    candidate_frames_ = 0;
+    return;
+  }
+  if (measured == active_) {
+    candidate_frames_ = 0;
+    return;
+  }
+  if (candidate_frames_ > 0 && measured == candidate_) {
+    ++candidate_frames_;
+  } else {
+    candidate_ = measured;
+    candidate_frames_ = 1;
+  }
+  if (candidate_frames_ >= kBarConfirmFrames) {
+    active_ = measured;
+    candidate_frames_ = 0;
+  }
+}
+
+PixelRect BarTracker::active(int width, int height) const {
+  if (!decided_ || width != width_ || height != height_) return whole_picture(width, height);
+  return active_;
+}
+
+void BarTracker::reset() {
+  decided_ = false;
+  width_ = height_ = 0;
+  candidate_frames_ = 0;
+  last_rows_.clear();
+}
+
+}  // namespace p3d

@@ -1,0 +1,121 @@
+// Letterbox and pillarbox bars: the black bands a film of another aspect
+// ratio gets in the frame. With crop-bars=auto the 3D stages run on the
+// picture between them (the active rect) and hand the bars on as they are,
+// so the bars stay black in both views and no depth edge comes from them
+// (docs/architecture.md, "Bars").
+//
+//  1. Counts. Per row and per column, the pixels brighter than the bar
+//     level (bar_pixel_bright()): bar_counts_cpu, and bar_counts_gpu on
+//     the device (cuda/bars_gpu.h), the same integers.
+//  2. Measure. The picture's rows and columns are those with more bright
+//     pixels than a 1/64 share of their length (noise in a compressed bar
+//     stays under it); measure_active_rect() moves their bounding rect's
+//     top left corner up and left onto kBarAlign cells.
+//  3. Decide. BarTracker adopts a measured rect only when it is plausible
+//     (bars on opposite sides of about equal size, at least half of the
+//     frame each way) and it has been measured on kBarConfirmFrames
+//     frames in a row; a darker or asymmetric frame (a fade to black, a
+//     night sky, a subtitle in a bar) keeps the rect. A scene cut or a
+//     reset adopts the next plausible measure at once.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "bilateral.h"
+#include "depth_estimate.h"
+#include "frame.h"
+#include "warp.h"
+
+namespace p3d {
+
+// A pixel is part of the picture when its brightest R'G'B' channel, or on
+// Y'CbCr its Y' in 8-bit R'G'B' levels, is over this level.
+constexpr int kBarLevel = 24;
+// The active rect's top left corner lies on multiples of this many
+// pixels: a whole 4:2:0 chroma sample and a corner of the cells of the
+// depth grids the GPU stages hand on (blocks and filter cells up to 8
+// pixels). The bottom right corner is where the picture ends.
+constexpr int kBarAlign = 8;
+// Frames a new rect must be measured in a row before it is adopted.
+constexpr int kBarConfirmFrames = 8;
+
+// The Y' value over which a Y'CbCr pixel is brighter than kBarLevel.
+inline int bar_luma_threshold(const YuvToRgb &m) {
+  return static_cast<int>(m.y_offset + static_cast<float>(kBarLevel) / m.y_scale);
+}
+
+P3D_HD bool bar_pixel_bright(const FrameView &f, int x, int y, int luma_threshold) {
+  if (is_packed_rgb(f.format)) {
+    const uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
+    const int brightest = p[0] > p[1] ? (p[0] > p[2] ? p[0] : p[2]) : (p[1] > p[2] ? p[1] : p[2]);
+    return brightest > kBarLevel;
+  }
+  return f.plane[0][static_cast<size_t>(y) * f.stride[0] + x] > luma_threshold;
+}
+
+// Bright pixels of each row (height values) and of each column (width).
+struct BarCounts {
+  std::vector<uint32_t> rows, cols;
+};
+void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *counts);
+
+// The picture's bounding rect, its top left corner moved onto kBarAlign
+// cells; empty when no row has picture.
+PixelRect measure_active_rect(const BarCounts &counts);
+
+// Both views of the pixels outside `active`: the source converted
+// (load_rgba), unshifted. pair: the views side by side (packed RGB, twice
+// the source's width); rows: one flag a source row (null: all rows).
+void views_outside_cpu(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
+                       const std::vector<uint8_t> *rows);
+// Copies the pair of the active picture (packed RGB, 2 w x h: the left
+// view, then the right) into its place in the pair of the frame (left view
+// at (x0, y0), right view at (W + x0, y0)); rows: one flag a row of the
+// active pair (null: all).
+void place_active_pair_cpu(const FrameView &active_pair, PixelRect active, const FrameView &pair,
+                           const std::vector<uint8_t> *rows);
+
+// Where the warp renders the views (warp_pack_changed_cpu() and
+// ActiveWarpGpu): from the picture inside `rect` only, with the parallax
+// of the whole frame's width (active_warp_params()); outside it both
+// views are the source (views_outside_cpu). Where the rect is narrower
+// than the frame the views are rendered into `pair` (packed RGB,
+// 2 w x h, kept between calls by an adaptive caller) and placed from
+// there; a rect of the frame's width renders into the frame pair's rows.
+struct ActiveArea {
+  PixelRect rect;
+  FrameView pair;
+};
+
+// The warp's parameters for a picture `active_width` wide inside a frame
+// `frame_width` wide: the same parallax in pixels (max_disparity is a
+// share of the width), within kMaxDisparityPercent.
+WarpParams active_warp_params(const WarpParams &params, int frame_width, int active_width);
+
+// The automatic sizes of the whole frame (the depth's block, the filter's
+// grid step) made explicit, for stages that run inside an active rect: a
+// film in bars is estimated and filtered at the scale of its frame, as
+// without the crop. Parameters that set them keep theirs.
+DepthParams frame_scaled(const DepthParams &p, int frame_width, int frame_height);
+BilateralParams frame_scaled(const BilateralParams &p, int frame_width, int frame_height);
+
+class BarTracker {
+ public:
+  // Takes one frame's counts; the rect for that frame and those that
+  // follow is active() afterwards.
+  void observe(const BarCounts &counts);
+  // The rect the 3D stages run on: the whole picture until a measure was
+  // adopted (and after a reset or a change of size).
+  PixelRect active(int width, int height) const;
+  void reset();
+
+ private:
+  bool decided_ = false;
+  int width_ = 0, height_ = 0;
+  PixelRect active_, candidate_;
+  int candidate_frames_ = 0;
+  std::vector<uint32_t> last_rows_;  // the previous frame's row counts (cut detection)
+};
+
+}  // namespace p3d
