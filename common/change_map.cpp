@@ -238,8 +238,17 @@ ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b) {
 }
 
 void copy_plane_rect(ImageView<const float> from, ImageView<float> to, PixelRect r) {
-  for (int y = r.y0; y < r.y1; ++y)
-    std::memcpy(to.row(y) + r.x0, from.row(y) + r.x0, sizeof(float) * static_cast<size_t>(r.x1 - r.x0));
+  cv::parallel_for_(cv::Range(r.y0, r.y1), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      std::memcpy(to.row(y) + r.x0, from.row(y) + r.x0, sizeof(float) * static_cast<size_t>(r.x1 - r.x0));
+  });
+}
+
+void copy_rows(uint8_t *to, size_t to_stride, const uint8_t *from, size_t from_stride, size_t row_bytes, int rows) {
+  cv::parallel_for_(cv::Range(0, rows), [&](const cv::Range &range) {
+    for (int y = range.start; y < range.end; ++y)
+      std::memcpy(to + static_cast<size_t>(y) * to_stride, from + static_cast<size_t>(y) * from_stride, row_bytes);
+  });
 }
 
 }  // namespace p3d

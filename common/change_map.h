@@ -110,4 +110,11 @@ ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b);
 // the same size.
 void copy_plane_rect(ImageView<const float> from, ImageView<float> to, PixelRect r);
 
+// Copies `rows` rows of row_bytes bytes between two strided buffers. The
+// copies of frames the adaptive stages keep and restore are memory-bound
+// and, on a machine of many cores, a copy on one core costs more than a
+// stage's work on an unchanged frame: bands of rows are copied in
+// parallel.
+void copy_rows(uint8_t *to, size_t to_stride, const uint8_t *from, size_t from_stride, size_t row_bytes, int rows);
+
 }  // namespace p3d

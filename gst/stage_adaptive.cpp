@@ -34,13 +34,12 @@ namespace {
 void copy_rows(const GstVideoFrame *frame, guint plane, const uint8_t *from, uint8_t *to, bool into_frame) {
   const gsize row = static_cast<gsize>(GST_VIDEO_FRAME_COMP_WIDTH(frame, plane)) *
                     GST_VIDEO_FRAME_COMP_PSTRIDE(frame, plane);
-  const gint stride = GST_VIDEO_FRAME_PLANE_STRIDE(frame, plane);
-  for (gint y = 0; y < GST_VIDEO_FRAME_COMP_HEIGHT(frame, plane); ++y) {
-    if (into_frame)
-      std::memcpy(to + static_cast<gsize>(y) * stride, from + static_cast<gsize>(y) * row, row);
-    else
-      std::memcpy(to + static_cast<gsize>(y) * row, from + static_cast<gsize>(y) * stride, row);
-  }
+  const gsize stride = static_cast<gsize>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, plane));
+  const gint rows = GST_VIDEO_FRAME_COMP_HEIGHT(frame, plane);
+  if (into_frame)
+    p3d::copy_rows(to, stride, from, row, row, rows);
+  else
+    p3d::copy_rows(to, row, from, stride, row, rows);
 }
 
 }  // namespace

@@ -145,7 +145,9 @@ SceneResult measure(const StageParams &p, const std::vector<HostFrame> &frames, 
   int differing = 0;
   const int w = frames[0].width(), h = frames[0].height();
   const PixelFormat format = frames[0].format();
-  auto make_full = [&] { return FullChain(p, w, h, format); };
+  // Both with crop-bars=auto, as the elements default (no scene but the
+  // letterbox has bars: the counts are the cost both pay).
+  auto make_full = [&] { return FullChain(p, w, h, format, true); };
   auto make_adaptive = [&] { return AdaptiveChain(p, w, h, format, tolerance); };
   run_round(frames, &r, make_full, make_adaptive, [&](const FullChain &full, const AdaptiveChain &adaptive, size_t k) {
     if (k > 0) {

@@ -16,14 +16,14 @@ namespace {
 
 ImageView<const float> const_view(const cv::Mat &m) { return depth_view_of(m); }
 
-// gst_video_frame_copy of the previous output into this frame's: every
-// plane, padding and all (both frames have one geometry).
+// OutputHistory's copies (gst/stage_adaptive.cpp): every plane's rows, in
+// parallel bands (both frames have one geometry).
 void copy_frame(const HostFrame &from, HostFrame &to) {
   const FrameView a = from.view(), b = to.view();
   for (int i = 0; i < frame_plane_count(a.format); ++i) {
     int row_bytes = 0, rows = 0;
     frame_plane_size(a.format, a.width, a.height, i, &row_bytes, &rows);
-    std::memcpy(b.plane[i], a.plane[i], static_cast<size_t>(a.stride[i]) * rows);
+    copy_rows(b.plane[i], b.stride[i], a.plane[i], a.stride[i], static_cast<size_t>(row_bytes), rows);
   }
 }
 
