@@ -1,11 +1,14 @@
 #include "element_helpers.h"
 
+#include <random>
+
 #include "test_data.h"
 
 #include <cstdlib>
 #include <cstring>
 
 #include <glib/gstdio.h>
+#include <opencv2/imgproc.hpp>
 
 #include "depth_meta.h"
 
@@ -238,6 +241,21 @@ std::string current_caps(GstPad *pad) {
   g_free(s);
   gst_caps_unref(caps);
   return out;
+}
+
+cv::Mat textured_picture(int w, int h, uint32_t seed) {
+  std::mt19937 rng(seed);
+  cv::Mat bgr(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(40 + (x * 150) / w + rng() % 12),
+                                          static_cast<uint8_t>(60 + (y * 130) / h + rng() % 12),
+                                          static_cast<uint8_t>(90 + rng() % 12));
+  for (int i = 0; i < 5; ++i) {
+    const cv::Rect r(static_cast<int>(rng() % w), static_cast<int>(rng() % h), w / 5, h / 4);
+    cv::rectangle(bgr, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
+  }
+  return bgr;
 }
 
 }  // namespace p3d::test

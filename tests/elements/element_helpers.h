@@ -43,6 +43,10 @@ DepthPlaneInfo buffer_depth_info(GstBuffer *buf);
 // stopped (negotiated caps and sink statistics are still there).
 std::string run_to_eos(const std::string &launch, int timeout_s = 60,
                        const std::function<void(GstElement *pipeline)> &at_eos = {});
+// A picture (BGR) with edges for the depth and texture for the warp:
+// ramps with noise and five rectangles of random colours.
+cv::Mat textured_picture(int w, int h, uint32_t seed);
+
 // Folder for files tests write (pictures of outputs).
 std::string output_dir();
 

@@ -24,27 +24,12 @@ using namespace p3d::test;
 
 namespace {
 
-// A picture with edges for the depth and texture for the warp.
-cv::Mat base_picture(int w, int h, uint32_t seed) {
-  std::mt19937 rng(seed);
-  cv::Mat bgr(h, w, CV_8UC3);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(40 + (x * 150) / w + rng() % 12),
-                                          static_cast<uint8_t>(60 + (y * 130) / h + rng() % 12),
-                                          static_cast<uint8_t>(90 + rng() % 12));
-  for (int i = 0; i < 5; ++i) {
-    const cv::Rect r(static_cast<int>(rng() % w), static_cast<int>(rng() % h), w / 5, h / 4);
-    cv::rectangle(bgr, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
-  }
-  return bgr;
-}
 
 // A sequence of the kinds a stream has: the same frame again, a small
 // object moving, a big change, a cut to another picture and back.
 std::vector<cv::Mat> sequence(int w, int h, uint32_t seed) {
   std::vector<cv::Mat> frames;
-  cv::Mat cur = base_picture(w, h, seed);
+  cv::Mat cur = textured_picture(w, h, seed);
   std::mt19937 rng(seed + 1);
   for (int k = 0; k < 14; ++k) {
     cv::Mat next = cur.clone();
@@ -59,7 +44,7 @@ std::vector<cv::Mat> sequence(int w, int h, uint32_t seed) {
         cv::rectangle(next, cv::Rect(w / 4, h / 5, w / 2, h / 2), cv::Scalar(rng() % 256, 30, 200), cv::FILLED);
         break;
       }
-      case 5: next = base_picture(w, h, seed + 100 + k); break;  // a cut
+      case 5: next = textured_picture(w, h, seed + 100 + k); break;  // a cut
       default: next.at<cv::Vec3b>(h / 2, w / 2) = cv::Vec3b(1, 2, 3); break;  // one pixel
     }
     frames.push_back(next);
@@ -274,7 +259,7 @@ TEST(AdaptiveElements, MemoryStaysFlatOverALongRun) {
   const int w = 64, h = 48;
   GstHarness *hx = gst_harness_new_parse("pseudo3dconvert processing=cpu layout=anaglyph");
   gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::I420, w, h).c_str());
-  cv::Mat pic = base_picture(w, h, 2);
+  cv::Mat pic = textured_picture(w, h, 2);
   long after_warmup = 0;
   for (int k = 0; k < 3000; ++k) {
     cv::rectangle(pic, cv::Rect(k % (w - 8), (k / 7) % (h - 8), 8, 8), cv::Scalar(k % 256, 90, 200), cv::FILLED);

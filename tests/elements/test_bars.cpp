@@ -28,25 +28,10 @@ using namespace p3d::test;
 
 namespace {
 
-// A picture with edges and texture.
-cv::Mat picture(int w, int h, uint32_t seed) {
-  std::mt19937 rng(seed);
-  cv::Mat bgr(h, w, CV_8UC3);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(60 + (x * 150) / w + rng() % 12),
-                                          static_cast<uint8_t>(70 + (y * 130) / h + rng() % 12),
-                                          static_cast<uint8_t>(90 + rng() % 12));
-  for (int i = 0; i < 4; ++i) {
-    const cv::Rect r(static_cast<int>(rng() % w), static_cast<int>(rng() % h), w / 5, h / 4);
-    cv::rectangle(bgr, r, cv::Scalar(60 + rng() % 190, 60 + rng() % 190, 60 + rng() % 190), cv::FILLED);
-  }
-  return bgr;
-}
 
 // A film: a picture with a box moving over it.
 std::vector<cv::Mat> film(int w, int h, int frames, uint32_t seed) {
-  const cv::Mat base = picture(w, h, seed);
+  const cv::Mat base = textured_picture(w, h, seed);
   std::vector<cv::Mat> out;
   for (int k = 0; k < frames; ++k) {
     cv::Mat f = base.clone();
@@ -218,7 +203,7 @@ TEST(CropBars, AdaptiveGivesTheSameBytes) {
   // A letterbox and a pillarbox, each with a cut to a full frame and back.
   for (const bool pillar : {false, true}) {
     std::vector<cv::Mat> frames = pillar ? in_bars(film(96, 120, 12, 11), 0, 32) : in_bars(film(160, 80, 12, 11), 24, 0);
-    const cv::Mat full = picture(160, pillar ? 120 : 128, 12);
+    const cv::Mat full = textured_picture(160, pillar ? 120 : 128, 12);
     for (int k = 6; k < 8; ++k) frames[k] = full;
     for (const std::string chain : {"pseudo3dconvert processing=cpu layout=side-by-side-half",
                                     "pseudo3dconvert processing=cpu layout=anaglyph fill=background"}) {
