@@ -5,7 +5,7 @@
 // (docs/architecture.md, "Bars").
 //
 //  1. Counts. Per row and per column, the pixels brighter than the bar
-//     level (bar_pixel_bright()): bar_counts_cpu, and bar_counts_gpu on
+//     level (bar_pixel_bright()): bar_counts_cpu, and BarCountsGpu on
 //     the device (cuda/bars_gpu.h), the same integers.
 //  2. Measure. The picture's rows and columns are those with more bright
 //     pixels than a 1/64 share of their length (noise in a compressed bar
@@ -15,8 +15,9 @@
 //     (bars on opposite sides of about equal size, at least half of the
 //     frame each way) and it has been measured on kBarConfirmFrames
 //     frames in a row; a darker or asymmetric frame (a fade to black, a
-//     night sky, a subtitle in a bar) keeps the rect. A scene cut or a
-//     reset adopts the next plausible measure at once.
+//     night sky, a subtitle in a bar) keeps the rect. The first frame, a
+//     scene cut (the rows' counts move by an eighth of the frame's pixels)
+//     and a reset adopt the next plausible measure at once.
 #pragma once
 
 #include <cstdint>

@@ -2,6 +2,8 @@
 
 #include <random>
 
+#include <gtest/gtest.h>
+
 #include "test_data.h"
 
 #include <cstdlib>
@@ -256,6 +258,26 @@ cv::Mat textured_picture(int w, int h, uint32_t seed) {
     cv::rectangle(bgr, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
   }
   return bgr;
+}
+
+void push_frames(const std::string &launch, PixelFormat f, const std::vector<cv::Mat> &frames,
+                 const std::function<void(GstBuffer *, GstHarness *)> &take,
+                 const std::function<void(int, GstHarness *)> &between) {
+  GstHarness *h = gst_harness_new_parse(launch.c_str());
+  gst_harness_set_src_caps_str(h, raw_caps(f, frames[0].cols, frames[0].rows).c_str());
+  for (size_t k = 0; k < frames.size(); ++k) {
+    if (between) between(static_cast<int>(k), h);
+    GstBuffer *in = buffer_from_frame(HostFrame::from_bgr(frames[k], f));
+    GST_BUFFER_PTS(in) = k * GST_SECOND / 25;
+    GstBuffer *b = gst_harness_push_and_pull(h, in);
+    if (!b) {
+      ADD_FAILURE() << launch << ": no output for frame " << k;
+      break;
+    }
+    take(b, h);
+    gst_buffer_unref(b);
+  }
+  gst_harness_teardown(h);
 }
 
 }  // namespace p3d::test

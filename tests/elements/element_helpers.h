@@ -43,6 +43,14 @@ DepthPlaneInfo buffer_depth_info(GstBuffer *buf);
 // stopped (negotiated caps and sink statistics are still there).
 std::string run_to_eos(const std::string &launch, int timeout_s = 60,
                        const std::function<void(GstElement *pipeline)> &at_eos = {});
+// Pushes every frame of `frames` (BGR, converted to f; PTS at 25 frames/s)
+// through a harness of `launch` and hands each output buffer to `take`
+// (which does not keep it); between(k, harness) runs before frame k. A
+// frame without output fails the test and ends the run.
+void push_frames(const std::string &launch, PixelFormat f, const std::vector<cv::Mat> &frames,
+                 const std::function<void(GstBuffer *, GstHarness *)> &take,
+                 const std::function<void(int, GstHarness *)> &between = {});
+
 // A picture (BGR) with edges for the depth and texture for the warp:
 // ramps with noise and five rectangles of random colours.
 cv::Mat textured_picture(int w, int h, uint32_t seed);

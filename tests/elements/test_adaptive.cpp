@@ -57,25 +57,16 @@ std::vector<cv::Mat> sequence(int w, int h, uint32_t seed) {
 // between(k, harness) runs before frame k is pushed.
 std::vector<std::vector<uint8_t>> outputs(const std::string &launch, PixelFormat f, const std::vector<cv::Mat> &frames,
                                           const std::function<void(int, GstHarness *)> &between = {}) {
-  GstHarness *h = gst_harness_new_parse(launch.c_str());
-  gst_harness_set_src_caps_str(h, raw_caps(f, frames[0].cols, frames[0].rows).c_str());
   std::vector<std::vector<uint8_t>> out;
-  for (size_t k = 0; k < frames.size(); ++k) {
-    if (between) between(static_cast<int>(k), h);
-    GstBuffer *in = buffer_from_frame(HostFrame::from_bgr(frames[k], f));
-    GST_BUFFER_PTS(in) = k * GST_SECOND / 25;
-    GstBuffer *b = gst_harness_push_and_pull(h, in);
-    if (!b) {
-      ADD_FAILURE() << launch << ": no output for frame " << k;
-      break;
-    }
-    GstMapInfo map;
-    gst_buffer_map(b, &map, GST_MAP_READ);
-    out.emplace_back(map.data, map.data + map.size);
-    gst_buffer_unmap(b, &map);
-    gst_buffer_unref(b);
-  }
-  gst_harness_teardown(h);
+  push_frames(
+      launch, f, frames,
+      [&](GstBuffer *b, GstHarness *) {
+        GstMapInfo map;
+        gst_buffer_map(b, &map, GST_MAP_READ);
+        out.emplace_back(map.data, map.data + map.size);
+        gst_buffer_unmap(b, &map);
+      },
+      between);
   return out;
 }
 

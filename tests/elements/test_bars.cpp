@@ -61,26 +61,17 @@ struct Output {
 // the depth it carries. between(k, harness) runs before frame k.
 Output run(const std::string &launch, PixelFormat f, const std::vector<cv::Mat> &frames,
            const std::function<void(int, GstHarness *)> &between = {}) {
-  GstHarness *h = gst_harness_new_parse(launch.c_str());
-  gst_harness_set_src_caps_str(h, raw_caps(f, frames[0].cols, frames[0].rows).c_str());
   Output out;
-  for (size_t k = 0; k < frames.size(); ++k) {
-    if (between) between(static_cast<int>(k), h);
-    GstBuffer *in = buffer_from_frame(HostFrame::from_bgr(frames[k], f));
-    GST_BUFFER_PTS(in) = k * GST_SECOND / 25;
-    GstBuffer *b = gst_harness_push_and_pull(h, in);
-    if (!b) {
-      ADD_FAILURE() << launch << ": no output for frame " << k;
-      break;
-    }
-    GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
-    out.frames.push_back(buffer_to_bgra(b, caps));
-    gst_caps_unref(caps);
-    out.depth.push_back(buffer_depth(b));
-    out.info.push_back(buffer_depth_info(b));
-    gst_buffer_unref(b);
-  }
-  gst_harness_teardown(h);
+  push_frames(
+      launch, f, frames,
+      [&](GstBuffer *b, GstHarness *h) {
+        GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+        out.frames.push_back(buffer_to_bgra(b, caps));
+        gst_caps_unref(caps);
+        out.depth.push_back(buffer_depth(b));
+        out.info.push_back(buffer_depth_info(b));
+      },
+      between);
   return out;
 }
 
