@@ -57,10 +57,7 @@ void ChangeMap::merge(const ChangeMap &o) {
 }
 
 ChangeMap ChangeMap::dilated(int reach_x, int reach_y) const {
-  // A changed pixel at a tile's edge reaches `reach` pixels into the
-  // tiles beside it: ceil(reach / tile) tiles on either side.
-  const int rx = (std::max(reach_x, 0) + kChangeTile - 1) / kChangeTile;
-  const int ry = (std::max(reach_y, 0) + kChangeTile - 1) / kChangeTile;
+  const int rx = reach_tiles(reach_x), ry = reach_tiles(reach_y);
   if (rx == 0 && ry == 0) return *this;
   ChangeMap across(width_, height_, false), out(width_, height_, false);
   for (int ty = 0; ty < tiles_y_; ++ty)
@@ -119,28 +116,6 @@ ChangeMap ChangeMap::cropped(PixelRect r) const {
   return sub;
 }
 
-PixelRect tile_pixels(int tx, int ty, int width, int height) {
-  return PixelRect{tx * kChangeTile, ty * kChangeTile, std::min(width, (tx + 1) * kChangeTile),
-                   std::min(height, (ty + 1) * kChangeTile)};
-}
-
-namespace {
-
-// The bytes of plane `plane` that hold the pixels of r: [b0, b1) of each
-// of the rows [r0, r1). 4:2:0 chroma: the samples of r's 2 x 2 blocks
-// (r starts on even coordinates: tiles do).
-struct PlaneBox {
-  int b0, b1, r0, r1;
-};
-PlaneBox plane_box(PixelFormat f, int plane, const PixelRect &r) {
-  if (is_packed_rgb(f)) return PlaneBox{4 * r.x0, 4 * r.x1, r.y0, r.y1};
-  if (plane == 0) return PlaneBox{r.x0, r.x1, r.y0, r.y1};
-  const int c0 = r.x0 / 2, c1 = (r.x1 + 1) / 2, bytes = f == PixelFormat::NV12 ? 2 : 1;
-  return PlaneBox{bytes * c0, bytes * c1, r.y0 / 2, (r.y1 + 1) / 2};
-}
-
-}  // namespace
-
 ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
   const int n = frame_plane_count(frame.format);
   const bool fresh = planes_.empty() || frame.format != format_ || frame.width != width_ || frame.height != height_;
@@ -196,8 +171,7 @@ ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
             samples += static_cast<uint64_t>(b.b1 - b.b0);
           }
         }
-        if (tolerance > 0.f)
-          changed = samples > 0 && static_cast<double>(diff) > static_cast<double>(tolerance) * samples;
+        if (tolerance > 0.f) changed = tile_over_tolerance(diff, samples, tolerance);
         if (!changed) continue;
         map.mark(tx, ty);
         for (int p = 0; p < n; ++p) {
@@ -215,22 +189,35 @@ ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
 }
 
 ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b) {
-  if (a.width != b.width || a.height != b.height || a.empty()) return ChangeMap(b.width, b.height, true);
+  return compare_grids(full_grid(a), full_grid(b));
+}
+
+ChangeMap compare_grids(DepthGrid<const float> a, DepthGrid<const float> b) {
+  if (a.width != b.width || a.height != b.height || a.shift != b.shift || a.cells.width != b.cells.width ||
+      a.cells.height != b.cells.height || a.empty())
+    return ChangeMap(b.width, b.height, true);
   ChangeMap map(a.width, a.height, false);
-  const size_t row_bytes = sizeof(float) * static_cast<size_t>(a.width);
+  const int s = a.shift;
+  auto differ = [&](int cy, int cx0, int cx1) {
+    return std::memcmp(a.cells.row(cy) + cx0, b.cells.row(cy) + cx0, sizeof(float) * static_cast<size_t>(cx1 - cx0)) != 0;
+  };
+  if ((kChangeTile >> s) << s != kChangeTile) {  // cells larger than a tile: few of them, each marks its pixels
+    for (int cy = 0; cy < a.cells.height; ++cy)
+      for (int cx = 0; cx < a.cells.width; ++cx)
+        if (differ(cy, cx, cx + 1)) map.mark_pixels(PixelRect{cx << s, cy << s, (cx + 1) << s, (cy + 1) << s});
+    return map;
+  }
+  // A tile holds whole cells: each row of tiles is its own task, its cell
+  // rows compared whole first (one call a row where nothing changed).
   cv::parallel_for_(cv::Range(0, map.tiles_y()), [&](const cv::Range &range) {
     for (int ty = range.start; ty < range.end; ++ty) {
       const PixelRect band = tile_pixels(0, ty, a.width, a.height);
-      bool same = true;  // whole rows first: one call a row where nothing changed
-      for (int y = band.y0; y < band.y1 && same; ++y) same = std::memcmp(a.row(y), b.row(y), row_bytes) == 0;
-      if (same) continue;
-      for (int tx = 0; tx < map.tiles_x(); ++tx) {
-        const PixelRect r = tile_pixels(tx, ty, a.width, a.height);
-        for (int y = r.y0; y < r.y1; ++y)
-          if (std::memcmp(a.row(y) + r.x0, b.row(y) + r.x0, sizeof(float) * static_cast<size_t>(r.x1 - r.x0)) != 0) {
-            map.mark(tx, ty);
-            break;
-          }
+      for (int cy = band.y0 >> s; cy <= (band.y1 - 1) >> s; ++cy) {
+        if (!differ(cy, 0, a.cells.width)) continue;
+        for (int tx = 0; tx < map.tiles_x(); ++tx) {
+          const PixelRect t = tile_pixels(tx, ty, a.width, a.height);
+          if (!map.tile(tx, ty) && differ(cy, t.x0 >> s, ((t.x1 - 1) >> s) + 1)) map.mark(tx, ty);
+        }
       }
     }
   });

@@ -73,10 +73,73 @@ class ChangeMap {
 };
 
 // Tiles along an axis of `pixels`.
-inline int change_tiles(int pixels) { return (pixels + kChangeTile - 1) / kChangeTile; }
+P3D_HD int change_tiles(int pixels) { return (pixels + kChangeTile - 1) / kChangeTile; }
 
 // A rectangle of pixels: the tile's, clipped to a width x height picture.
-PixelRect tile_pixels(int tx, int ty, int width, int height);
+P3D_HD PixelRect tile_pixels(int tx, int ty, int width, int height) {
+  const int x1 = (tx + 1) * kChangeTile, y1 = (ty + 1) * kChangeTile;
+  return PixelRect{tx * kChangeTile, ty * kChangeTile, x1 < width ? x1 : width, y1 < height ? y1 : height};
+}
+
+// Tiles on either side that a reach of `pixels` covers: a changed pixel at
+// a tile's edge reaches that far into the tiles beside it.
+P3D_HD int reach_tiles(int pixels) { return pixels > 0 ? (pixels + kChangeTile - 1) / kChangeTile : 0; }
+
+// The bytes of plane `plane` of a frame that hold the pixels of r: [b0, b1)
+// of each of the rows [r0, r1). 4:2:0 chroma: the samples of r's 2 x 2
+// blocks (r starts on even coordinates: tiles do).
+struct PlaneBox {
+  int b0, b1, r0, r1;
+};
+P3D_HD PlaneBox plane_box(PixelFormat f, int plane, const PixelRect &r) {
+  if (is_packed_rgb(f)) return PlaneBox{4 * r.x0, 4 * r.x1, r.y0, r.y1};
+  if (plane == 0) return PlaneBox{r.x0, r.x1, r.y0, r.y1};
+  const int c0 = r.x0 / 2, c1 = (r.x1 + 1) / 2, bytes = f == PixelFormat::NV12 ? 2 : 1;
+  return PlaneBox{bytes * c0, bytes * c1, r.y0 / 2, (r.y1 + 1) / 2};
+}
+
+// A tile compared with tolerance t > 0 (FrameHistory) counts as changed
+// when the mean |difference| of its `samples` bytes exceeds t.
+P3D_HD bool tile_over_tolerance(unsigned long long diff, unsigned long long samples, float tolerance) {
+  return samples > 0 && static_cast<double>(diff) > static_cast<double>(tolerance) * static_cast<double>(samples);
+}
+
+// When a stage compares its inputs with the previous frame's. A stage
+// whose inputs keep changing gains nothing from the comparison, which then
+// only adds its cost (on the GPU, where a stage is a few passes over the
+// frame, as much as the stage saves on a partly changed frame). After a
+// compared frame that was busy (the stage's rule; on the GPU: anything
+// changed), the stage computes the next frames whole without comparing,
+// its histories reset (what they hold is then out of date), and compares
+// again after them: the first comparison of a fresh history finds every
+// tile changed and is not observed; the one after it tells whether the
+// scene calmed down. The pause doubles while the frames stay busy, from
+// kBackOffFrames up to kBackOffMax, so that a film pays a comparison
+// every few seconds and a scene that stops is found within that. Whole
+// frames are what adaptive=false computes: the output stays exact.
+constexpr int kBackOffFrames = 16;
+constexpr int kBackOffMax = 128;
+class ChangeBackOff {
+ public:
+  // Before a frame: false when the stage computes it whole, uncompared.
+  bool compare_next() {
+    if (skip_ == 0) return true;
+    --skip_;
+    return false;
+  }
+  // After a compared frame that was compared with a previous one.
+  void observe(bool busy) {
+    skip_ = busy ? pause_ : 0;
+    pause_ = busy ? (2 * pause_ < kBackOffMax ? 2 * pause_ : kBackOffMax) : kBackOffFrames;
+  }
+  void reset() {
+    skip_ = 0;
+    pause_ = kBackOffFrames;
+  }
+
+ private:
+  int skip_ = 0, pause_ = kBackOffFrames;
+};
 
 // Compares each frame with the one before (a copy kept here) and tells
 // which tiles differ. tolerance 0: a tile differs when any of its bytes
@@ -105,6 +168,10 @@ class FrameHistory {
 // The tiles in which two float planes of one size differ in any byte
 // (all tiles when their sizes differ).
 ChangeMap compare_planes(ImageView<const float> a, ImageView<const float> b);
+// The same for two grids (p3d_defs.h DepthGrid) of one geometry: the tiles
+// with a pixel of a cell whose values differ in any byte (all tiles when
+// the geometries differ). compare_planes() is its case of shift 0.
+ChangeMap compare_grids(DepthGrid<const float> a, DepthGrid<const float> b);
 
 // Copies the rows and columns of rect r from one float plane to another of
 // the same size.

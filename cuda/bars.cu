@@ -33,7 +33,8 @@ __global__ void bar_counts_kernel(const FrameView f, int luma_threshold, uint32_
 // Both views of a pixel outside the rect: the source converted.
 // A plain launch (after the warp's kernels and copies).
 __global__ void views_outside_kernel(const FrameView src, const YuvToRgb m, const PixelRect active,
-                                     const FrameView pair) {
+                                     const FrameView pair, StageGate gate) {
+  if (gate.closed()) return;
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= src.width || y >= src.height) return;
@@ -97,9 +98,9 @@ void BarCountsGpu::reset() {
 }
 
 CudaStatus views_outside_gpu(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
-                             cudaStream_t stream) {
+                             cudaStream_t stream, StageGate gate) {
   const dim3 block(32, 8), grid((src.width + 31) / 32, (src.height + 7) / 8);
-  views_outside_kernel<<<grid, block, 0, stream>>>(src, m, active, pair);
+  views_outside_kernel<<<grid, block, 0, stream>>>(src, m, active, pair, gate);
   P3D_CUDA_TRY_LAUNCH(views_outside_kernel);
   return {};
 }
@@ -121,7 +122,7 @@ CudaStatus buffer_frame(DeviceBuffer &buf, PixelFormat format, int width, int he
 
 CudaStatus ActiveWarpGpu::render(WarpRendererGpu &warp, const WarpParams &params, const PackParams &pack,
                                  const FrameView &src, const YuvToRgb &m, DepthGrid<const float> depth,
-                                 PixelRect rect, const FrameView &dst, cudaStream_t stream) {
+                                 PixelRect rect, const FrameView &dst, cudaStream_t stream, StageGate gate) {
   if (rect.empty() || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > src.width || rect.y1 > src.height ||
       depth.width != src.width || depth.height != src.height || !sub_grid_fits(depth, rect))
     return CudaStatus{cudaErrorInvalidValue, "active rect within the frame and on the depth cells", __FILE__,
@@ -138,22 +139,22 @@ CudaStatus ActiveWarpGpu::render(WarpRendererGpu &warp, const WarpParams &params
   const DepthGrid<const float> sub_depth = sub_grid(depth, rect);
   if (rect.x0 == 0 && rect.x1 == src.width) {
     P3D_CUDA_TRY_STATUS(warp.render(active_params, sub_src, m, sub_depth,
-                                    sub_frame(pair, PixelRect{0, rect.y0, pair.width, rect.y1}), stream));
+                                    sub_frame(pair, PixelRect{0, rect.y0, pair.width, rect.y1}), stream, nullptr,
+                                    gate));
   } else {
     FrameView active_pair;
     P3D_CUDA_TRY_STATUS(buffer_frame(active_pair_, pair.format, 2 * rect.width(), rect.height(), &active_pair));
-    P3D_CUDA_TRY_STATUS(warp.render(active_params, sub_src, m, sub_depth, active_pair, stream));
+    P3D_CUDA_TRY_STATUS(warp.render(active_params, sub_src, m, sub_depth, active_pair, stream, nullptr, gate));
     const size_t view_bytes = 4 * static_cast<size_t>(rect.width());
     uint8_t *to = pair.plane[0] + static_cast<size_t>(rect.y0) * pair.stride[0];
-    P3D_CUDA_TRY(cudaMemcpy2DAsync(to + 4 * static_cast<size_t>(rect.x0), pair.stride[0], active_pair.plane[0],
-                                   active_pair.stride[0], view_bytes, rect.height(), cudaMemcpyDeviceToDevice,
-                                   stream));
-    P3D_CUDA_TRY(cudaMemcpy2DAsync(to + 4 * static_cast<size_t>(src.width + rect.x0), pair.stride[0],
-                                   active_pair.plane[0] + view_bytes, active_pair.stride[0], view_bytes,
-                                   rect.height(), cudaMemcpyDeviceToDevice, stream));
+    P3D_CUDA_TRY_STATUS(copy_rows_gated(to + 4 * static_cast<size_t>(rect.x0), pair.stride[0], active_pair.plane[0],
+                                        active_pair.stride[0], view_bytes, rect.height(), gate, stream));
+    P3D_CUDA_TRY_STATUS(copy_rows_gated(to + 4 * static_cast<size_t>(src.width + rect.x0), pair.stride[0],
+                                        active_pair.plane[0] + view_bytes, active_pair.stride[0], view_bytes,
+                                        rect.height(), gate, stream));
   }
-  P3D_CUDA_TRY_STATUS(views_outside_gpu(src, m, rect, pair, stream));
-  if (!pair_is_dst) P3D_CUDA_TRY_STATUS(pack_gpu(pack, pair, dst, stream));
+  P3D_CUDA_TRY_STATUS(views_outside_gpu(src, m, rect, pair, stream, gate));
+  if (!pair_is_dst) P3D_CUDA_TRY_STATUS(pack_gpu(pack, pair, dst, stream, gate));
   return {};
 }
 

@@ -46,7 +46,7 @@ class ActiveWarpGpu {
  public:
   CudaStatus render(WarpRendererGpu &warp, const WarpParams &params, const PackParams &pack, const FrameView &src,
                     const YuvToRgb &m, DepthGrid<const float> depth, PixelRect rect, const FrameView &dst,
-                    cudaStream_t stream);
+                    cudaStream_t stream, StageGate gate = {});
 
  private:
   DeviceBuffer pair_, active_pair_;
@@ -54,6 +54,6 @@ class ActiveWarpGpu {
 
 // views_outside_cpu() over every row, on the device.
 CudaStatus views_outside_gpu(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
-                             cudaStream_t stream);
+                             cudaStream_t stream, StageGate gate = {});
 
 }  // namespace p3d

@@ -226,6 +226,24 @@ __device__ __forceinline__ void store_output(const DepthGrid<float> &out, const 
     store_cell<kIo == kCellsOnGrids>(out, cells.s, x, y, v);
 }
 
+// Adaptive (BilateralFilterGpu::run with dirty tiles): a block whose
+// outputs, cells (cx0, cy0) .. (cx1, cy1) of step s, lie in no dirty tile
+// computes the same values as the frame before, so it copies them from the
+// kept output (of out's geometry) instead. True when it did.
+__device__ __forceinline__ bool kept_block(const TileFlags &dirty, const DepthGrid<const float> &kept,
+                                           const DepthGrid<float> &out, int s, int cx0, int cy0, int cx1, int cy1) {
+  if (dirty.any_in(PixelRect{cx0 * s, cy0 * s, cx1 * s, cy1 * s})) return false;
+  const int sh = out.shift, x0 = (cx0 * s) >> sh, y0 = (cy0 * s) >> sh;
+  const int x1 = min(out.cells.width, ((cx1 * s) + (1 << sh) - 1) >> sh);
+  const int y1 = min(out.cells.height, ((cy1 * s) + (1 << sh) - 1) >> sh);
+  const int tid = threadIdx.y * blockDim.x + threadIdx.x, cols = x1 - x0;
+  for (int i = tid; cols > 0 && i < cols * (y1 - y0); i += blockDim.x * blockDim.y) {
+    const int y = y0 + i / cols, x = x0 + i % cols;
+    out.cells.at(x, y) = kept.cells.at(x, y);
+  }
+  return true;
+}
+
 // Tile row t of the thread's window column holds tap row dy = t - j of its
 // output j. One row: each texel is loaded once and serves every output
 // whose window contains that row (j in [J0, J1]).
@@ -292,8 +310,12 @@ __device__ void filter_unclipped(const Texel *tile, const float *range_sym, cons
 template <int R, GridIo kIo>
 __global__ void __launch_bounds__(kThreads) bilateral_kernel(FrameView guide, DepthGrid<const float> depth_in,
                                                             DepthGrid<float> depth_out,
-                                                            const float *__restrict__ tables, Cells cells) {
+                                                            const float *__restrict__ tables, Cells cells,
+                                                            TileFlags dirty, DepthGrid<const float> kept) {
   chained_kernel_start();
+  if (kept_block(dirty, kept, depth_out, cells.s, blockIdx.x * kBlockX, blockIdx.y * kOutY, (blockIdx.x + 1) * kBlockX,
+                 (blockIdx.y + 1) * kOutY))
+    return;
   constexpr bool kCells = kIo != kPixelGrid;
   using G = Geometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
@@ -369,8 +391,11 @@ __device__ __forceinline__ float pass_unclipped(int centre4, const float (&space
 template <int R, GridIo kIo>
 __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
     separable_kernel(FrameView guide, DepthGrid<const float> depth_in, DepthGrid<float> depth_out,
-                     const float *__restrict__ tables, Cells cells) {
+                     const float *__restrict__ tables, Cells cells, TileFlags dirty, DepthGrid<const float> kept) {
   chained_kernel_start();
+  if (kept_block(dirty, kept, depth_out, cells.s, blockIdx.x * kBlockX, blockIdx.y * kOutY, (blockIdx.x + 1) * kBlockX,
+                 (blockIdx.y + 1) * kOutY))
+    return;
   constexpr bool kCells = kIo != kPixelGrid;
   using G = SeparableGeometry<R>;
   extern __shared__ __align__(8) unsigned char smem[];
@@ -458,7 +483,8 @@ __global__ void __launch_bounds__(kThreads, P3D_THREADS_PER_SM / kThreads)
   }
 }
 
-using KernelFn = void (*)(FrameView, DepthGrid<const float>, DepthGrid<float>, const float *, Cells);
+using KernelFn = void (*)(FrameView, DepthGrid<const float>, DepthGrid<float>, const float *, Cells, TileFlags,
+                          DepthGrid<const float>);
 struct KernelEntry {
   KernelFn fn;
   size_t shared_bytes;
@@ -513,7 +539,8 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
 }
 
 CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameView &guide,
-                                   DepthGrid<const float> depth_in, DepthGrid<float> depth_out, cudaStream_t stream) {
+                                   DepthGrid<const float> depth_in, DepthGrid<float> depth_out, cudaStream_t stream,
+                                   const TileFlags &dirty, DepthGrid<const float> kept) {
   if (guide.width != depth_in.width || guide.height != depth_in.height)
     return invalid("BilateralFilterGpu::run: guide and depth sizes differ", __LINE__);
   if (depth_out.width != depth_in.width || depth_out.height != depth_in.height)
@@ -524,6 +551,10 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
   if (static_cast<const void *>(depth_in.cells.data) == static_cast<const void *>(depth_out.cells.data))
     return invalid("BilateralFilterGpu::run: depth_in aliases depth_out", __LINE__);
   if (guide.plane[0] == nullptr) return invalid("BilateralFilterGpu::run: guide has no plane 0", __LINE__);
+  if (dirty.flags && (kept.width != depth_out.width || kept.height != depth_out.height ||
+                      kept.shift != depth_out.shift || kept.cells.width != depth_out.cells.width ||
+                      kept.cells.height != depth_out.cells.height))
+    return invalid("BilateralFilterGpu::run: the kept output has the output's geometry", __LINE__);
 
   const BilateralParams sanitised = bilateral_sanitize(params);
   const int step = bilateral_effective_scale(sanitised, depth_in.width, depth_in.height);
@@ -546,7 +577,7 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
   const dim3 block(kBlockX, kBlockY);
   const dim3 grid((cells.w + kBlockX - 1) / kBlockX, (cells.h + kOutY - 1) / kOutY);
   P3D_CUDA_TRY(launch_chained(k.fn, grid, block, k.shared_bytes, stream, guide, depth_in, depth_out,
-                              tables_.as<const float>(), cells));
+                              tables_.as<const float>(), cells, dirty, kept));
   return {};
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "../common/bilateral.h"
+#include "change_gpu.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
 
@@ -31,8 +32,15 @@ class BilateralFilterGpu {
   // the cell's pixels. Widths and heights are the picture's; another
   // output shift, or cells that do not fit (grid_fits), give
   // cudaErrorInvalidValue.
+  //
+  // Adaptive (bilateral_filter_changed_cpu on the device): dirty, the
+  // tiles within bilateral_reach() of a changed guide or depth tile; a
+  // block of outputs outside them copies its values from `kept`, the
+  // previous frame's output (depth_out's geometry, cudaErrorInvalidValue
+  // otherwise), instead of filtering. Default flags: every block filters.
   CudaStatus run(const BilateralParams &params, const FrameView &guide, DepthGrid<const float> depth_in,
-                 DepthGrid<float> depth_out, cudaStream_t stream);
+                 DepthGrid<float> depth_out, cudaStream_t stream, const TileFlags &dirty = {},
+                 DepthGrid<const float> kept = {});
 
  private:
   CudaStatus upload_tables(const BilateralParams &sanitised, cudaStream_t stream);

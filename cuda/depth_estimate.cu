@@ -129,7 +129,8 @@ template <int kB>
 __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView frame, int B_arg, int bx, int by,
                                                                   float *__restrict__ features,
                                                                   const float *__restrict__ ref, bool have_state,
-                                                                  DepthDeviceState *state, bool words) {
+                                                                  DepthDeviceState *state, bool words,
+                                                                  TileFlags changes, bool incremental) {
   chained_kernel_start();
   constexpr int kRows = kB > 0 ? feature_rows_per_cta(kB) : kFeatureRowsMax;
   __shared__ uint32_t col[kRows][3][kThreads];
@@ -140,8 +141,14 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
   const int x = blockIdx.x * per_cta * B + t;
   const bool column_in = t < per_cta * B && x < frame.width;
   const int j0 = blockIdx.y * rows_per_cta;
+  // Adaptive: a CTA whose pixels lie in no changed tile keeps its blocks'
+  // features (features holds the previous frame's) and only adds their
+  // differences from the reference.
+  const int cta_x0 = blockIdx.x * per_cta * B, cta_y0 = j0 * B;
+  const bool kept = incremental && !changes.any_in(PixelRect{cta_x0, cta_y0, cta_x0 + per_cta * B,
+                                                             cta_y0 + rows_per_cta * B});
   if constexpr (kB > 0 && kB % 2 == 0) {
-    if (words) {  // 4:2:0, rows 4-byte aligned: a thread sums four columns of a block row
+    if (words && !kept) {  // 4:2:0, rows 4-byte aligned: a thread sums four columns of a block row
       const int x_cta = blockIdx.x * per_cta * B;
       for (int item = t; item < (kThreads / 4) * rows_per_cta; item += kThreads) {
         const int r = item / (kThreads / 4), c0 = 4 * (item - r * (kThreads / 4)), x4 = x_cta + c0;
@@ -164,7 +171,7 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
   }
 #pragma unroll
   for (int r = 0; r < kRows; ++r) {
-    if (kB > 0 && kB % 2 == 0 && words) break;  // summed above
+    if ((kB > 0 && kB % 2 == 0 && words) || kept) break;  // summed above, or kept
     if (r >= rows_per_cta) break;  // kB > 0: never
     const int y0 = (j0 + r) * B;
     uint32_t s0 = 0, s1 = 0, s2 = 0;
@@ -198,11 +205,16 @@ __global__ void __launch_bounds__(kThreads) block_features_kernel(FrameView fram
     const int r = item / per_cta, b = item - r * per_cta;
     const int i = blockIdx.x * per_cta + b, j = j0 + r;
     if (i >= bx || j >= by) continue;
+    const size_t base = (static_cast<size_t>(j) * bx + i) * 3;
+    if (kept) {
+      if (have_state)
+        for (int c = 0; c < 3; ++c) diff += temporal_diff_fixed(features[base + c], ref[base + c]);
+      continue;
+    }
     const int cols = block_extent(i, B, frame.width), rows = block_extent(j, B, frame.height);
     uint32_t sum[3] = {0, 0, 0};
     for (int k = b * B; k < b * B + cols; ++k)
       for (int c = 0; c < 3; ++c) sum[c] += col[r][c][k];
-    const size_t base = (static_cast<size_t>(j) * bx + i) * 3;
     for (int c = 0; c < 3; ++c) {
       const float f = block_mean(sum[c], cols * rows);
       features[base + c] = f;
@@ -279,6 +291,18 @@ __device__ TemporalDecision device_decision(const DepthDeviceState *state, const
   return temporal_decision(have_state, diff, params);
 }
 
+// Adaptive: the passes of steps 2-4 after the tile pass leave a reused
+// frame out (DepthEstimatorGpu::estimate with changes).
+struct ReuseSkip {
+  bool on;
+  const DepthDeviceState *state;
+  DepthParams params;
+  bool have_state;
+  __device__ bool skipped(int n) const {
+    return on && device_decision(state, params, have_state, n) == TemporalDecision::Reuse;
+  }
+};
+
 // Tile pass: components inside one 32x32 tile of blocks, in shared memory.
 // The local index ly*32+lx orders a tile's blocks as the global index does, so
 // the local root maps to the tile-local smallest global index. Each block's
@@ -294,7 +318,8 @@ __device__ TemporalDecision device_decision(const DepthDeviceState *state, const
 // one unite per run and row, not two a block.
 __global__ void tile_labels_kernel(const float *__restrict__ features, float *__restrict__ smoothed, int bx, int by,
                                    DepthParams params, bool yuv, bool have_state, const DepthDeviceState *state, int *labels,
-                                   unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
+                                   unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max,
+                                   bool skip_reused) {
   chained_kernel_start();
   __shared__ int parent[kTile * kTile];
   __shared__ float feat[kTile * kTile][3];
@@ -302,7 +327,8 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
   const int lx = threadIdx.x, x0 = blockIdx.x * kTile, y0 = blockIdx.y * kTile;
   const int gx = x0 + lx;
   const float edge_threshold = params.edge_threshold;
-  const bool cut = device_decision(state, params, have_state, bx * by) == TemporalDecision::Cut;
+  const TemporalDecision decision = device_decision(state, params, have_state, bx * by);
+  const bool cut = decision == TemporalDecision::Cut;
   for (int ly = threadIdx.y; ly < kTile; ly += kTileRowsPerPass) {
     const int l = ly * kTile + lx, gy = y0 + ly;
     if (gx < bx && gy < by) {
@@ -314,6 +340,9 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
       for (int c = 0; c < 3; ++c) smoothed[static_cast<size_t>(g) * 3 + c] = feat[l][c];
     }
   }
+  // Adaptive: a reused frame outputs the previous depths, so its regions
+  // are never read (uniform: the decision is the kernel's).
+  if (skip_reused && decision == TemporalDecision::Reuse) return;
   __syncthreads();
   // Row runs: lane lx's run starts at the highest lane <= lx not joined to
   // its left (lane 0 never is).
@@ -363,10 +392,11 @@ __global__ void tile_labels_kernel(const float *__restrict__ features, float *__
 // always unites. Large regions cross a border with one unite instead of
 // one per block of the border (each a chain of global atomics).
 __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx, int by, float edge_threshold,
-                                     bool yuv, int *labels, int tiles_x, long long vertical_pairs, long long pairs) {
+                                     bool yuv, int *labels, int tiles_x, long long vertical_pairs, long long pairs,
+                                     ReuseSkip skip) {
   chained_kernel_start();
   const long long e = static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (e >= pairs) return;
+  if (e >= pairs || skip.skipped(bx * by)) return;
   int a, b, step;  // step: from a pair's blocks to those of the pair before it on the border (0: none in the tile)
   if (e < vertical_pairs) {
     const int gy = static_cast<int>(e / (tiles_x - 1));
@@ -405,8 +435,10 @@ __global__ void border_labels_kernel(const float *__restrict__ smoothed, int bx,
 // warp and label) because a large region would otherwise put every block's
 // atomic on one address.
 __global__ void resolve_kernel(int *labels, int n, int bx, int B, int width, int height, Hypothesis hypothesis,
-                               unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max) {
+                               unsigned long long *region_sums, uint32_t *region_counts, uint32_t *region_max,
+                               ReuseSkip skip) {
   chained_kernel_start();
+  if (skip.skipped(n)) return;  // uniform
   __shared__ int cta_root;
   __shared__ uint32_t warp_sum[kThreads / 32], warp_count[kThreads / 32], warp_max[kThreads / 32];
   const int i = blockIdx.x * kThreads + threadIdx.x;
@@ -552,7 +584,7 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
 }
 
 CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth,
-                                       cudaStream_t stream) {
+                                       cudaStream_t stream, const TileFlags *changes) {
   const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
   if (W <= 0 || H <= 0) {
     reset();
@@ -614,7 +646,7 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
                                           : false;
   P3D_CUDA_TRY(launch_chained(features_kernel, dim3(grid_for(bx, per_cta), grid_for(by, rows_per_cta)), kThreads, 0,
                               stream, frame, B, bx, by, features_.as<float>(), ref_features_.as<float>(), same_grid,
-                              state, words));
+                              state, words, changes ? *changes : TileFlags{}, changes != nullptr && same_grid));
 
   // Step 2.
   const bool yuv = !is_packed_rgb(frame.format);
@@ -622,19 +654,20 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   P3D_CUDA_TRY(launch_chained(tile_labels_kernel, dim3(tiles_x, tiles_y), dim3(kTile, kTileRowsPerPass), 0, stream,
                               features_.as<float>(), smoothed_features_.as<float>(), bx, by, params, yuv, same_grid,
                               state, labels_.as<int>(), region_sums_.as<unsigned long long>(),
-                              region_counts_.as<uint32_t>(), region_max_.as<uint32_t>()));
+                              region_counts_.as<uint32_t>(), region_max_.as<uint32_t>(), changes != nullptr));
+  const ReuseSkip skip{changes != nullptr, state, params, same_grid};
   const long long vertical_pairs = static_cast<long long>(tiles_x - 1) * by;
   const long long pairs = vertical_pairs + static_cast<long long>(tiles_y - 1) * bx;
   if (pairs > 0) {
     P3D_CUDA_TRY(launch_chained(border_labels_kernel, grid_for(pairs, kThreads), kThreads, 0, stream,
                                 smoothed_features_.as<float>(), bx, by, params.edge_threshold, yuv, labels_.as<int>(),
-                                tiles_x, vertical_pairs, pairs));
+                                tiles_x, vertical_pairs, pairs, skip));
   }
 
   // Steps 3-4.
   P3D_CUDA_TRY(launch_chained(resolve_kernel, grid_for(n, kThreads), kThreads, 0, stream, labels_.as<int>(), n, bx, B,
                               W, H, params.hypothesis, region_sums_.as<unsigned long long>(),
-                              region_counts_.as<uint32_t>(), region_max_.as<uint32_t>()));
+                              region_counts_.as<uint32_t>(), region_max_.as<uint32_t>(), skip));
 
   // Steps 4-5.
   P3D_CUDA_TRY(launch_chained(block_depth_kernel, grid_for(n, kThreads), kThreads, 0, stream, labels_.as<int>(),

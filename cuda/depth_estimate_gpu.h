@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "../common/depth_estimate.h"
+#include "change_gpu.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
 
@@ -45,7 +46,14 @@ class DepthEstimatorGpu {
   // grid then gets one value a block, written by the depth kernel, with no
   // expansion (cudaErrorInvalidValue, nothing queued, for another shift or
   // a grid not of the frame's size).
-  CudaStatus estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth, cudaStream_t stream);
+  // changes (adaptive, as DepthEstimatorCpu::estimate_blocks): the tiles of
+  // `frame` that differ from the previous call's frame, on the device. The
+  // features kernel's CTAs whose pixels lie in no such tile keep the
+  // previous features (the same pixels give the same sums), and a reused
+  // frame leaves steps 2-4 out (labels then describe the last frame that
+  // used them). The output is that of a call without `changes`.
+  CudaStatus estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth, cudaStream_t stream,
+                      const TileFlags *changes = nullptr);
   void reset();
 
   // For tests (synchronise the stream, copy to host).

@@ -14,6 +14,7 @@ struct PackKernelParams {
   AnaglyphMatrices am;
   FrameView in;
   FrameView out;
+  StageGate gate;  // closed: the adaptive stage keeps this frame (cuda/change_gpu.h)
 };
 
 constexpr int kBlockX = 32, kBlockY = 8;
@@ -26,6 +27,7 @@ constexpr int kVec = 4;
 template <StereoInput I>
 __global__ void pack_kernel(const PackKernelParams kp) {
   chained_kernel_start();
+  if (kp.gate.closed()) return;
   const int x = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;  // bottom up, as pack_anaglyph_pair_vec
   if (x >= kp.out.width || y >= kp.out.height) return;
@@ -39,6 +41,7 @@ __global__ void pack_kernel(const PackKernelParams kp) {
 template <StereoInput I>
 __global__ void pack_kernel_vec(const PackKernelParams kp) {
   chained_kernel_start();
+  if (kp.gate.closed()) return;
   const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
   const int y = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;  // bottom up, as pack_anaglyph_pair_vec
   if (x0 >= kp.out.width || y >= kp.out.height) return;
@@ -85,6 +88,7 @@ __device__ uint32_t word_at(const uint4 &v, int i) { return i == 0 ? v.x : i == 
 template <bool kBgr, bool kAlpha>
 __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   chained_kernel_start();
+  if (kp.gate.closed()) return;
   const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kVec;
   const int y = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;
   if (x0 >= kp.out.width || y >= kp.out.height) return;
@@ -115,6 +119,7 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
 template <StereoInput I>
 __global__ void pack_kernel_yuv(const PackKernelParams kp) {
   chained_kernel_start();
+  if (kp.gate.closed()) return;
   const int bx = blockIdx.x * blockDim.x + threadIdx.x;
   const int by = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;  // bottom up, as pack_anaglyph_pair_vec
   if (2 * bx >= kp.out.width || 2 * by >= kp.out.height) return;
@@ -161,10 +166,11 @@ CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t s
 
 }  // namespace
 
-CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream) {
+CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream,
+                    StageGate gate) {
   if (!pack_args_valid(params, in, out))
     return CudaStatus{cudaErrorInvalidValue, "pack_gpu: pack_args_valid(params, in, out)", __FILE__, __LINE__};
-  const PackKernelParams kp{params, anaglyph_matrices(params.glasses, params.method), in, out};
+  const PackKernelParams kp{params, anaglyph_matrices(params.glasses, params.method), in, out, gate};
   const bool vec = use_vector_stores(params, out);
   switch (params.input) {
     case StereoInput::SideBySideHalf: return launch<StereoInput::SideBySideHalf>(kp, vec, stream);

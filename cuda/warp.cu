@@ -71,14 +71,14 @@ CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &sr
 
 CudaStatus WarpRendererGpu::render(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                                    DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
-                                   long long *holes_out) {
-  return render_pair(params, src, m, depth, out, nullptr, stream, holes_out, nullptr);
+                                   long long *holes_out, StageGate gate) {
+  return render_pair(params, src, m, depth, out, nullptr, stream, holes_out, nullptr, gate);
 }
 
 CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                                         DepthGrid<const float> depth, const FrameView &out,
                                         const FusedAnaglyph *fused_request, cudaStream_t stream, long long *holes_out,
-                                        bool *fused_used) {
+                                        bool *fused_used, StageGate gate) {
   if (!warp_frames_fit(src, depth, out)) return invalid_frames();
   const WarpParams p = warp_sanitize(params);
   const int W = src.width, H = src.height;
@@ -86,6 +86,9 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
   const EyeShifts eyes{{warp_eye_shift(p, D, 0), warp_eye_shift(p, D, 1)}};
   const bool average = p.fill == HoleFill::NeighborAverage;
   const bool smooth = p.fill == HoleFill::BackgroundSmooth;
+  if (average && gate.state)
+    return CudaStatus{cudaErrorInvalidValue, "fill=NeighborAverage (host-checked steps) with a stage gate", __FILE__,
+                      __LINE__};
 
   if (smem_optin_ < 0) {
     int dev = 0;
@@ -144,14 +147,14 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          rows.keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, rows.smem, stream, smem_optin_,
                          &attributes_set_, rows.group_rows, rows.tail_y0, rows.wide_groups, rows.rows_together,
-                         rows.wide_group_threads, fuse ? *fused_request : FusedAnaglyph{}};
+                         rows.wide_group_threads, fuse ? *fused_request : FusedAnaglyph{}, gate};
   P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
   if (smooth)
     P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_, &sums_launch_));
   if (fuse)
     P3D_CUDA_TRY_STATUS(
-        launch_fused_patch(out, *fused_request, sc, plan, rows.tail_y0, stream, &resident_patch_blocks_));
+        launch_fused_patch(out, *fused_request, sc, plan, rows.tail_y0, stream, &resident_patch_blocks_, gate));
   if (fused_used) *fused_used = fuse;
 
   if (holes_out) {

@@ -14,6 +14,7 @@
 
 #include "../common/pack.h"
 #include "../common/warp.h"
+#include "change_gpu.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
 #include "warp_plan.h"  // the renderer's cached choices
@@ -33,8 +34,11 @@ class WarpRendererGpu {
                     const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr);
   // The same with the depth on a grid (p3d_defs.h DepthGrid): the filter's
   // coarse cells, read in place; the result is the full-size map's.
+  // A closed gate (cuda/change_gpu.h: an adaptive stage keeping the frame)
+  // makes every kernel return at once; fill=NeighborAverage, whose steps
+  // the host checks, takes none (cudaErrorInvalidValue).
   CudaStatus render(const WarpParams &params, const FrameView &src, const YuvToRgb &m, DepthGrid<const float> depth,
-                    const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr);
+                    const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr, StageGate gate = {});
   // Renders the pair and packs it in one: the function of warp_render_cpu()
   // then pack_cpu() of its 2W x H pair (pack.input is taken as the pair's
   // side-by-side, left first). out: pack_size()'s size, packed RGB or
@@ -51,12 +55,12 @@ class WarpRendererGpu {
   // (if not null) says which ran. No host sync (but fill=NeighborAverage's).
   CudaStatus render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src, const YuvToRgb &m,
                            DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
-                           bool *fused_out = nullptr);
+                           bool *fused_out = nullptr, StageGate gate = {});
 
  private:
   CudaStatus render_pair(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                          DepthGrid<const float> depth, const FrameView &out, const FusedAnaglyph *fused,
-                         cudaStream_t stream, long long *holes_out, bool *fused_used);
+                         cudaStream_t stream, long long *holes_out, bool *fused_used, StageGate gate);
   CudaStatus neighbour_average(const FrameView &out, int width, int height, cudaStream_t stream);
 
   // keys_: H x W 64-bit keys (a row per block, both eyes in turn), only for

@@ -15,6 +15,7 @@
 
 #include "../common/frame.h"
 #include "../common/warp.h"
+#include "change_gpu.h"
 #include "cuda_check.h"
 #include "warp_plan.h"
 
@@ -87,6 +88,7 @@ struct RowLaunch {
   bool rows_together;  // groups in RowsTogether blocks, of wide_group_threads
   int wide_group_threads;
   FusedAnaglyph fused;  // out.plane[0] null: not fused
+  StageGate gate;       // closed: the adaptive stage keeps this frame (cuda/change_gpu.h)
 };
 
 // cuda/warp.cu.
@@ -117,7 +119,8 @@ CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const 
 // row kernel left in `pair` mixed into f.out. *resident_blocks: one wave
 // of its blocks, read from the device once (-1: not yet).
 CudaStatus launch_fused_patch(const FrameView &pair, const FusedAnaglyph &f, const SmoothScratch &sc,
-                              const SmoothPlan &plan, int tail_y0, cudaStream_t stream, int *resident_blocks);
+                              const SmoothPlan &plan, int tail_y0, cudaStream_t stream, int *resident_blocks,
+                              StageGate gate);
 
 }  // namespace warp_detail
 }  // namespace p3d

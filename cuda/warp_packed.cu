@@ -31,8 +31,10 @@ __device__ uint32_t pair_word(const FrameView &pair, int col, int y) {
   return is_bgr_order(pair.format) ? swap_rb_word(w) : w;  // store_rgba()'s bytes back in rgba_word order
 }
 
-__global__ void fused_anaglyph_patch_kernel(FrameView pair, FusedAnaglyph f, SmoothScratch sc, int tail_y0) {
+__global__ void fused_anaglyph_patch_kernel(FrameView pair, FusedAnaglyph f, SmoothScratch sc, int tail_y0,
+                                            StageGate gate) {
   chained_kernel_start();
+  if (gate.closed()) return;
   const int W = pair.width / 2, H = pair.height, chunks = row_chunks(W);
   constexpr int kItemsARow = kSmoothTileW / kPatchPerThread;
   // 32-bit counts (a 64-bit division costs more than the rest of an item):
@@ -87,7 +89,8 @@ __global__ void fused_anaglyph_patch_kernel(FrameView pair, FusedAnaglyph f, Smo
 }  // namespace
 
 CudaStatus launch_fused_patch(const FrameView &pair, const FusedAnaglyph &f, const SmoothScratch &sc,
-                              const SmoothPlan &plan, int tail_y0, cudaStream_t stream, int *resident_blocks) {
+                              const SmoothPlan &plan, int tail_y0, cudaStream_t stream, int *resident_blocks,
+                              StageGate gate) {
   if (*resident_blocks < 0) {
     int dev = 0, sms = 0, threads = 0;
     P3D_CUDA_TRY(cudaGetDevice(&dev));
@@ -98,7 +101,7 @@ CudaStatus launch_fused_patch(const FrameView &pair, const FusedAnaglyph &f, con
   const int W = pair.width / 2, H = pair.height;
   const unsigned blocks = patch_blocks(plan, W, H, tail_y0, *resident_blocks);
   P3D_CUDA_TRY(launch_chained(fused_anaglyph_patch_kernel, blocks, kPatchThreads, 0, stream, pair, f, sc,
-                              min(tail_y0, H)));
+                              min(tail_y0, H), gate));
   return {};
 }
 
@@ -108,7 +111,7 @@ using namespace warp_detail;
 
 CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src,
                                           const YuvToRgb &m, DepthGrid<const float> depth, const FrameView &out,
-                                          cudaStream_t stream, bool *fused_out) {
+                                          cudaStream_t stream, bool *fused_out, StageGate gate) {
   if (fused_out) *fused_out = false;
   PackParams pp = pack;
   pp.input = StereoInput::SideBySide;
@@ -116,7 +119,8 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
   // The pair in the output's packed format (pack's input and output share
   // one), or RGBA for a 4:2:0 output.
   const PixelFormat pair_format = is_packed_rgb(out.format) ? out.format : PixelFormat::RGBA;
-  if (pack_is_identity(pp) && out.format == pair_format) return render(params, src, m, depth, out, stream);
+  if (pack_is_identity(pp) && out.format == pair_format)
+    return render_pair(params, src, m, depth, out, nullptr, stream, nullptr, nullptr, gate);
   if (src.width <= 0 || src.height <= 0 || src.width > kMaxFrameSide || src.height > kMaxFrameSide)
     return invalid_frames();
   const int W = src.width, H = src.height;
@@ -143,10 +147,11 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
     fused.swap = pp.swap_eyes;
   }
   bool used = false;
-  P3D_CUDA_TRY_STATUS(render_pair(params, src, m, depth, pair, fusable ? &fused : nullptr, stream, nullptr, &used));
+  P3D_CUDA_TRY_STATUS(
+      render_pair(params, src, m, depth, pair, fusable ? &fused : nullptr, stream, nullptr, &used, gate));
   if (fused_out) *fused_out = used;
   if (used) return {};
-  return pack_gpu(pp, pair, out, stream);
+  return pack_gpu(pp, pair, out, stream, gate);
 }
 
 }  // namespace p3d

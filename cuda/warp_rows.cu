@@ -597,8 +597,10 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
                                       : P3D_MAX_THREADS_PER_SM / kRowThreadsMax)
     warp_row_kernel(FrameView src, YuvToRgb m, DepthGrid<const float> depth, FrameView out, EyeShifts eyes, float D,
                     float convergence, typename Keys::Word *global_keys, uint8_t *mask, SmoothScratch smooth,
-                    unsigned long long *total, bool words, int group_rows, int group_blocks, FusedAnaglyph fused) {
+                    unsigned long long *total, bool words, int group_rows, int group_blocks, FusedAnaglyph fused,
+                    StageGate gate) {
   chained_kernel_start();
+  if (gate.closed()) return;  // the smooth fill then finds no tile listed
   static_assert(kSharedKeys || !kBothEyes, "both eyes at once keep their keys in shared memory");
   static_assert(!kFused || kBlock == RowBlock::RowsTogether, "the pack is fused in RowsTogether blocks");
   static_assert(kBothEyes || kBlock == RowBlock::Row, "row groups render both eyes at once");
@@ -707,7 +709,7 @@ CudaStatus launch_rows(const RowLaunch &l) {
                                                                                         : row_threads(l.src.width);
   P3D_CUDA_TRY(launch_chained(row_kernel, blocks, threads, l.smem, l.stream, l.src, l.m, l.depth, l.out, l.eyes, l.D,
                               l.convergence, reinterpret_cast<typename Keys::Word *>(l.global_keys), l.mask, l.smooth,
-                              l.total, l.words, rows, group_blocks, l.fused));
+                              l.total, l.words, rows, group_blocks, l.fused, l.gate));
   return {};
 }
 

@@ -77,6 +77,11 @@ struct DepthState {
   p3d::PixelRect estimated_rect;
 #if HAVE_CUDA
   p3d::BarCountsGpu bar_counts_gpu;
+  // adaptive on CUDA memory: the frame's bytes kept on the device and the
+  // tiles that changed (cuda/change_gpu.h). Streaming thread.
+  p3d::FrameHistoryGpu history_gpu;
+  p3d::ChangeMapGpu changes_gpu;
+  p3d::ChangeBackOff backoff_gpu;
 #endif
   // method decides the output width: it changes at a frame boundary (object lock).
   p3d::gst::StagedGeometry<GstPseudo3DDepthMethod> method{DEFAULT_METHOD};
@@ -149,6 +154,8 @@ static p3d::DepthParams frame_params(GstPseudo3DDepth *self) {
     self->state->cpu.reset();
 #if HAVE_CUDA
     self->state->gpu.reset();
+    self->state->history_gpu.reset();
+    self->state->backoff_gpu.reset();
 #endif
     self->state->history.reset();
     self->state->last_plane.reset();
@@ -244,15 +251,16 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   // Automatic block sizes are the frame's, inside bars too.
   const p3d::DepthParams params = p3d::frame_scaled(frame_params(self), view.width, view.height);
   const bool crop = crop_bars(self);
-  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
+  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base);
   DepthState *state = self->state;
+  const bool adaptive_cpu = adaptive.on && path == GST_PSEUDO3D_PATH_CPU;
   p3d::ChangeMap changes;
-  if (adaptive.on) changes = state->history.compare(view, adaptive.tolerance);
-  if (crop && observe_bars(self, path, view, adaptive.on && !changes.any()) != GST_FLOW_OK) return GST_FLOW_ERROR;
+  if (adaptive_cpu) changes = state->history.compare(view, adaptive.tolerance);
+  if (crop && observe_bars(self, path, view, adaptive_cpu && !changes.any()) != GST_FLOW_OK) return GST_FLOW_ERROR;
   bool moved = false;
   const p3d::PixelRect rect = frame_rect(self, path, params, view, crop, &moved);
   const p3d::FrameView active = p3d::sub_frame(view, rect);
-  if (adaptive.on) {
+  if (adaptive_cpu) {
     // Only the blocks of changed tiles are summed again; when no block
     // depth changed the frame gets the previous plane itself. A moved
     // rect starts over (frame_rect restarted the estimator): every tile.
@@ -279,10 +287,26 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   if (!plane) return GST_FLOW_ERROR;
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
-    const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&] {
-      return state->gpu.estimate(params, active, p3d::sub_grid(plane->grid(), rect), base->gpu->stream());
+    // Adaptive: the frame compared on the device, and only the feature
+    // blocks of changed tiles summed again (a moved rect restarted the
+    // estimator, which then sums every block); while frames keep
+    // changing, uncompared (ChangeBackOff).
+    const bool compare = adaptive.on && state->backoff_gpu.compare_next();
+    if (!compare) state->history_gpu.reset();
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&]() -> p3d::CudaStatus {
+      cudaStream_t stream = base->gpu->stream();
+      p3d::TileFlags changed;
+      if (compare) {
+        P3D_CUDA_TRY_STATUS(state->history_gpu.compare(view, adaptive.tolerance, state->changes_gpu, stream));
+        P3D_CUDA_TRY_STATUS(state->changes_gpu.summarize(stream));
+        changed = state->changes_gpu.flags().offset(rect.x0, rect.y0);
+      }
+      return state->gpu.estimate(params, active, p3d::sub_grid(plane->grid(), rect), stream,
+                                 compare ? &changed : nullptr);
     });
     if (ret != GST_FLOW_OK) return ret;
+    if (compare && state->history_gpu.compared())
+      state->backoff_gpu.observe(state->changes_gpu.last_share() > 0);
   } else
 #endif
   {
@@ -345,6 +369,8 @@ static void release(GstPseudo3DBase *base) {
 #if HAVE_CUDA
   state->gpu = p3d::DepthEstimatorGpu();
   state->bar_counts_gpu.reset();
+  state->history_gpu = p3d::FrameHistoryGpu();
+  state->changes_gpu = p3d::ChangeMapGpu();
 #endif
   state->pool.clear();
 }

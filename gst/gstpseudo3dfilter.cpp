@@ -39,6 +39,11 @@ enum { PROP_0, PROP_RADIUS, PROP_SIGMA_SPACE, PROP_SIGMA_RANGE, PROP_MODE, PROP_
 struct FilterState {
 #if HAVE_CUDA
   p3d::BilateralFilterGpu gpu;
+  // adaptive on CUDA memory: the inputs compared on the device, and the
+  // tiles within the filter's reach of a change.
+  p3d::gst::InputHistoryGpu inputs_gpu;
+  p3d::ChangeMapGpu dirty_gpu;
+  p3d::ChangeBackOff backoff_gpu;
 #endif
   p3d::gst::DepthPlanePool pool;
   // adaptive (stage_adaptive.h), streaming thread: the previous frame's
@@ -50,6 +55,10 @@ struct FilterState {
 
   void forget() {
     inputs.reset();
+#if HAVE_CUDA
+    inputs_gpu.reset();
+    backoff_gpu.reset();
+#endif
     params.reset();
     last_out.reset();
   }
@@ -115,23 +124,52 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   GST_OBJECT_UNLOCK(self);
   if (gst_pseudo3d_base_take_history_reset(base)) self->state->forget();
   const p3d::PixelRect rect = filter_rect(path, depth, params);
-  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
-  if (adaptive.on) return filter_adaptive(self, buf, guide, params, rect, adaptive.tolerance);
-  self->state->forget();
+  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base);
+  if (adaptive.on && path == GST_PSEUDO3D_PATH_CPU)
+    return filter_adaptive(self, buf, guide, params, rect, adaptive.tolerance);
+  FilterState *state = self->state;
+  if (!adaptive.on) state->forget();
   // On CUDA memory the output holds a value a cell of the coarse grid (no
   // full-size copy; depth_plane.h) where the grid step is a power of two.
   const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), rect.width(), rect.height());
-  p3d::gst::DepthPlanePtr out =
-      p3d::gst::new_depth(base, self->state->pool, path, depth->width, depth->height, shift);
+  p3d::gst::DepthPlanePtr out = p3d::gst::new_depth(base, state->pool, path, depth->width, depth->height, shift);
   if (!out || !p3d::gst::set_active(base, out.get(), rect)) return GST_FLOW_ERROR;
   const p3d::FrameView active = p3d::sub_frame(guide, rect);
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
-    const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&] {
-      return self->state->gpu.run(params, active, p3d::sub_grid(p3d::as_const(depth->grid()), rect),
-                                  p3d::sub_grid(out->grid(), rect), base->gpu->stream());
+    // Adaptive: the blocks of outputs within the filter's reach of a
+    // changed guide or depth tile are filtered, the others copied from the
+    // previous output plane, which the stage holds; while frames keep
+    // changing, uncompared (ChangeBackOff).
+    const bool compare = adaptive.on && state->backoff_gpu.compare_next();
+    if (!compare) {
+      state->inputs_gpu.reset();
+      state->last_out.reset();
+    }
+    const bool whole = compare && (state->params.changed({params, rect}) || !state->last_out ||
+                                   state->last_out->width != out->width || state->last_out->height != out->height);
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "filtering depth", [&]() -> p3d::CudaStatus {
+      cudaStream_t stream = base->gpu->stream();
+      p3d::TileFlags dirty;
+      p3d::DepthGrid<const float> kept;
+      if (compare) {
+        P3D_CUDA_TRY_STATUS(state->inputs_gpu.compare(guide, p3d::gst::frame_depth_plane(buf), adaptive.tolerance,
+                                                      stream));
+        if (!whole) {
+          const int reach = p3d::bilateral_reach(params, rect.width(), rect.height());
+          P3D_CUDA_TRY_STATUS(p3d::dilate_gpu(state->inputs_gpu.changes(), reach, reach, state->dirty_gpu, stream));
+          P3D_CUDA_TRY_STATUS(state->dirty_gpu.summarize(stream));
+          dirty = state->dirty_gpu.flags().offset(rect.x0, rect.y0);
+          kept = p3d::sub_grid(p3d::as_const(state->last_out->grid()), rect);
+        }
+      }
+      return state->gpu.run(params, active, p3d::sub_grid(p3d::as_const(depth->grid()), rect),
+                            p3d::sub_grid(out->grid(), rect), stream, dirty, kept);
     });
     if (ret != GST_FLOW_OK) return ret;
+    if (compare) state->last_out = out;
+    if (compare && !whole && state->inputs_gpu.compared())
+      state->backoff_gpu.observe(state->dirty_gpu.last_share() > 0);
   } else
 #endif
   {
@@ -147,6 +185,8 @@ static void release(GstPseudo3DBase *base) {
   state->forget();
 #if HAVE_CUDA
   state->gpu = p3d::BilateralFilterGpu();
+  state->inputs_gpu = p3d::gst::InputHistoryGpu();
+  state->dirty_gpu = p3d::ChangeMapGpu();
 #endif
   state->pool.clear();
 }

@@ -68,11 +68,18 @@ struct PackState {
   p3d::gst::InputHistory input;
   p3d::gst::KeptParams<p3d::PackParams> params;
   p3d::gst::OutputHistory output;
+#if HAVE_CUDA
+  // adaptive on CUDA memory (cuda/change_gpu.h).
+  p3d::gst::WholeOutputGpu adaptive_gpu;
+#endif
 
   void forget() {
     input.reset();
     params.reset();
     output.reset();
+#if HAVE_CUDA
+    adaptive_gpu.reset();
+#endif
   }
 };
 
@@ -180,17 +187,34 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(base);
   const p3d::PackParams params = self->packing->frame_params();
   const p3d::FrameView src = p3d::gst::frame_view(in), dst = p3d::gst::frame_view(out);
+  PackState *state = self->state;
+  if (gst_pseudo3d_base_take_history_reset(base)) state->forget();
+  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base);
 #if HAVE_CUDA
-  if (path == GST_PSEUDO3D_PATH_GPU)
-    return p3d::gst::run_gpu(base, "packing the stereo pair", [&] {
-      return p3d::pack_gpu(params, src, dst, base->gpu->stream());
+  // Adaptive on the device: a frame whose input did not change is not
+  // packed, the kept output is copied into it; while frames keep
+  // changing, uncompared (ChangeBackOff).
+  if (path == GST_PSEUDO3D_PATH_GPU) {
+    if (!adaptive.on) state->forget();
+    const bool keep = state->adaptive_gpu.begin(adaptive.on);
+    const bool changed_params = keep && state->params.changed(params);
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "packing the stereo pair", [&]() -> p3d::CudaStatus {
+      cudaStream_t stream = base->gpu->stream();
+      p3d::StageGate gate;
+      if (keep)
+        P3D_CUDA_TRY_STATUS(state->adaptive_gpu.decide(src, nullptr, adaptive.tolerance, changed_params, stream, &gate));
+      P3D_CUDA_TRY_STATUS(p3d::pack_gpu(params, src, dst, stream, gate));
+      if (keep) P3D_CUDA_TRY_STATUS(state->adaptive_gpu.finish(dst, stream));
+      return p3d::CudaStatus{};
     });
+    state->adaptive_gpu.end(ret == GST_FLOW_OK);
+    return ret;
+  }
+#else
+  (void)path;
 #endif
   // Adaptive: the output rows that read a changed input row are packed
   // again, the rest is the previous output.
-  PackState *state = self->state;
-  if (gst_pseudo3d_base_take_history_reset(base)) state->forget();
-  const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base, path);
   p3d::ChangeMap changes;
   bool whole = true;
   if (adaptive.on) {
@@ -209,7 +233,13 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   return GST_FLOW_OK;
 }
 
-static void release(GstPseudo3DBase *base) { GST_PSEUDO3D_PACK(base)->state->forget(); }
+static void release(GstPseudo3DBase *base) {
+  PackState *state = GST_PSEUDO3D_PACK(base)->state;
+  state->forget();
+#if HAVE_CUDA
+  state->adaptive_gpu = p3d::gst::WholeOutputGpu();
+#endif
+}
 
 static void gst_pseudo3d_pack_set_property(GObject *object, guint prop_id, const GValue *value, GParamSpec *pspec) {
   GstPseudo3DPack *self = GST_PSEUDO3D_PACK(object);

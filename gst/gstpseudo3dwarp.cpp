@@ -73,16 +73,22 @@ struct WarpState {
   // The views of a picture narrower than the frame (pillarbox bars), kept
   // from frame to frame like the pair buffer.
   std::vector<uint8_t> active_pair;
+#if HAVE_CUDA
+  p3d::WarpRendererGpu gpu;
+  p3d::ActiveWarpGpu active_gpu;
+  // adaptive on CUDA memory: the inputs compared and the output kept on
+  // the device (cuda/change_gpu.h).
+  p3d::gst::WholeOutputGpu adaptive_gpu;
+#endif
 
   void forget() {
     inputs.reset();
     params.reset();
     output.reset();
-  }
 #if HAVE_CUDA
-  p3d::WarpRendererGpu gpu;
-  p3d::ActiveWarpGpu active_gpu;
+    adaptive_gpu.reset();
 #endif
+  }
 };
 
 struct _GstPseudo3DWarp {
@@ -197,20 +203,39 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   p3d::PixelRect rect = depth->active_rect();
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
+    WarpState *state = self->state;
     const p3d::PixelRect whole = p3d::whole_picture(src.width, src.height);
-    self->state->forget();
     const p3d::FrameView dst = p3d::gst::frame_view(out);
     const p3d::DepthGrid<const float> grid = p3d::as_const(depth->grid());
     if (!p3d::sub_grid_fits(grid, rect)) rect = whole;
-    return p3d::gst::run_gpu(base, "rendering the views", [&] {
+    // Adaptive: the inputs compared and the decision taken on the device;
+    // the kernels of a frame whose inputs did not change return at once
+    // and the kept output is copied into it; while frames keep changing,
+    // uncompared (ChangeBackOff). fill=neighbor-average, whose steps the
+    // host checks, renders every frame.
+    const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base);
+    const bool adaptive_fill = adaptive.on && p3d::warp_sanitize(params).fill != p3d::HoleFill::NeighborAverage;
+    if (!adaptive_fill) state->forget();
+    const bool keep = state->adaptive_gpu.begin(adaptive_fill);
+    const bool changed_params = keep && state->params.changed({params, pack, yuv, rect});
+    const GstFlowReturn ret = p3d::gst::run_gpu(base, "rendering the views", [&]() -> p3d::CudaStatus {
+      cudaStream_t stream = base->gpu->stream();
+      p3d::StageGate gate;
+      if (keep)
+        P3D_CUDA_TRY_STATUS(state->adaptive_gpu.decide(src, p3d::gst::frame_depth_plane(inbuf), adaptive.tolerance,
+                                                       changed_params, stream, &gate));
       if (rect != whole)
-        return self->state->active_gpu.render(self->state->gpu, params, pack, src, yuv, grid, rect, dst,
-                                              base->gpu->stream());
-      return self->state->gpu.render_packed(params, pack, src, yuv, grid, dst, base->gpu->stream());
+        P3D_CUDA_TRY_STATUS(state->active_gpu.render(state->gpu, params, pack, src, yuv, grid, rect, dst, stream, gate));
+      else
+        P3D_CUDA_TRY_STATUS(state->gpu.render_packed(params, pack, src, yuv, grid, dst, stream, nullptr, gate));
+      if (keep) P3D_CUDA_TRY_STATUS(state->adaptive_gpu.finish(dst, stream));
+      return p3d::CudaStatus{};
     });
+    state->adaptive_gpu.end(ret == GST_FLOW_OK);
+    return ret;
   }
 #endif
-  return render_cpu(self, inbuf, src, params, pack, yuv, rect, p3d::gst::adaptive_settings(base, path), out);
+  return render_cpu(self, inbuf, src, params, pack, yuv, rect, p3d::gst::adaptive_settings(base), out);
 }
 
 static void release(GstPseudo3DBase *base) {
@@ -218,6 +243,7 @@ static void release(GstPseudo3DBase *base) {
 #if HAVE_CUDA
   GST_PSEUDO3D_WARP(base)->state->gpu = p3d::WarpRendererGpu();
   GST_PSEUDO3D_WARP(base)->state->active_gpu = p3d::ActiveWarpGpu();
+  GST_PSEUDO3D_WARP(base)->state->adaptive_gpu = p3d::gst::WholeOutputGpu();
 #endif
 }
 

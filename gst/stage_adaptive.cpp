@@ -6,10 +6,10 @@
 
 namespace p3d::gst {
 
-AdaptiveSettings adaptive_settings(GstPseudo3DBase *self, GstPseudo3DPath path) {
+AdaptiveSettings adaptive_settings(GstPseudo3DBase *self) {
   AdaptiveSettings s;
   GST_OBJECT_LOCK(self);
-  s.on = self->adaptive && path == GST_PSEUDO3D_PATH_CPU;
+  s.on = self->adaptive;
   s.tolerance = self->reuse_tolerance;
   GST_OBJECT_UNLOCK(self);
   return s;
@@ -26,6 +26,56 @@ void InputHistory::reset() {
   inputs_.reset();
   depth_.reset();
 }
+
+#if HAVE_CUDA
+CudaStatus InputHistoryGpu::compare(const FrameView &frame, const DepthPlanePtr &depth, float tolerance,
+                                    cudaStream_t stream) {
+  P3D_CUDA_TRY_STATUS(frame_.compare(frame, tolerance, changes_, stream));
+  compared_ = frame_.compared() && (!depth || depth_);
+  if (depth && depth != depth_) {
+    if (depth_ && depth_->on_device)
+      P3D_CUDA_TRY_STATUS(mark_grid_changes_gpu(as_const(depth_->grid()), as_const(depth->grid()), changes_, stream));
+    else
+      P3D_CUDA_TRY_STATUS(changes_.fill(true, stream));
+  }
+  depth_ = depth;
+  return {};
+}
+
+void InputHistoryGpu::reset() {
+  frame_.reset();
+  depth_.reset();
+}
+
+bool WholeOutputGpu::begin(bool adaptive) {
+  if (!adaptive) reset();
+  comparing_ = adaptive && backoff_.compare_next();
+  if (adaptive && !comparing_) {
+    inputs_.reset();
+    output_.reset();
+  }
+  return comparing_;
+}
+
+CudaStatus WholeOutputGpu::decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, bool whole,
+                                  cudaStream_t stream, StageGate *gate) {
+  P3D_CUDA_TRY_STATUS(inputs_.compare(frame, depth, tolerance, stream));
+  P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), whole, stream));
+  *gate = output_.gate();
+  return {};
+}
+
+void WholeOutputGpu::end(bool ok) {
+  // Any change makes such a stage compute the whole frame: it is busy.
+  if (ok && comparing_ && inputs_.compared()) backoff_.observe(output_.last_ran());
+}
+
+void WholeOutputGpu::reset() {
+  inputs_.reset();
+  output_.reset();
+  backoff_.reset();
+}
+#endif
 
 namespace {
 

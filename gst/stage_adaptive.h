@@ -1,8 +1,8 @@
 // The adaptive work of a stage (adaptive=true, the default): what a stage
 // keeps of its inputs and its output from one frame to the next, so that it
-// recomputes only the tiles a change can reach (common/change_map.h). With
+// recomputes only the tiles a change can reach (common/change_map.h; on
+// CUDA memory cuda/change_gpu.h, all of it on the device). With
 // reuse-tolerance 0 the output is byte for byte that of adaptive=false.
-// The CPU path works this way; on CUDA memory every frame is computed whole.
 #pragma once
 
 #include <gst/video/video.h>
@@ -11,18 +11,22 @@
 #include <vector>
 
 #include "adaptive.h"
+#include "config.h"
 #include "depth_plane.h"
 #include "gstpseudo3dbase.h"
+#if HAVE_CUDA
+#include "change_gpu.h"
+#endif
 
 namespace p3d::gst {
 
-// The stage's adaptive settings for this frame, read once: off on the GPU
-// path. tolerance: reuse-tolerance (common/change_map.h FrameHistory).
+// The stage's adaptive settings for this frame, read once.
+// tolerance: reuse-tolerance (common/change_map.h FrameHistory).
 struct AdaptiveSettings {
   bool on = false;
   float tolerance = 0.f;
 };
-AdaptiveSettings adaptive_settings(GstPseudo3DBase *self, GstPseudo3DPath path);
+AdaptiveSettings adaptive_settings(GstPseudo3DBase *self);
 
 // A stage's inputs of the previous frame (common/adaptive.h StageInputs),
 // holding on to the depth plane (planes never change once attached).
@@ -61,6 +65,55 @@ class OutputHistory {
   GstVideoInfo info_;
   std::vector<uint8_t> planes_[GST_VIDEO_MAX_PLANES];
 };
+
+#if HAVE_CUDA
+// InputHistory on CUDA memory: the frame compared with a copy on the
+// device, the depth grid with the previous frame's plane (held), the tiles
+// that changed left in changes().
+class InputHistoryGpu {
+ public:
+  // frame: device memory; depth: a device plane or null (the stage reads
+  // none). Queued on `stream`.
+  CudaStatus compare(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, cudaStream_t stream);
+  const ChangeMapGpu &changes() const { return changes_; }
+  // Whether the last compare() had the previous frame's inputs (else it
+  // flagged every tile).
+  bool compared() const { return compared_; }
+  void reset();
+
+ private:
+  FrameHistoryGpu frame_;
+  ChangeMapGpu changes_;
+  DepthPlanePtr depth_;
+  bool compared_ = false;
+};
+
+// The adaptive steps on CUDA memory of a stage that keeps its output
+// whole (pseudo3dwarp, pseudo3dpack): its inputs compared, the device's
+// decision (KeptOutputGpu), the back-off (ChangeBackOff). Per frame:
+// begin() before the GPU block; inside it decide(), the stage's kernels
+// behind the gate, finish(); end() after the block's wait.
+class WholeOutputGpu {
+ public:
+  // Whether this frame is compared (adaptive and not backing off); when
+  // not, what was kept is dropped and the frame is computed whole.
+  bool begin(bool adaptive);
+  // Compares the inputs (depth: as InputHistoryGpu::compare) and queues
+  // the decision; whole: the parameters changed. *gate: the stage's.
+  CudaStatus decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, bool whole,
+                    cudaStream_t stream, StageGate *gate);
+  CudaStatus finish(const FrameView &out, cudaStream_t stream) { return output_.finish(out, stream); }
+  // After the frame's work was waited for (ok: it succeeded).
+  void end(bool ok);
+  void reset();
+
+ private:
+  InputHistoryGpu inputs_;
+  KeptOutputGpu output_;
+  ChangeBackOff backoff_;
+  bool comparing_ = false;
+};
+#endif
 
 // The parameters of the previous frame: whatever was kept was made with
 // them, and any change makes the stage compute the whole frame.

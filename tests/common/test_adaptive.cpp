@@ -420,6 +420,68 @@ TEST(AdaptiveChangeMap, ComparePlanesAndCopyPlaneRect) {
   }
 }
 
+// A grid's changes are those of its full-size map: compare_grids() against
+// compare_planes() of the expanded grids, for cells smaller than, as large
+// as and larger than a tile, on sizes that leave partial cells and tiles.
+TEST(AdaptiveChangeMap, CompareGridsIsComparePlanesOfTheExpandedMaps) {
+  std::mt19937 rng(21);
+  for (int shift = 0; shift <= 6; ++shift)
+    for (const cv::Size size : {cv::Size(97, 45), cv::Size(200, 131), cv::Size(64, 64)}) {
+      const int cw = grid_cells(size.width, shift), ch = grid_cells(size.height, shift);
+      cv::Mat a(ch, cw, CV_32FC1);
+      cv::randu(a, 0.f, 1.f);
+      for (int k = 0; k < 20; ++k) {
+        cv::Mat b = a.clone();
+        const int changes = k % 4;  // none, then one to three cells
+        for (int c = 0; c < changes; ++c) b.at<float>(uniform(rng, 0, ch - 1), uniform(rng, 0, cw - 1)) += 1.f;
+        const DepthGrid<const float> ga{cview(a), size.width, size.height, shift};
+        const DepthGrid<const float> gb{cview(b), size.width, size.height, shift};
+        cv::Mat fa(size.height, size.width, CV_32FC1), fb(size.height, size.width, CV_32FC1);
+        expand_grid(ga, depth_view_of(fa));
+        expand_grid(gb, depth_view_of(fb));
+        EXPECT_TRUE(same_tiles(compare_grids(ga, gb), compare_planes(cview(fa), cview(fb))))
+            << "shift " << shift << " " << size.width << "x" << size.height << " case " << k;
+      }
+      const DepthGrid<const float> ga{cview(a), size.width, size.height, shift};
+      const DepthGrid<const float> other{cview(a), size.width, size.height, shift + 1};
+      EXPECT_TRUE(compare_grids(ga, other).all()) << "another shift: every tile";
+    }
+}
+
+// The frames uncompared after each busy one (compare_next() false in a
+// row before the next true).
+int pause_after_busy(ChangeBackOff &b) {
+  b.observe(true);
+  int n = 0;
+  while (!b.compare_next()) ++n;
+  return n;
+}
+
+// ChangeBackOff: a busy compared frame makes the next kBackOffFrames
+// uncompared, doubling while busy up to kBackOffMax; a calm one starts
+// over; reset() compares at once.
+TEST(AdaptiveChangeMap, BackOffSkipsComparisonsAfterABusyFrame) {
+  ChangeBackOff b;
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_TRUE(b.compare_next());
+    b.observe(false);
+  }
+  EXPECT_TRUE(b.compare_next());
+  int want = kBackOffFrames;
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(pause_after_busy(b), want) << "busy frame " << k;
+    want = std::min(2 * want, kBackOffMax);
+  }
+  b.observe(false);
+  EXPECT_TRUE(b.compare_next()) << "a calm frame: compared again";
+  EXPECT_EQ(pause_after_busy(b), kBackOffFrames) << "the pause starts over";
+  b.observe(true);
+  EXPECT_FALSE(b.compare_next());
+  b.reset();
+  EXPECT_TRUE(b.compare_next()) << "reset: compares at once";
+  EXPECT_EQ(pause_after_busy(b), kBackOffFrames);
+}
+
 // ---- FrameHistory and StageInputs --------------------------------------------------
 
 TEST(AdaptiveFrameHistory, FirstUnchangedAndNewGeometry) {

@@ -280,4 +280,68 @@ void push_frames(const std::string &launch, PixelFormat f, const std::vector<cv:
   gst_harness_teardown(h);
 }
 
+
+std::vector<cv::Mat> changing_sequence(int w, int h, uint32_t seed) {
+  std::vector<cv::Mat> frames;
+  cv::Mat cur = textured_picture(w, h, seed);
+  std::mt19937 rng(seed + 1);
+  for (int k = 0; k < 14; ++k) {
+    cv::Mat next = cur.clone();
+    switch (k % 7) {
+      case 0: case 1: break;  // unchanged
+      case 2: case 3: {  // a small box moves
+        const cv::Rect r(static_cast<int>(rng() % (w - 12)), static_cast<int>(rng() % (h - 10)), 12, 10);
+        cv::rectangle(next, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
+        break;
+      }
+      case 4: {  // a big change
+        cv::rectangle(next, cv::Rect(w / 4, h / 5, w / 2, h / 2), cv::Scalar(rng() % 256, 30, 200), cv::FILLED);
+        break;
+      }
+      case 5: next = textured_picture(w, h, seed + 100 + k); break;  // a cut
+      default: next.at<cv::Vec3b>(h / 2, w / 2) = cv::Vec3b(1, 2, 3); break;  // one pixel
+    }
+    frames.push_back(next);
+    cur = next;
+  }
+  return frames;
+}
+
+std::vector<std::vector<uint8_t>> output_bytes(const std::string &launch, PixelFormat f,
+                                               const std::vector<cv::Mat> &frames,
+                                               const std::function<void(int, GstHarness *)> &between) {
+  std::vector<std::vector<uint8_t>> out;
+  push_frames(
+      launch, f, frames,
+      [&](GstBuffer *b, GstHarness *) {
+        GstMapInfo map;
+        gst_buffer_map(b, &map, GST_MAP_READ);
+        out.emplace_back(map.data, map.data + map.size);
+        gst_buffer_unmap(b, &map);
+      },
+      between);
+  return out;
+}
+
+void expect_same_bytes(const std::vector<std::vector<uint8_t>> &a, const std::vector<std::vector<uint8_t>> &b,
+                       const std::string &what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t k = 0; k < a.size(); ++k) EXPECT_TRUE(a[k] == b[k]) << what << ": frame " << k << " differs";
+}
+
+std::string on_every_stage(const std::string &chain, const std::string &option) {
+  std::string out;
+  size_t i = 0;
+  while (i <= chain.size()) {
+    const size_t bang = chain.find(" ! ", i);
+    std::string part = chain.substr(i, bang == std::string::npos ? std::string::npos : bang - i);
+    if (part.rfind("pseudo3d", 0) == 0) part += option;
+    out += part;
+    if (bang == std::string::npos) break;
+    out += " ! ";
+    i = bang + 3;
+  }
+  return out;
+}
+
 }  // namespace p3d::test

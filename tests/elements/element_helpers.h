@@ -55,6 +55,28 @@ void push_frames(const std::string &launch, PixelFormat f, const std::vector<cv:
 // ramps with noise and five rectangles of random colours.
 cv::Mat textured_picture(int w, int h, uint32_t seed);
 
+// A sequence of the kinds a stream has (14 frames of textured_picture):
+// the same frame again, a small object moving, a big change, a cut to
+// another picture and back, one pixel.
+std::vector<cv::Mat> changing_sequence(int w, int h, uint32_t seed);
+
+// The output bytes of every frame of `frames` pushed through `launch`
+// (push_frames). between(k, harness) runs before frame k is pushed.
+std::vector<std::vector<uint8_t>> output_bytes(const std::string &launch, PixelFormat f,
+                                               const std::vector<cv::Mat> &frames,
+                                               const std::function<void(int, GstHarness *)> &between = {});
+
+// Fails the test where the outputs of two runs differ in any byte.
+void expect_same_bytes(const std::vector<std::vector<uint8_t>> &a, const std::vector<std::vector<uint8_t>> &b,
+                       const std::string &what);
+
+// The launch line with `option` (" name=value") added to every pseudo3d
+// element of it; with_adaptive: adaptive=<on>.
+std::string on_every_stage(const std::string &chain, const std::string &option);
+inline std::string with_adaptive(const std::string &chain, bool on) {
+  return on_every_stage(chain, std::string(" adaptive=") + (on ? "true" : "false"));
+}
+
 // Folder for files tests write (pictures of outputs).
 std::string output_dir();
 

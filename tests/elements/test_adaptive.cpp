@@ -25,79 +25,11 @@ using namespace p3d::test;
 namespace {
 
 
-// A sequence of the kinds a stream has: the same frame again, a small
-// object moving, a big change, a cut to another picture and back.
-std::vector<cv::Mat> sequence(int w, int h, uint32_t seed) {
-  std::vector<cv::Mat> frames;
-  cv::Mat cur = textured_picture(w, h, seed);
-  std::mt19937 rng(seed + 1);
-  for (int k = 0; k < 14; ++k) {
-    cv::Mat next = cur.clone();
-    switch (k % 7) {
-      case 0: case 1: break;  // unchanged
-      case 2: case 3: {  // a small box moves
-        const cv::Rect r(static_cast<int>(rng() % (w - 12)), static_cast<int>(rng() % (h - 10)), 12, 10);
-        cv::rectangle(next, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
-        break;
-      }
-      case 4: {  // a big change
-        cv::rectangle(next, cv::Rect(w / 4, h / 5, w / 2, h / 2), cv::Scalar(rng() % 256, 30, 200), cv::FILLED);
-        break;
-      }
-      case 5: next = textured_picture(w, h, seed + 100 + k); break;  // a cut
-      default: next.at<cv::Vec3b>(h / 2, w / 2) = cv::Vec3b(1, 2, 3); break;  // one pixel
-    }
-    frames.push_back(next);
-    cur = next;
-  }
-  return frames;
-}
-
-// The output bytes of every frame of `frames` pushed through `launch`.
-// between(k, harness) runs before frame k is pushed.
-std::vector<std::vector<uint8_t>> outputs(const std::string &launch, PixelFormat f, const std::vector<cv::Mat> &frames,
-                                          const std::function<void(int, GstHarness *)> &between = {}) {
-  std::vector<std::vector<uint8_t>> out;
-  push_frames(
-      launch, f, frames,
-      [&](GstBuffer *b, GstHarness *) {
-        GstMapInfo map;
-        gst_buffer_map(b, &map, GST_MAP_READ);
-        out.emplace_back(map.data, map.data + map.size);
-        gst_buffer_unmap(b, &map);
-      },
-      between);
-  return out;
-}
-
 // The element named "c" in a harness's pipeline.
 GstElement *element_c(GstHarness *hx) {
   GstElement *c = gst_bin_get_by_name(GST_BIN(hx->element), "c");
   gst_object_unref(c);  // the pipeline holds it
   return c;
-}
-
-void expect_same(const std::vector<std::vector<uint8_t>> &a, const std::vector<std::vector<uint8_t>> &b,
-                 const std::string &what) {
-  ASSERT_EQ(a.size(), b.size()) << what;
-  for (size_t k = 0; k < a.size(); ++k) EXPECT_TRUE(a[k] == b[k]) << what << ": frame " << k << " differs";
-}
-
-// The launch line with adaptive=<on> on every pseudo3d stage of it.
-std::string with_adaptive(const std::string &chain, bool on) {
-  std::string out;
-  const std::string flag = std::string(" adaptive=") + (on ? "true" : "false");
-  size_t i = 0;
-  while (i <= chain.size()) {
-    const size_t bang = chain.find(" ! ", i);
-    std::string part = chain.substr(i, bang == std::string::npos ? std::string::npos : bang - i);
-    if (part.rfind("pseudo3d", 0) == 0) part += flag;
-    out += part;
-    if (bang == std::string::npos) break;
-    out += " ! ";
-    i = bang + 3;
-  }
-  return out;
 }
 
 struct Case {
@@ -122,17 +54,17 @@ TEST(AdaptiveElements, SameBytesAsFullComputation) {
        PixelFormat::RGBx},
   };
   for (const Case &c : cases) {
-    const std::vector<cv::Mat> frames = sequence(w, h, 7);
-    const auto full = outputs(with_adaptive(c.chain, false), c.format, frames);
-    const auto adaptive = outputs(with_adaptive(c.chain, true), c.format, frames);
-    expect_same(full, adaptive, c.chain);
+    const std::vector<cv::Mat> frames = changing_sequence(w, h, 7);
+    const auto full = output_bytes(with_adaptive(c.chain, false), c.format, frames);
+    const auto adaptive = output_bytes(with_adaptive(c.chain, true), c.format, frames);
+    expect_same_bytes(full, adaptive, c.chain);
   }
 }
 
 // A property changed between frames: the stage recomputes what it kept.
 TEST(AdaptiveElements, PropertyChangeBetweenFramesInvalidatesWhatWasKept) {
   const int w = 80, h = 48;
-  const std::vector<cv::Mat> frames = sequence(w, h, 11);
+  const std::vector<cv::Mat> frames = changing_sequence(w, h, 11);
   const std::string chain = "pseudo3dconvert processing=cpu layout=side-by-side-half name=c";
   auto change = [](int k, GstHarness *hx) {
     GstElement *c = element_c(hx);
@@ -142,15 +74,15 @@ TEST(AdaptiveElements, PropertyChangeBetweenFramesInvalidatesWhatWasKept) {
     if (k == 9) g_object_set(c, "convergence", 0.2f, NULL);
     if (k == 11) g_object_set(c, "hypothesis", 1, NULL);  // left-right
   };
-  const auto full = outputs(with_adaptive(chain, false), PixelFormat::I420, frames, change);
-  expect_same(full, outputs(with_adaptive(chain, true), PixelFormat::I420, frames, change), "property changes");
+  const auto full = output_bytes(with_adaptive(chain, false), PixelFormat::I420, frames, change);
+  expect_same_bytes(full, output_bytes(with_adaptive(chain, true), PixelFormat::I420, frames, change), "property changes");
   // The changes took effect: without them the last frame differs.
-  EXPECT_FALSE(full.back() == outputs(with_adaptive(chain, false), PixelFormat::I420, frames).back());
+  EXPECT_FALSE(full.back() == output_bytes(with_adaptive(chain, false), PixelFormat::I420, frames).back());
 }
 
 // Switching adaptive itself while frames flow changes no byte.
 TEST(AdaptiveElements, TogglingAdaptiveChangesNoByte) {
-  const std::vector<cv::Mat> frames = sequence(64, 40, 5);
+  const std::vector<cv::Mat> frames = changing_sequence(64, 40, 5);
   const std::string chain = "pseudo3dconvert processing=cpu layout=anaglyph name=c";
   auto toggle = [](int k, GstHarness *hx) {
     g_object_set(element_c(hx), "adaptive", k % 3 != 1, NULL);
@@ -158,14 +90,14 @@ TEST(AdaptiveElements, TogglingAdaptiveChangesNoByte) {
     g_object_get(element_c(hx), "adaptive", &on, NULL);
     EXPECT_EQ(on, k % 3 != 1);
   };
-  expect_same(outputs(with_adaptive(chain, false), PixelFormat::NV12, frames),
-              outputs(chain, PixelFormat::NV12, frames, toggle), "adaptive toggled");
+  expect_same_bytes(output_bytes(with_adaptive(chain, false), PixelFormat::NV12, frames),
+              output_bytes(chain, PixelFormat::NV12, frames, toggle), "adaptive toggled");
 }
 
 // After a flush the output is that of an element that never saw the
 // frames before it.
 TEST(AdaptiveElements, FlushStartsAfresh) {
-  const std::vector<cv::Mat> frames = sequence(64, 40, 3);
+  const std::vector<cv::Mat> frames = changing_sequence(64, 40, 3);
   const std::string chain = "pseudo3dconvert processing=cpu layout=side-by-side-half";
   auto flush = [](int k, GstHarness *hx) {
     if (k != 6) return;
@@ -175,11 +107,11 @@ TEST(AdaptiveElements, FlushStartsAfresh) {
     gst_segment_init(&seg, GST_FORMAT_TIME);
     gst_harness_push_event(hx, gst_event_new_segment(&seg));
   };
-  const auto with_flush = outputs(with_adaptive(chain, true), PixelFormat::I420, frames, flush);
+  const auto with_flush = output_bytes(with_adaptive(chain, true), PixelFormat::I420, frames, flush);
   const std::vector<cv::Mat> after(frames.begin() + 6, frames.end());
-  const auto fresh = outputs(with_adaptive(chain, false), PixelFormat::I420, after);
+  const auto fresh = output_bytes(with_adaptive(chain, false), PixelFormat::I420, after);
   ASSERT_EQ(with_flush.size(), frames.size());
-  expect_same(std::vector<std::vector<uint8_t>>(with_flush.begin() + 6, with_flush.end()), fresh, "after the flush");
+  expect_same_bytes(std::vector<std::vector<uint8_t>>(with_flush.begin() + 6, with_flush.end()), fresh, "after the flush");
 }
 
 // A caps change mid stream (another size): the kept results of the old
@@ -190,7 +122,7 @@ TEST(AdaptiveElements, CapsChangeStartsAfresh) {
   GstHarness *ref = gst_harness_new_parse((launch + " adaptive=false").c_str());
   for (const auto &[w, hgt] : {std::pair{64, 40}, std::pair{48, 32}, std::pair{64, 40}}) {
     for (GstHarness *hx : {h, ref}) gst_harness_set_src_caps_str(hx, raw_caps(PixelFormat::I420, w, hgt).c_str());
-    for (const cv::Mat &f : sequence(w, hgt, 9)) {
+    for (const cv::Mat &f : changing_sequence(w, hgt, 9)) {
       GstBuffer *a = gst_harness_push_and_pull(h, buffer_from_frame(HostFrame::from_bgr(f, PixelFormat::I420)));
       GstBuffer *b = gst_harness_push_and_pull(ref, buffer_from_frame(HostFrame::from_bgr(f, PixelFormat::I420)));
       ASSERT_TRUE(a && b);
@@ -211,7 +143,7 @@ TEST(AdaptiveElements, CapsChangeStartsAfresh) {
 // writes into the frame it was given (here the test) does not change what
 // the next frame starts from.
 TEST(AdaptiveElements, KeptOutputIsNotWrittenDownstream) {
-  const std::vector<cv::Mat> frames = sequence(64, 40, 21);
+  const std::vector<cv::Mat> frames = changing_sequence(64, 40, 21);
   GstHarness *h = gst_harness_new_parse("pseudo3dconvert processing=cpu layout=side-by-side-half");
   gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::RGBA, 64, 40).c_str());
   std::vector<std::vector<uint8_t>> got;
@@ -227,7 +159,7 @@ TEST(AdaptiveElements, KeptOutputIsNotWrittenDownstream) {
     gst_buffer_unref(b);
   }
   gst_harness_teardown(h);
-  expect_same(outputs("pseudo3dconvert processing=cpu layout=side-by-side-half adaptive=false", PixelFormat::RGBA,
+  expect_same_bytes(output_bytes("pseudo3dconvert processing=cpu layout=side-by-side-half adaptive=false", PixelFormat::RGBA,
                       frames),
               got, "scribbled downstream");
 }

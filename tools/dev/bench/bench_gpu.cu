@@ -16,7 +16,7 @@
 #include "bilateral_gpu.h"
 #include "cuda_check.h"
 #include "depth_estimate_gpu.h"
-#include "device_buffer.h"
+#include "device_frames.h"
 #include "pack_gpu.h"
 #include "warp_gpu.h"
 
@@ -39,51 +39,6 @@ CudaStatus convert_gpu(const FrameView &in, const YuvToRgb &m, const FrameView &
   P3D_CUDA_TRY_LAUNCH(convert_kernel);
   return {};
 }
-
-// A frame in device memory, planes pitched by the driver.
-struct DevFrame {
-  DeviceBuffer planes[3];
-  FrameView view;
-
-  CudaStatus allocate(PixelFormat format, int width, int height) {
-    view.format = format;
-    view.width = width;
-    view.height = height;
-    for (int i = 0; i < frame_plane_count(format); ++i) {
-      int row_bytes = 0, rows = 0;
-      frame_plane_size(format, width, height, i, &row_bytes, &rows);
-      P3D_CUDA_TRY_STATUS(planes[i].ensure_2d(static_cast<size_t>(row_bytes), static_cast<size_t>(rows)));
-      view.plane[i] = planes[i].as<uint8_t>();
-      view.stride[i] = static_cast<int>(planes[i].pitch());
-    }
-    return {};
-  }
-
-  CudaStatus upload(const HostFrame &h) {
-    P3D_CUDA_TRY_STATUS(allocate(h.format(), h.width(), h.height()));
-    const FrameView hv = h.view();
-    for (int i = 0; i < frame_plane_count(h.format()); ++i) {
-      int row_bytes = 0, rows = 0;
-      frame_plane_size(h.format(), h.width(), h.height(), i, &row_bytes, &rows);
-      P3D_CUDA_TRY(cudaMemcpy2D(view.plane[i], view.stride[i], hv.plane[i], hv.stride[i], row_bytes, rows,
-                                cudaMemcpyHostToDevice));
-    }
-    return {};
-  }
-};
-
-// A width x height picture's depth on a grid of 2^shift-pixel cells.
-struct DevDepth {
-  DeviceBuffer buf;
-  DepthGrid<float> view;
-
-  CudaStatus allocate(int width, int height, int shift) {
-    const int w = grid_cells(width, shift), h = grid_cells(height, shift);
-    P3D_CUDA_TRY_STATUS(buf.ensure_2d(static_cast<size_t>(w) * sizeof(float), static_cast<size_t>(h)));
-    view = DepthGrid<float>{ImageView<float>{buf.as<float>(), w, h, buf.pitch()}, width, height, shift};
-    return {};
-  }
-};
 
 // Owned stream and events; destruction errors cannot be reported from a
 // destructor and leave nothing behind that matters for a benchmark.

@@ -15,6 +15,11 @@
 #include "json_line.h"
 #include "metrics.h"
 #include "scene_chain.h"
+#ifdef P3D_BENCH_GPU
+#include <stdexcept>
+
+#include "scene_chain_gpu.h"
+#endif
 
 namespace p3d::bench {
 
@@ -65,6 +70,7 @@ struct SceneResult {
   Series off, on;
   AdaptiveChain::Shares changed;  // means over the timed frames
   bool compared = true;  // false: the on chain is meant to differ (measure_crop)
+  bool gpu = false;      // the GPU chains (the rows and filter/warp shares are not counted)
   int identical_frames = 0;
   int first_mismatch = -1;  // frame number, -1: none
   std::string mismatch_at;
@@ -83,12 +89,12 @@ struct SceneResult {
 // one a change from the frame before as a stream meets it. after(off, on,
 // k) sees each frame's outputs.
 template <class MakeOff, class MakeOn, class After>
-void run_round(const std::vector<HostFrame> &frames, SceneResult *r, MakeOff make_off, MakeOn make_on, After after) {
+void run_round(const std::vector<FrameView> &frames, SceneResult *r, MakeOff make_off, MakeOn make_on, After after) {
   auto off_chain = make_off();
   auto on_chain = make_on();
   std::vector<StageMs> off, on;
   for (size_t k = 0; k < frames.size(); ++k) {
-    const FrameView f = frames[k].view();
+    const FrameView f = frames[k];
     StageMs off_ms, on_ms;
     if (k % 2) {
       off_chain.frame(f, &off_ms);
@@ -133,30 +139,39 @@ double frame_psnr(const HostFrame &a, const HostFrame &b) {
   return psnr(ca, cb);
 }
 
-// Both chains over one sequence, `rounds` times; in the first round each
-// adaptive output is compared with the full chain's (every round computes
-// the same bytes).
-SceneResult measure(const StageParams &p, const std::vector<HostFrame> &frames, float tolerance, int rounds) {
+std::vector<FrameView> views_of(const std::vector<HostFrame> &frames) {
+  std::vector<FrameView> v;
+  for (const HostFrame &f : frames) v.push_back(f.view());
+  return v;
+}
+
+// The chains' shares of changed tiles and rows (AdaptiveChain::shares);
+// the GPU chain reports none, so its input share is FrameHistory's.
+void add_shares(SceneResult *r, const AdaptiveChain &adaptive) {
+  const AdaptiveChain::Shares &s = adaptive.shares();
+  r->changed.input += s.input;
+  r->changed.filter += s.filter;
+  r->changed.warp += s.warp;
+  r->changed.warp_rows += s.warp_rows;
+}
+#ifdef P3D_BENCH_GPU
+void add_shares(SceneResult *, const GpuSceneChain &) {}
+#endif
+
+// Both chains over one sequence (`frames`, their views in the chains'
+// memory), `rounds` times; in the first round each adaptive output is
+// compared with the full chain's (every round computes the same bytes).
+template <class MakeFull, class MakeAdaptive>
+SceneResult measure(const std::vector<HostFrame> &frames, const std::vector<FrameView> &views, float tolerance,
+                    int rounds, MakeFull make_full, MakeAdaptive make_adaptive) {
   SceneResult r;
   r.tolerance = tolerance;
   r.frames = static_cast<int>(frames.size());
   r.rounds = rounds;
   double psnr_sum = 0;
   int differing = 0;
-  const int w = frames[0].width(), h = frames[0].height();
-  const PixelFormat format = frames[0].format();
-  // Both with crop-bars=auto, as the elements default (no scene but the
-  // letterbox has bars: the counts are the cost both pay).
-  auto make_full = [&] { return FullChain(p, w, h, format, true); };
-  auto make_adaptive = [&] { return AdaptiveChain(p, w, h, format, tolerance); };
-  run_round(frames, &r, make_full, make_adaptive, [&](const FullChain &full, const AdaptiveChain &adaptive, size_t k) {
-    if (k > 0) {
-      const AdaptiveChain::Shares &s = adaptive.shares();
-      r.changed.input += s.input;
-      r.changed.filter += s.filter;
-      r.changed.warp += s.warp;
-      r.changed.warp_rows += s.warp_rows;
-    }
+  run_round(views, &r, make_full, make_adaptive, [&](const auto &full, const auto &adaptive, size_t k) {
+    if (k > 0) add_shares(&r, adaptive);
     const std::string where = first_difference(full.output(), adaptive.output());
     if (where.empty()) {
       ++r.identical_frames;
@@ -172,11 +187,56 @@ SceneResult measure(const StageParams &p, const std::vector<HostFrame> &frames, 
     r.psnr_min = std::min(r.psnr_min, db);
   });
   for (int i = 1; i < rounds; ++i)
-    run_round(frames, &r, make_full, make_adaptive, [](const FullChain &, const AdaptiveChain &, size_t) {});
+    run_round(views, &r, make_full, make_adaptive, [](const auto &, const auto &, size_t) {});
   if (differing > 0) r.psnr_mean = psnr_sum / differing;
   const double timed = std::max(1, r.frames - 1);
   for (double *share : {&r.changed.input, &r.changed.filter, &r.changed.warp, &r.changed.warp_rows}) *share /= timed;
   return r;
+}
+
+#ifdef P3D_BENCH_GPU
+// The share of the input's tiles that differ from the frame before, over
+// the timed frames (FrameHistory at the tolerance).
+double input_share(const std::vector<HostFrame> &frames, float tolerance) {
+  FrameHistory h;
+  double sum = 0;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const double f = h.compare(frames[k].view(), tolerance).fraction();
+    if (k > 0) sum += f;
+  }
+  return frames.size() > 1 ? sum / static_cast<double>(frames.size() - 1) : 0;
+}
+#endif
+
+// The CPU chains (both with crop-bars=auto, as the elements default: no
+// scene but the letterbox has bars, and the counts are the cost both pay)
+// or the GPU chains.
+SceneResult measure(const StageParams &p, const std::vector<HostFrame> &frames, float tolerance, int rounds,
+                    bool gpu) {
+  const int w = frames[0].width(), h = frames[0].height();
+  const PixelFormat format = frames[0].format();
+#ifdef P3D_BENCH_GPU
+  if (gpu) {
+    std::vector<DevFrame> device(frames.size());
+    std::vector<FrameView> views;
+    for (size_t k = 0; k < frames.size(); ++k) {
+      const CudaStatus st = device[k].upload(frames[k]);
+      if (!st.ok()) throw std::runtime_error(st.message());
+      views.push_back(device[k].view);
+    }
+    SceneResult r = measure(
+        frames, views, tolerance, rounds, [&] { return GpuSceneChain(p, w, h, format, false, 0.f); },
+        [&] { return GpuSceneChain(p, w, h, format, true, tolerance); });
+    r.changed.input = input_share(frames, tolerance);
+    r.gpu = true;
+    return r;
+  }
+#else
+  (void)gpu;
+#endif
+  return measure(
+      frames, views_of(frames), tolerance, rounds, [&] { return FullChain(p, w, h, format, true); },
+      [&] { return AdaptiveChain(p, w, h, format, tolerance); });
 }
 
 // The letterbox scene: crop-bars=auto ("on") against off, both with
@@ -190,7 +250,7 @@ SceneResult measure_crop(const StageParams &p, const std::vector<HostFrame> &fra
   const int w = frames[0].width(), h = frames[0].height();
   const PixelFormat format = frames[0].format();
   for (int i = 0; i < rounds; ++i)
-    run_round(frames, &r, [&] { return FullChain(p, w, h, format, false); },
+    run_round(views_of(frames), &r, [&] { return FullChain(p, w, h, format, false); },
               [&] { return FullChain(p, w, h, format, true); }, [](const FullChain &, const FullChain &, size_t) {});
   return r;
 }
@@ -236,7 +296,13 @@ void emit(const SceneResult &r, const StageParams &p, const SceneRunInfo &info, 
   else
     j.str("git", info.git);
   j.str("scene", r.scene).integer("width", r.size.width).integer("height", r.size.height);
-  j.str("device", "cpu").integer("cpu_threads", cv::getNumThreads());
+  if (r.gpu) {
+#ifdef P3D_BENCH_GPU
+    j.str("device", "gpu").str("gpu_name", gpu_name());
+#endif
+  } else {
+    j.str("device", "cpu").integer("cpu_threads", cv::getNumThreads());
+  }
   j.str("format", info.format).str("layout", enum_nick(kPackLayoutNames, p.pack.layout));
   j.str("filter_mode", enum_nick(kFilterModeNames, p.filter.mode)).str("fill", enum_nick(kHoleFillNames, p.warp.fill));
   j.integer("filter_scale", bilateral_effective_scale(bilateral_sanitize(p.filter), r.size.width, r.size.height));
@@ -267,12 +333,12 @@ void emit(const SceneResult &r, const StageParams &p, const SceneRunInfo &info, 
 
 int run_scenes(const SceneOptions &o, const StageParams &p, PixelFormat format, const std::vector<Size> &sizes,
                const SceneRunInfo &info, std::ostream &out) {
-  std::printf("scene mode: the CPU chain (depth, filter, warp + pack), adaptive off and on in turn frame by frame;\n"
+  std::printf("scene mode: the %s chain (depth, filter, warp + pack), adaptive off and on in turn frame by frame;\n"
               "%d frames a sequence, the first the warm-up; ms a frame, the shortest of %d round(s).\n"
               "changed: input tiles that differ from the frame before; rows: source rows the warp renders again;\n"
               "on/off: mean on / mean off; same: every output byte equal to adaptive=false's\n"
               "letterbox: on is crop-bars=auto, off crop-bars=off, both adaptive=false (changed: n/a)\n",
-              o.frames, o.rounds);
+              o.gpu ? "GPU" : "CPU", o.frames, o.rounds);
   print_header();
   bool mismatch_at_zero = false;
   for (const Size s : sizes) {
@@ -284,7 +350,12 @@ int run_scenes(const SceneOptions &o, const StageParams &p, PixelFormat format, 
         continue;
       }
       for (const float tolerance : o.tolerances) {
-        SceneResult r = scene == "letterbox" ? measure_crop(p, frames, o.rounds) : measure(p, frames, tolerance, o.rounds);
+        if (scene == "letterbox" && o.gpu) {
+          std::printf("%-9s %dx%d skipped: crop-bars is not timed on the GPU\n", scene.c_str(), s.width, s.height);
+          break;
+        }
+        SceneResult r = scene == "letterbox" ? measure_crop(p, frames, o.rounds)
+                                             : measure(p, frames, tolerance, o.rounds, o.gpu);
         r.scene = scene;
         r.size = s;
         r.note = note;

@@ -1,5 +1,6 @@
-// pseudo3d-bench's scene mode (--scenes): the CPU chain over each generated
-// sequence (scenes.h) with the adaptive stages off and on (scene_chain.h),
+// pseudo3d-bench's scene mode (--scenes): the CPU chain (or, with --device
+// gpu, the GPU chain) over each generated sequence (scenes.h) with the
+// adaptive stages off and on (scene_chain.h, scene_chain_gpu.h),
 // the two chains in turn a frame at a time, each frame timed. Reports, per scene, size and reuse tolerance, the
 // adaptive chain's cost relative to the full chain of the same run, whether
 // its output is byte for byte the full chain's (and its PSNR against it
@@ -21,6 +22,7 @@ struct SceneOptions {
   int rounds = 1;                   // runs of each sequence; a frame's time is its shortest
   std::vector<float> tolerances = {0.f};
   std::string video;                // the camera scene's file
+  bool gpu = false;                 // the GPU chains (scene_chain_gpu.h) instead of the CPU's
 };
 
 // What every result line repeats of the run: the header line's run id, the

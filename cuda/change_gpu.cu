@@ -1,0 +1,411 @@
+// The adaptive stages' bookkeeping on the device (cuda/change_gpu.h).
+#include "change_gpu.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace p3d {
+
+namespace {
+
+constexpr int kThreads = 256;
+
+unsigned blocks_for(long long items, int per_block) {
+  return static_cast<unsigned>((items + per_block - 1) / per_block);
+}
+
+// The kept copy's planes.
+struct KeptPlanes {
+  uint8_t *plane[3];
+  size_t pitch[3];
+};
+
+// Tiles a block of the compare kernel takes side by side (one row of
+// tiles high): their rows are loaded as one run of 16-byte words a plane.
+constexpr int kCompareTilesX = 4;
+
+// The bytes a whole tile spans in a row of plane p (a partial last tile
+// spans fewer): a word of the run belongs to tile offset / tile_bytes.
+__device__ int tile_bytes(PixelFormat f, int p) {
+  const PlaneBox b = plane_box(f, p, PixelRect{0, 0, kChangeTile, kChangeTile});
+  return b.b1 - b.b0;
+}
+
+// Calls f(tile, current, kept) for each unit of plane p's rows [box.r0,
+// box.r1) x bytes [box.b0, box.b1) that this thread handles: 16-byte
+// words where the run and both planes allow, else bytes. tile: the unit's
+// tile within the block's run.
+template <typename F>
+__device__ void for_run(const FrameView &frame, const KeptPlanes &kept, int p, const PlaneBox &box, F &&f) {
+  const int run = box.b1 - box.b0, rows = box.r1 - box.r0, per_tile = tile_bytes(frame.format, p);
+  const size_t cur_pitch = static_cast<size_t>(frame.stride[p]);
+  const uintptr_t align = reinterpret_cast<uintptr_t>(frame.plane[p]) | reinterpret_cast<uintptr_t>(kept.plane[p]) |
+                          cur_pitch | kept.pitch[p] | static_cast<uintptr_t>(box.b0) | static_cast<uintptr_t>(run);
+  if (align % 16 == 0) {
+    const int per_row = run / 16;
+    for (int i = threadIdx.x; i < per_row * rows; i += blockDim.x) {
+      const int y = box.r0 + i / per_row, w = i % per_row;
+      f(16 * w / per_tile, reinterpret_cast<uint4 *>(frame.plane[p] + y * cur_pitch + box.b0) + w,
+        reinterpret_cast<uint4 *>(kept.plane[p] + y * kept.pitch[p] + box.b0) + w);
+    }
+    return;
+  }
+  for (int i = threadIdx.x; i < run * rows; i += blockDim.x) {
+    const int y = box.r0 + i / run, b = i % run;
+    f(b / per_tile, frame.plane[p] + y * cur_pitch + box.b0 + b, kept.plane[p] + y * kept.pitch[p] + box.b0 + b);
+  }
+}
+
+__device__ unsigned sad(const uint4 &a, const uint4 &b) {
+  return __vsadu4(a.x, b.x) + __vsadu4(a.y, b.y) + __vsadu4(a.z, b.z) + __vsadu4(a.w, b.w);
+}
+__device__ unsigned sad(uint8_t a, uint8_t b) { return a > b ? a - b : b - a; }
+__device__ bool same(const uint4 &a, const uint4 &b) { return a.x == b.x && a.y == b.y && a.z == b.z && a.w == b.w; }
+__device__ bool same(uint8_t a, uint8_t b) { return a == b; }
+
+// A block a run of kCompareTilesX tiles: FrameHistory::compare's test of
+// each tile, then the changed tiles' bytes recorded.
+// A plain launch (<<< >>>), as every kernel of this file.
+__global__ void compare_tiles_kernel(FrameView frame, KeptPlanes kept, int planes, float tolerance, uint8_t *flags,
+                                     int tiles_x) {
+  __shared__ unsigned long long diff[kCompareTilesX];
+  __shared__ int differs[kCompareTilesX];
+  const int tx0 = blockIdx.x * kCompareTilesX, ty = blockIdx.y;
+  const int tiles = min(kCompareTilesX, tiles_x - tx0);
+  if (threadIdx.x < kCompareTilesX) {
+    diff[threadIdx.x] = 0;
+    differs[threadIdx.x] = 0;
+  }
+  __syncthreads();
+  const PixelRect first = tile_pixels(tx0, ty, frame.width, frame.height);
+  const PixelRect r{first.x0, first.y0, tile_pixels(tx0 + tiles - 1, ty, frame.width, frame.height).x1, first.y1};
+  for (int p = 0; p < planes; ++p)
+    for_run(frame, kept, p, plane_box(frame.format, p, r), [&](int t, const auto *cur, const auto *old) {
+      if (tolerance > 0.f) {
+        const unsigned d = sad(*cur, *old);
+        if (d) atomicAdd(&diff[t], static_cast<unsigned long long>(d));
+      } else if (!same(*cur, *old)) {
+        differs[t] = 1;
+      }
+    });
+  __syncthreads();
+  __shared__ int changed[kCompareTilesX];
+  if (threadIdx.x < tiles) {
+    const int t = threadIdx.x;
+    bool c = differs[t] != 0;
+    if (tolerance > 0.f) {
+      const PixelRect tr = tile_pixels(tx0 + t, ty, frame.width, frame.height);
+      unsigned long long samples = 0;
+      for (int p = 0; p < planes; ++p) {
+        const PlaneBox b = plane_box(frame.format, p, tr);
+        samples += static_cast<unsigned long long>(b.b1 - b.b0) * (b.r1 - b.r0);
+      }
+      c = tile_over_tolerance(diff[t], samples, tolerance);
+    }
+    changed[t] = c;
+    flags[static_cast<size_t>(ty) * tiles_x + tx0 + t] = c ? 1 : 0;
+  }
+  __syncthreads();
+  bool any = false;
+  for (int t = 0; t < tiles; ++t) any = any || changed[t];
+  if (!any) return;
+  for (int p = 0; p < planes; ++p)
+    for_run(frame, kept, p, plane_box(frame.format, p, r), [&](int t, const auto *cur, auto *old) {
+      if (changed[t]) *old = *cur;
+    });
+}
+
+// A thread a cell: the tiles with a pixel of a cell that differs are
+// marked (several threads may store the same 1).
+// A plain launch (<<< >>>), as every kernel of this file.
+__global__ void mark_grid_changes_kernel(DepthGrid<const float> a, DepthGrid<const float> b, TileFlags map) {
+  const int cx = blockIdx.x * blockDim.x + threadIdx.x, cy = blockIdx.y * blockDim.y + threadIdx.y;
+  if (cx >= a.cells.width || cy >= a.cells.height) return;
+  if (__float_as_uint(a.cells.at(cx, cy)) == __float_as_uint(b.cells.at(cx, cy))) return;
+  const int x0 = cx << a.shift, y0 = cy << a.shift;
+  const int x1 = min(a.width, (cx + 1) << a.shift), y1 = min(a.height, (cy + 1) << a.shift);
+  uint8_t *flags = const_cast<uint8_t *>(map.flags);
+  for (int ty = y0 / kChangeTile; ty <= (y1 - 1) / kChangeTile; ++ty)
+    for (int tx = x0 / kChangeTile; tx <= (x1 - 1) / kChangeTile; ++tx) flags[static_cast<size_t>(ty) * map.tiles_x + tx] = 1;
+}
+
+// A thread a tile: ChangeMap::dilated.
+// A plain launch (<<< >>>), as every kernel of this file.
+__global__ void dilate_kernel(TileFlags in, int rx, int ry, uint8_t *out) {
+  const int tx = blockIdx.x * blockDim.x + threadIdx.x, ty = blockIdx.y * blockDim.y + threadIdx.y;
+  if (tx >= in.tiles_x || ty >= in.tiles_y) return;
+  bool any = false;
+  for (int y = max(0, ty - ry); y <= min(in.tiles_y - 1, ty + ry) && !any; ++y)
+    for (int x = max(0, tx - rx); x <= min(in.tiles_x - 1, tx + rx) && !any; ++x)
+      any = in.flags[static_cast<size_t>(y) * in.tiles_x + x] != 0;
+  out[static_cast<size_t>(ty) * in.tiles_x + tx] = any ? 1 : 0;
+}
+
+// One block: the flagged tiles counted into *count.
+// A plain launch (<<< >>>), as every kernel of this file.
+__global__ void count_kernel(const uint8_t *flags, int tiles, unsigned *count) {
+  __shared__ unsigned total;
+  if (threadIdx.x == 0) total = 0;
+  __syncthreads();
+  unsigned n = 0;
+  for (int i = threadIdx.x; i < tiles; i += blockDim.x) n += flags[i] ? 1u : 0u;
+  if (n) atomicAdd(&total, n);
+  __syncthreads();
+  if (threadIdx.x == 0) *count = total;
+}
+
+// One block: KeptOutputGpu::decide's rule from the flags; *ran (host
+// memory) tells the host afterwards.
+// A plain launch (<<< >>>), as every kernel of this file.
+__global__ void decide_kernel(const uint8_t *flags, int tiles, bool whole, bool first, GateState *state,
+                              unsigned *ran) {
+  const bool any = __syncthreads_or([&] {
+    for (int i = threadIdx.x; i < tiles; i += blockDim.x)
+      if (flags[i]) return true;
+    return false;
+  }());
+  const bool all = __syncthreads_and([&] {
+    for (int i = threadIdx.x; i < tiles; i += blockDim.x)
+      if (!flags[i]) return false;
+    return true;
+  }());
+  if (threadIdx.x != 0) return;
+  const bool run = whole || any || !state->kept_valid;
+  const bool keep = run && (!all || first);
+  state->run = run;
+  state->keep = keep;
+  state->kept_valid = run ? keep : 1;
+  *ran = run ? 1u : 0u;
+}
+
+enum class CopyWhen : int { Run, Finish };
+
+// Copies rows between two planes: CopyWhen::Run copies `from` into `to`
+// when the gate is open; CopyWhen::Finish copies `from` (the kept copy)
+// into `to` (the output) when it is closed, and `to` into `from` when the
+// frame is kept. 16-byte words where both planes allow.
+// A plain launch (<<< >>>), as every kernel of this file.
+__global__ void copy_rows_kernel(uint8_t *to, size_t to_pitch, uint8_t *from, size_t from_pitch, size_t row_bytes,
+                                 int rows, const GateState *state, CopyWhen when, bool vec16) {
+  bool forward;
+  if (when == CopyWhen::Run) {
+    if (state && !state->run) return;
+    forward = true;
+  } else {
+    if (state->run && !state->keep) return;
+    forward = !state->run;
+  }
+  uint8_t *dst = forward ? to : from;
+  const uint8_t *src = forward ? from : to;
+  const size_t dst_pitch = forward ? to_pitch : from_pitch, src_pitch = forward ? from_pitch : to_pitch;
+  const size_t unit = vec16 ? 16 : 1, per_row = row_bytes / unit;
+  const size_t items = per_row * rows;
+  for (size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; i < items;
+       i += static_cast<size_t>(gridDim.x) * blockDim.x) {
+    const size_t y = i / per_row, k = i % per_row;
+    if (vec16)
+      reinterpret_cast<uint4 *>(dst + y * dst_pitch)[k] = reinterpret_cast<const uint4 *>(src + y * src_pitch)[k];
+    else
+      dst[y * dst_pitch + k] = src[y * src_pitch + k];
+  }
+}
+
+CudaStatus launch_copy(uint8_t *to, size_t to_pitch, uint8_t *from, size_t from_pitch, size_t row_bytes, int rows,
+                       const GateState *state, CopyWhen when, cudaStream_t stream) {
+  if (rows <= 0 || row_bytes == 0) return {};
+  const bool vec16 = row_bytes % 16 == 0 && to_pitch % 16 == 0 && from_pitch % 16 == 0 &&
+                     reinterpret_cast<uintptr_t>(to) % 16 == 0 && reinterpret_cast<uintptr_t>(from) % 16 == 0;
+  const long long items = static_cast<long long>(row_bytes / (vec16 ? 16 : 1)) * rows;
+  const unsigned grid = std::min<unsigned>(blocks_for(items, kThreads), 65535u);
+  copy_rows_kernel<<<grid, kThreads, 0, stream>>>(to, to_pitch, from, from_pitch, row_bytes, rows, state, when, vec16);
+  P3D_CUDA_TRY_LAUNCH(copy_rows_kernel);
+  return {};
+}
+
+// The planes of a frame's format and size in one pitched buffer (rows of
+// each plane 16-byte aligned).
+CudaStatus plane_layout(DeviceBuffer &buf, PixelFormat format, int width, int height, size_t offset[3],
+                        size_t pitch[3], int *planes) {
+  *planes = frame_plane_count(format);
+  size_t total = 0;
+  for (int p = 0; p < *planes; ++p) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(format, width, height, p, &row_bytes, &rows);
+    pitch[p] = (static_cast<size_t>(row_bytes) + 15) / 16 * 16;
+    offset[p] = total;
+    total += pitch[p] * rows;
+  }
+  P3D_CUDA_TRY_STATUS(buf.ensure(total > 0 ? total : 16));
+  return {};
+}
+
+}  // namespace
+
+PinnedWord::~PinnedWord() {
+  if (host_) cudaFreeHost(host_);
+}
+
+PinnedWord &PinnedWord::operator=(PinnedWord &&o) noexcept {
+  if (this != &o) {
+    if (host_) cudaFreeHost(host_);
+    host_ = o.host_;
+    device_ = o.device_;
+    o.host_ = o.device_ = nullptr;
+  }
+  return *this;
+}
+
+CudaStatus PinnedWord::ensure() {
+  if (host_) return {};
+  void *h = nullptr;
+  P3D_CUDA_TRY_ALLOC(cudaHostAlloc(&h, sizeof(unsigned), cudaHostAllocMapped), sizeof(unsigned));
+  host_ = static_cast<unsigned *>(h);
+  *host_ = 0;
+  void *d = nullptr;
+  P3D_CUDA_TRY(cudaHostGetDevicePointer(&d, h, 0));
+  device_ = static_cast<unsigned *>(d);
+  return {};
+}
+
+CudaStatus ChangeMapGpu::summarize(cudaStream_t stream) {
+  P3D_CUDA_TRY_STATUS(count_.ensure());
+  count_kernel<<<1, kThreads, 0, stream>>>(data(), static_cast<int>(tiles()), count_.device());
+  P3D_CUDA_TRY_LAUNCH(count_kernel);
+  return {};
+}
+
+double ChangeMapGpu::last_share() const {
+  return tiles() ? static_cast<double>(count_.host()) / static_cast<double>(tiles()) : 0.0;
+}
+
+CudaStatus ChangeMapGpu::resize(int width, int height) {
+  width_ = width > 0 ? width : 0;
+  height_ = height > 0 ? height : 0;
+  tiles_x_ = change_tiles(width_);
+  tiles_y_ = change_tiles(height_);
+  P3D_CUDA_TRY_STATUS(flags_.ensure(tiles() > 0 ? tiles() : 1));
+  return {};
+}
+
+TileFlags ChangeMapGpu::flags() const {
+  return TileFlags{flags_.as<const uint8_t>(), width_, height_, tiles_x_, tiles_y_, 0, 0};
+}
+
+CudaStatus ChangeMapGpu::fill(bool all, cudaStream_t stream) {
+  if (tiles()) P3D_CUDA_TRY(cudaMemsetAsync(flags_.get(), all ? 1 : 0, tiles(), stream));
+  return {};
+}
+
+CudaStatus ChangeMapGpu::download(ChangeMap *out, cudaStream_t stream) const {
+  P3D_CUDA_TRY(cudaStreamSynchronize(stream));
+  std::vector<uint8_t> host(tiles());
+  if (!host.empty()) P3D_CUDA_TRY(cudaMemcpy(host.data(), flags_.get(), host.size(), cudaMemcpyDeviceToHost));
+  *out = ChangeMap(width_, height_, false);
+  for (int ty = 0; ty < tiles_y_; ++ty)
+    for (int tx = 0; tx < tiles_x_; ++tx)
+      if (host[static_cast<size_t>(ty) * tiles_x_ + tx]) out->mark(tx, ty);
+  return {};
+}
+
+CudaStatus FrameHistoryGpu::compare(const FrameView &frame, float tolerance, ChangeMapGpu &out,
+                                    cudaStream_t stream) {
+  P3D_CUDA_TRY_STATUS(out.resize(frame.width, frame.height));
+  if (out.tiles() == 0) return {};
+  const bool fresh = !have_ || frame.format != format_ || frame.width != width_ || frame.height != height_;
+  compared_ = !fresh;
+  int planes = 0;
+  if (fresh) {
+    have_ = false;
+    P3D_CUDA_TRY_STATUS(plane_layout(copy_, frame.format, frame.width, frame.height, offset_, pitch_, &planes));
+  } else {
+    planes = frame_plane_count(frame.format);
+  }
+  KeptPlanes kept{};
+  for (int p = 0; p < planes; ++p) {
+    kept.plane[p] = copy_.as<uint8_t>() + offset_[p];
+    kept.pitch[p] = pitch_[p];
+  }
+  if (fresh) {
+    for (int p = 0; p < planes; ++p) {
+      int row_bytes = 0, rows = 0;
+      frame_plane_size(frame.format, frame.width, frame.height, p, &row_bytes, &rows);
+      P3D_CUDA_TRY(cudaMemcpy2DAsync(kept.plane[p], kept.pitch[p], frame.plane[p], frame.stride[p], row_bytes, rows,
+                                     cudaMemcpyDeviceToDevice, stream));
+    }
+    P3D_CUDA_TRY_STATUS(out.fill(true, stream));
+    format_ = frame.format;
+    width_ = frame.width;
+    height_ = frame.height;
+    have_ = true;
+    return {};
+  }
+  const TileFlags f = out.flags();
+  compare_tiles_kernel<<<dim3(blocks_for(f.tiles_x, kCompareTilesX), f.tiles_y), kThreads, 0, stream>>>(
+      frame, kept, planes, tolerance, out.data(), f.tiles_x);
+  P3D_CUDA_TRY_LAUNCH(compare_tiles_kernel);
+  return {};
+}
+
+CudaStatus mark_grid_changes_gpu(DepthGrid<const float> a, DepthGrid<const float> b, ChangeMapGpu &map,
+                                 cudaStream_t stream) {
+  if (map.tiles() == 0) return {};
+  if (a.width != b.width || a.height != b.height || a.shift != b.shift || a.cells.width != b.cells.width ||
+      a.cells.height != b.cells.height || a.width != map.width() || a.height != map.height() || a.empty())
+    return map.fill(true, stream);
+  const dim3 block(32, 8), grid(blocks_for(a.cells.width, 32), blocks_for(a.cells.height, 8));
+  mark_grid_changes_kernel<<<grid, block, 0, stream>>>(a, b, map.flags());
+  P3D_CUDA_TRY_LAUNCH(mark_grid_changes_kernel);
+  return {};
+}
+
+CudaStatus dilate_gpu(const ChangeMapGpu &in, int reach_x, int reach_y, ChangeMapGpu &out, cudaStream_t stream) {
+  P3D_CUDA_TRY_STATUS(out.resize(in.width(), in.height()));
+  if (in.tiles() == 0) return {};
+  const TileFlags f = in.flags();
+  const dim3 block(32, 8), grid(blocks_for(f.tiles_x, 32), blocks_for(f.tiles_y, 8));
+  dilate_kernel<<<grid, block, 0, stream>>>(f, reach_tiles(reach_x), reach_tiles(reach_y), out.data());
+  P3D_CUDA_TRY_LAUNCH(dilate_kernel);
+  return {};
+}
+
+CudaStatus KeptOutputGpu::decide(const ChangeMapGpu &changes, bool whole, cudaStream_t stream) {
+  if (!state_.get()) {
+    P3D_CUDA_TRY_STATUS(state_.ensure(sizeof(GateState)));
+    first_ = true;
+  }
+  P3D_CUDA_TRY_STATUS(ran_.ensure());
+  if (first_) P3D_CUDA_TRY(cudaMemsetAsync(state_.get(), 0, sizeof(GateState), stream));
+  decide_kernel<<<1, kThreads, 0, stream>>>(changes.data(), static_cast<int>(changes.tiles()), whole || first_, first_,
+                                            state_.as<GateState>(), ran_.device());
+  P3D_CUDA_TRY_LAUNCH(decide_kernel);
+  if (first_) {
+    // The copy is laid out again: its frames may have another geometry.
+    offset_[0] = pitch_[0] = 0;
+  }
+  first_ = false;
+  return {};
+}
+
+CudaStatus KeptOutputGpu::finish(const FrameView &out, cudaStream_t stream) {
+  int planes = 0;
+  if (pitch_[0] == 0) {
+    P3D_CUDA_TRY_STATUS(plane_layout(copy_, out.format, out.width, out.height, offset_, pitch_, &planes));
+  } else {
+    planes = frame_plane_count(out.format);
+  }
+  for (int p = 0; p < planes; ++p) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(out.format, out.width, out.height, p, &row_bytes, &rows);
+    P3D_CUDA_TRY_STATUS(launch_copy(out.plane[p], out.stride[p], copy_.as<uint8_t>() + offset_[p], pitch_[p],
+                                    row_bytes, rows, state_.as<const GateState>(), CopyWhen::Finish, stream));
+  }
+  return {};
+}
+
+CudaStatus copy_rows_gated(uint8_t *to, size_t to_pitch, const uint8_t *from, size_t from_pitch, size_t row_bytes,
+                           int rows, StageGate gate, cudaStream_t stream) {
+  return launch_copy(to, to_pitch, const_cast<uint8_t *>(from), from_pitch, row_bytes, rows, gate.state, CopyWhen::Run,
+                     stream);
+}
+
+}  // namespace p3d

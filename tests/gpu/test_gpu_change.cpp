@@ -1,0 +1,296 @@
+// The adaptive bookkeeping on the device (cuda/change_gpu.h) against
+// common/change_map.h, and the adaptive kernels against their full runs.
+// What the tests prove:
+//  * FrameHistoryGpu flags the tiles FrameHistory flags, frame after frame
+//    (unchanged frames, one byte, a box, small noise that adds up under a
+//    tolerance, a new picture, a new size), in every format, on frames
+//    with odd sizes and unaligned rows, at tolerances 0, 1.5 and 8;
+//  * mark_grid_changes_gpu marks compare_grids' tiles, and dilate_gpu is
+//    ChangeMap::dilated, for cells and reaches of several sizes;
+//  * KeptOutputGpu: an unchanged frame gets the kept output, byte for
+//    byte; a changed one runs; a frame that changed every tile is not kept
+//    (the next unchanged frame is computed again); `whole` runs the frame;
+//  * the depth estimator with tile flags and the filter with dirty tiles
+//    and a kept output give, frame after frame, the bytes of their full
+//    runs (the elements' adaptive runs, the warp's and the pack's gates
+//    included: test_gpu_elements.cpp, GpuAdaptive).
+#include <cstring>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "adaptive.h"
+#include "bars.h"
+#include "bilateral_gpu.h"
+#include "change_gpu.h"
+#include "change_map.h"
+#include "depth_estimate_gpu.h"
+#include "gpu_util.h"
+#include "pack_gpu.h"
+#include "test_data.h"
+#include "warp_gpu.h"
+
+namespace p3d {
+namespace {
+
+using test::DeviceDepth;
+using test::DeviceFrame;
+using test::check_cuda;
+using test::format_name;
+
+std::string tiles_text(const ChangeMap &m) {
+  std::string s;
+  for (int ty = 0; ty < m.tiles_y(); ++ty) {
+    for (int tx = 0; tx < m.tiles_x(); ++tx) s += m.tile(tx, ty) ? '#' : '.';
+    s += '/';
+  }
+  return s;
+}
+
+::testing::AssertionResult same_tiles(const ChangeMap &got, const ChangeMap &want) {
+  bool same = got.width() == want.width() && got.height() == want.height();
+  for (int ty = 0; same && ty < want.tiles_y(); ++ty)
+    for (int tx = 0; same && tx < want.tiles_x(); ++tx) same = got.tile(tx, ty) == want.tile(tx, ty);
+  if (same) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "got " << tiles_text(got) << "\nwant " << tiles_text(want);
+}
+
+cv::Mat picture(int w, int h, uint32_t seed) {
+  cv::Mat bgr(h, w, CV_8UC3);
+  cv::RNG rng(seed);
+  rng.fill(bgr, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(bgr, bgr, cv::Size(0, 0), 1.5);
+  return bgr;
+}
+
+// A sequence of pictures: the same again, one pixel, a box, noise of one
+// level over a region (it adds up under a tolerance), a new picture.
+std::vector<cv::Mat> sequence(int w, int h, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<cv::Mat> out{picture(w, h, seed)};
+  for (int k = 1; k < 16; ++k) {
+    cv::Mat next = out.back().clone();
+    switch (k % 6) {
+      case 0: break;
+      case 1: next.at<cv::Vec3b>(static_cast<int>(rng() % h), static_cast<int>(rng() % w))[0] ^= 0x40; break;
+      case 2:
+        cv::rectangle(next, cv::Rect(static_cast<int>(rng() % w), static_cast<int>(rng() % h), 9, 7),
+                      cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
+        break;
+      case 3:
+      case 4: {
+        const cv::Rect r(0, 0, w / 2, h / 2);
+        cv::Mat roi = next(r);
+        cv::add(roi, cv::Scalar(1, 1, 1), roi);
+        break;
+      }
+      default: next = picture(w, h, seed + 100 + k); break;
+    }
+    out.push_back(next);
+  }
+  return out;
+}
+
+TEST(GpuChange, FrameHistoryFlagsTheTilesTheCpuFlags) {
+  for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420, PixelFormat::RGBA, PixelFormat::BGRx})
+    for (const cv::Size size : {cv::Size(97, 45), cv::Size(160, 96), cv::Size(33, 65)})
+      for (float tolerance : {0.f, 1.5f, 8.f})
+        for (bool unaligned : {false, true}) {
+          FrameHistory cpu;
+          FrameHistoryGpu gpu;
+          ChangeMapGpu map;
+          const std::vector<cv::Mat> frames = sequence(size.width, size.height, 3);
+          for (size_t k = 0; k <= frames.size(); ++k) {
+            // The last frame is of another size: every tile again.
+            const cv::Mat bgr = k < frames.size() ? frames[k] : picture(size.width + 2, size.height, 9);
+            const HostFrame host = HostFrame::from_bgr(bgr, f);
+            const DeviceFrame dev = unaligned ? DeviceFrame::upload_at(host, 3, 5) : DeviceFrame::upload(host);
+            const ChangeMap want = cpu.compare(host.view(), tolerance);
+            check_cuda(gpu.compare(dev.view(), tolerance, map, nullptr));
+            ChangeMap got;
+            check_cuda(map.download(&got, nullptr));
+            EXPECT_TRUE(same_tiles(got, want)) << format_name(f) << " " << size.width << "x" << size.height
+                                               << " tolerance " << tolerance << (unaligned ? " unaligned" : "")
+                                               << " frame " << k;
+          }
+        }
+}
+
+TEST(GpuChange, GridChangesAndDilationMatchTheCpu) {
+  std::mt19937 rng(5);
+  for (int shift : {0, 1, 2, 3, 6})
+    for (const cv::Size size : {cv::Size(97, 45), cv::Size(300, 170)}) {
+      const int cw = grid_cells(size.width, shift), ch = grid_cells(size.height, shift);
+      cv::Mat a(ch, cw, CV_32FC1);
+      cv::randu(a, 0.f, 1.f);
+      for (int k = 0; k < 8; ++k) {
+        cv::Mat b = a.clone();
+        for (int c = 0; c < k % 4; ++c) b.at<float>(static_cast<int>(rng() % ch), static_cast<int>(rng() % cw)) += 1.f;
+        DeviceDepth da(size.width, size.height, shift), db(size.width, size.height, shift);
+        check_cuda(CudaStatus{cudaMemcpy2D(da.view().data, da.view().pitch, a.data, a.step, cw * 4, ch,
+                                           cudaMemcpyHostToDevice)});
+        check_cuda(CudaStatus{cudaMemcpy2D(db.view().data, db.view().pitch, b.data, b.step, cw * 4, ch,
+                                           cudaMemcpyHostToDevice)});
+        const DepthGrid<const float> ha{ImageView<const float>{reinterpret_cast<const float *>(a.data), cw, ch, a.step},
+                                        size.width, size.height, shift};
+        const DepthGrid<const float> hb{ImageView<const float>{reinterpret_cast<const float *>(b.data), cw, ch, b.step},
+                                        size.width, size.height, shift};
+        ChangeMapGpu map, dilated;
+        check_cuda(map.resize(size.width, size.height));
+        check_cuda(map.fill(false, nullptr));
+        check_cuda(mark_grid_changes_gpu(as_const(da.grid()), as_const(db.grid()), map, nullptr));
+        ChangeMap got;
+        check_cuda(map.download(&got, nullptr));
+        const ChangeMap want = compare_grids(ha, hb);
+        EXPECT_TRUE(same_tiles(got, want)) << "shift " << shift << " case " << k;
+        for (const cv::Point reach : {cv::Point(0, 0), cv::Point(5, 1), cv::Point(33, 64), cv::Point(200, 7)}) {
+          check_cuda(dilate_gpu(map, reach.x, reach.y, dilated, nullptr));
+          ChangeMap got_dilated;
+          check_cuda(dilated.download(&got_dilated, nullptr));
+          EXPECT_TRUE(same_tiles(got_dilated, want.dilated(reach.x, reach.y)))
+              << "shift " << shift << " reach " << reach.x << "," << reach.y;
+        }
+      }
+      // Another geometry: every tile.
+      DeviceDepth da(size.width, size.height, shift), other(size.width, size.height, shift + 1);
+      ChangeMapGpu map;
+      check_cuda(map.resize(size.width, size.height));
+      check_cuda(map.fill(false, nullptr));
+      check_cuda(mark_grid_changes_gpu(as_const(da.grid()), as_const(other.grid()), map, nullptr));
+      ChangeMap got;
+      check_cuda(map.download(&got, nullptr));
+      EXPECT_TRUE(got.all());
+    }
+}
+
+// The frame a gated "stage" writes: its seed's bytes when it runs.
+HostFrame stage_output(PixelFormat f, int w, int h, uint32_t seed) {
+  HostFrame out(f, w, h);
+  out.fill_random(seed);
+  return out;
+}
+
+// Whether two frames of one format and size hold the same visible bytes.
+bool same_bytes(const HostFrame &a, const HostFrame &b) {
+  const FrameView x = a.view(), y = b.view();
+  if (x.format != y.format || x.width != y.width || x.height != y.height) return false;
+  for (int p = 0; p < frame_plane_count(x.format); ++p) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(x.format, x.width, x.height, p, &row_bytes, &rows);
+    for (int r = 0; r < rows; ++r)
+      if (std::memcmp(x.plane[p] + static_cast<size_t>(r) * x.stride[p], y.plane[p] + static_cast<size_t>(r) * y.stride[p],
+                      static_cast<size_t>(row_bytes)) != 0)
+        return false;
+  }
+  return true;
+}
+
+// KeptOutputGpu's rule, with a copy standing in for a stage's kernels
+// (copy_rows_gated: runs only when the gate is open).
+TEST(GpuChange, KeptOutputRunsKeepsAndRestores) {
+  for (PixelFormat f : {PixelFormat::RGBA, PixelFormat::NV12, PixelFormat::I420}) {
+    const int w = 70, h = 45;
+    KeptOutputGpu kept;
+    ChangeMapGpu changes;
+    check_cuda(changes.resize(w, h));
+    // flags: 0 none, 1 one tile, 2 all. whole: the parameters changed.
+    struct Step {
+      int flags;
+      bool whole;
+      bool runs;
+    };
+    // The first frame runs and is kept; unchanged frames restore; a frame
+    // that changed every tile runs and is not kept, so the next unchanged
+    // one runs; whole runs.
+    const std::vector<Step> steps = {{2, false, true},  {0, false, false}, {1, false, true}, {0, false, false},
+                                     {2, false, true},  {0, false, true},  {0, false, false}, {0, true, true},
+                                     {0, false, false}};
+    HostFrame last;
+    for (size_t k = 0; k < steps.size(); ++k) {
+      check_cuda(changes.fill(steps[k].flags == 2, nullptr));
+      if (steps[k].flags == 1) check_cuda(CudaStatus{cudaMemset(changes.data() + 1, 1, 1)});
+      check_cuda(kept.decide(changes, steps[k].whole, nullptr));
+      const HostFrame fresh = stage_output(f, w, h, 40 + static_cast<uint32_t>(k));
+      const DeviceFrame src = DeviceFrame::upload(fresh);
+      DeviceFrame out = DeviceFrame::upload(stage_output(f, w, h, 999));  // a pool buffer's old bytes
+      const FrameView o = out.view(), s = src.view();
+      for (int p = 0; p < frame_plane_count(f); ++p) {
+        int row_bytes = 0, rows = 0;
+        frame_plane_size(f, w, h, p, &row_bytes, &rows);
+        check_cuda(copy_rows_gated(o.plane[p], o.stride[p], s.plane[p], s.stride[p], row_bytes, rows, kept.gate(),
+                                   nullptr));
+      }
+      check_cuda(kept.finish(o, nullptr));
+      const HostFrame got = out.download();
+      const HostFrame &want = steps[k].runs ? fresh : last;
+      EXPECT_TRUE(same_bytes(got, want)) << format_name(f) << " step " << k << (steps[k].runs ? " runs" : " keeps");
+      last = got;
+    }
+  }
+}
+
+// A copy of a device grid's cells (the same geometry).
+DeviceDepth copy_of(const DeviceDepth &d) {
+  const DepthGrid<float> g = d.grid();
+  DeviceDepth c(g.width, g.height, g.shift);
+  check_cuda(CudaStatus{cudaMemcpy2D(c.view().data, c.view().pitch, g.cells.data, g.cells.pitch,
+                                     sizeof(float) * g.cells.width, g.cells.height, cudaMemcpyDeviceToDevice)});
+  return c;
+}
+
+// Depth on its block grid and the filter on its cells, as the elements
+// run them on CUDA memory, adaptive against full, over a sequence with
+// unchanged frames, small changes, drift and cuts: the same bytes.
+TEST(GpuChange, AdaptiveDepthAndFilterGiveTheFullRunsBytes) {
+  for (const cv::Size size : {cv::Size(160, 96), cv::Size(1280, 720)})
+    for (PixelFormat f : {PixelFormat::NV12, PixelFormat::RGBA}) {
+      DepthParams dp;
+      dp.temporal_smoothing = 0.4f;
+      const DepthParams params = frame_scaled(dp, size.width, size.height);
+      BilateralParams bp;
+      bp.scale = size.height >= 720 ? 2 : 1;
+      const BilateralParams filter = frame_scaled(bp, size.width, size.height);
+      const int block_shift = block_grid_shift(params, size.width, size.height);
+      const int cell_shift = bilateral_grid_shift(bilateral_sanitize(filter), size.width, size.height);
+      DepthEstimatorGpu full_depth, adaptive_depth;
+      BilateralFilterGpu full_filter, adaptive_filter;
+      FrameHistoryGpu history;
+      ChangeMapGpu changes, dirty;
+      std::unique_ptr<DeviceDepth> prev_depth, prev_out;
+      const int reach = bilateral_reach(filter, size.width, size.height);
+      const std::vector<cv::Mat> frames = sequence(size.width, size.height, 11);
+      for (size_t k = 0; k < frames.size(); ++k) {
+        const DeviceFrame dev = DeviceFrame::upload(HostFrame::from_bgr(frames[k], f));
+        DeviceDepth depth_a(size.width, size.height, block_shift), depth_b(size.width, size.height, block_shift);
+        check_cuda(full_depth.estimate(params, dev.view(), depth_a.grid(), nullptr));
+        check_cuda(history.compare(dev.view(), 0.f, changes, nullptr));
+        const TileFlags flags = changes.flags();
+        check_cuda(adaptive_depth.estimate(params, dev.view(), depth_b.grid(), nullptr, &flags));
+        EXPECT_EQ(cv::norm(depth_a.download(), depth_b.download(), cv::NORM_INF), 0.0)
+            << format_name(f) << " " << size.width << " frame " << k << ": depth";
+        // The filter: the frame's changes and the depth's, within reach.
+        if (prev_depth)
+          check_cuda(mark_grid_changes_gpu(as_const(prev_depth->grid()), as_const(depth_b.grid()), changes, nullptr));
+        check_cuda(dilate_gpu(changes, reach, reach, dirty, nullptr));
+        DeviceDepth out_a(size.width, size.height, cell_shift), out_b(size.width, size.height, cell_shift);
+        out_b.poison();
+        check_cuda(full_filter.run(filter, dev.view(), as_const(depth_a.grid()), out_a.grid(), nullptr));
+        check_cuda(adaptive_filter.run(filter, dev.view(), as_const(depth_b.grid()), out_b.grid(), nullptr,
+                                       prev_out ? dirty.flags() : TileFlags{},
+                                       prev_out ? as_const(prev_out->grid()) : DepthGrid<const float>{}));
+        const cv::Mat a = out_a.download(), b = out_b.download();
+        EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << format_name(f) << " " << size.width << " frame " << k
+                                                     << ": filter";
+        prev_depth = std::make_unique<DeviceDepth>(copy_of(depth_b));
+        prev_out = std::make_unique<DeviceDepth>(copy_of(out_b));
+      }
+    }
+}
+
+}  // namespace
+}  // namespace p3d
