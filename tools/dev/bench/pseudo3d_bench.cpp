@@ -17,13 +17,13 @@
 //   chain    depth + filter + warp-pack
 //
 // Scene mode (--scenes): instead of the stages on rotating inputs, the CPU
-// chain over generated sequences (still picture, screen content, the
-// vtest.avi camera, pan, snow, cuts; scenes.h) with the adaptive stages off
-// and on, as the elements run them (scene_bench.h): ms a frame of each, the
-// adaptive chain's cost relative to adaptive=false, whether its output is
-// byte for byte the same (PSNR where a reuse tolerance lets it differ), the
-// share of tiles that changed and the time per stage. CPU only: the
-// adaptive stages do not run on CUDA memory.
+// chain (the GPU's with --device gpu) over generated sequences (still
+// picture, screen content, the vtest.avi camera, pan, snow, cuts,
+// letterbox; scenes.h) with the adaptive stages off and on, as the
+// elements run them (scene_bench.h): ms a frame of each, the adaptive
+// chain's cost relative to adaptive=false, whether its output is byte for
+// byte the same (PSNR where a reuse tolerance lets it differ), the share
+// of tiles that changed and the time per stage.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
