@@ -154,11 +154,11 @@ __global__ void count_kernel(const uint8_t *flags, int tiles, unsigned *count) {
   if (threadIdx.x == 0) *count = total;
 }
 
-// One block: KeptOutputGpu::decide's rule from the flags; *ran (host
-// memory) tells the host afterwards.
+// One block: KeptOutputGpu::decide's rule from the flags; *changed (host
+// memory) tells the host afterwards whether a tile changed.
 // A plain launch (<<< >>>), as every kernel of this file.
 __global__ void decide_kernel(const uint8_t *flags, int tiles, bool whole, bool first, GateState *state,
-                              unsigned *ran) {
+                              unsigned *changed) {
   const bool any = __syncthreads_or([&] {
     for (int i = threadIdx.x; i < tiles; i += blockDim.x)
       if (flags[i]) return true;
@@ -175,7 +175,7 @@ __global__ void decide_kernel(const uint8_t *flags, int tiles, bool whole, bool 
   state->run = run;
   state->keep = keep;
   state->kept_valid = run ? keep : 1;
-  *ran = run ? 1u : 0u;
+  *changed = any ? 1u : 0u;
 }
 
 enum class CopyWhen : int { Run, Finish };
@@ -368,32 +368,37 @@ CudaStatus dilate_gpu(const ChangeMapGpu &in, int reach_x, int reach_y, ChangeMa
   return {};
 }
 
-CudaStatus KeptOutputGpu::decide(const ChangeMapGpu &changes, bool whole, cudaStream_t stream) {
+CudaStatus KeptOutputGpu::decide(const ChangeMapGpu &changes, const FrameView &out, bool whole,
+                                  cudaStream_t stream) {
   if (!state_.get()) {
     P3D_CUDA_TRY_STATUS(state_.ensure(sizeof(GateState)));
     first_ = true;
   }
-  P3D_CUDA_TRY_STATUS(ran_.ensure());
-  if (first_) P3D_CUDA_TRY(cudaMemsetAsync(state_.get(), 0, sizeof(GateState), stream));
-  decide_kernel<<<1, kThreads, 0, stream>>>(changes.data(), static_cast<int>(changes.tiles()), whole || first_, first_,
-                                            state_.as<GateState>(), ran_.device());
-  P3D_CUDA_TRY_LAUNCH(decide_kernel);
+  P3D_CUDA_TRY_STATUS(changed_.ensure());
+  // Output of another format or size (a layout changed while playing):
+  // what is kept does not fit it, so the frame starts afresh.
+  if (out.format != format_ || out.width != width_ || out.height != height_) first_ = true;
   if (first_) {
-    // The copy is laid out again: its frames may have another geometry.
-    offset_[0] = pitch_[0] = 0;
+    // The copy is laid out for this output (decide() is never followed by
+    // a copy of another size); nothing the copy held is read again.
+    P3D_CUDA_TRY_STATUS(plane_layout(copy_, out.format, out.width, out.height, offset_, pitch_, &planes_));
+    format_ = out.format;
+    width_ = out.width;
+    height_ = out.height;
+    P3D_CUDA_TRY(cudaMemsetAsync(state_.get(), 0, sizeof(GateState), stream));
   }
+  decide_kernel<<<1, kThreads, 0, stream>>>(changes.data(), static_cast<int>(changes.tiles()), whole || first_, first_,
+                                            state_.as<GateState>(), changed_.device());
+  P3D_CUDA_TRY_LAUNCH(decide_kernel);
   first_ = false;
   return {};
 }
 
 CudaStatus KeptOutputGpu::finish(const FrameView &out, cudaStream_t stream) {
-  int planes = 0;
-  if (pitch_[0] == 0) {
-    P3D_CUDA_TRY_STATUS(plane_layout(copy_, out.format, out.width, out.height, offset_, pitch_, &planes));
-  } else {
-    planes = frame_plane_count(out.format);
-  }
-  for (int p = 0; p < planes; ++p) {
+  if (out.format != format_ || out.width != width_ || out.height != height_)
+    return CudaStatus{cudaErrorInvalidValue, "KeptOutputGpu::finish: the output decide() was given", __FILE__,
+                      __LINE__};
+  for (int p = 0; p < planes_; ++p) {
     int row_bytes = 0, rows = 0;
     frame_plane_size(out.format, out.width, out.height, p, &row_bytes, &rows);
     P3D_CUDA_TRY_STATUS(launch_copy(out.plane[p], out.stride[p], copy_.as<uint8_t>() + offset_[p], pitch_[p],

@@ -162,26 +162,29 @@ struct StageGate {
 class KeptOutputGpu {
  public:
   // Queues the decision for a frame whose inputs changed in the tiles of
-  // `changes`: run when a tile changed, nothing is kept, or `whole` (the
-  // parameters or the output's geometry changed: what is kept was made
-  // otherwise). The output is kept after a frame that did not change every
-  // tile, or after the first one.
-  CudaStatus decide(const ChangeMapGpu &changes, bool whole, cudaStream_t stream);
+  // `changes`, to be written into `out`: run when a tile changed, nothing
+  // of out's format and size is kept, or `whole` (the parameters changed:
+  // what is kept was made otherwise). The output is kept after a frame
+  // that did not change every tile, or after the first one.
+  CudaStatus decide(const ChangeMapGpu &changes, const FrameView &out, bool whole, cudaStream_t stream);
   StageGate gate() const { return StageGate{state_.as<const GateState>()}; }
-  // Whether the last decided frame was computed, once the stream has
-  // passed the decision (ChangeBackOff's signal for such a stage).
-  bool last_ran() const { return ran_.host() != 0; }
-  // After the stage's kernels: `out` gets the kept copy when the frame was
-  // not computed; the copy takes `out` when it was and is kept. out must
-  // have the size and format of decide()'s frames (the caller passes
-  // whole=true on any change).
+  // Whether a tile of the last decided frame's inputs changed, once the
+  // stream has passed the decision (ChangeBackOff's signal for such a
+  // stage: a frame computed only because nothing was kept is not busy).
+  bool last_changed() const { return changed_.host() != 0; }
+  // After the stage's kernels: `out` (decide()'s) gets the kept copy when
+  // the frame was not computed; the copy takes `out` when it was and is
+  // kept.
   CudaStatus finish(const FrameView &out, cudaStream_t stream);
   // Nothing kept: the next frame is computed and is the first.
   void reset() { first_ = true; }
 
  private:
   DeviceBuffer state_, copy_;
-  PinnedWord ran_;
+  PinnedWord changed_;
+  // The copy's frames: their format and size, each plane's place in copy_.
+  PixelFormat format_ = PixelFormat::RGBA;
+  int width_ = 0, height_ = 0, planes_ = 0;
   size_t offset_[3] = {0, 0, 0}, pitch_[3] = {0, 0, 0};
   bool first_ = true;
 };

@@ -304,7 +304,13 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
       return state->gpu.estimate(params, active, p3d::sub_grid(plane->grid(), rect), stream,
                                  compare ? &changed : nullptr);
     });
-    if (ret != GST_FLOW_OK) return ret;
+    if (ret != GST_FLOW_OK) {
+      // The frame's copy may be recorded while the estimator's features
+      // are not: both start afresh.
+      state->history_gpu.reset();
+      state->gpu.reset();
+      return ret;
+    }
     if (compare && state->history_gpu.compared())
       state->backoff_gpu.observe(state->changes_gpu.last_share() > 0);
   } else

@@ -166,7 +166,10 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
       return state->gpu.run(params, active, p3d::sub_grid(p3d::as_const(depth->grid()), rect),
                             p3d::sub_grid(out->grid(), rect), stream, dirty, kept);
     });
-    if (ret != GST_FLOW_OK) return ret;
+    if (ret != GST_FLOW_OK) {
+      state->forget();  // the inputs and parameters kept may have moved on without the output
+      return ret;
+    }
     if (compare) state->last_out = out;
     if (compare && !whole && state->inputs_gpu.compared())
       state->backoff_gpu.observe(state->dirty_gpu.last_share() > 0);

@@ -202,7 +202,8 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
       cudaStream_t stream = base->gpu->stream();
       p3d::StageGate gate;
       if (keep)
-        P3D_CUDA_TRY_STATUS(state->adaptive_gpu.decide(src, nullptr, adaptive.tolerance, changed_params, stream, &gate));
+        P3D_CUDA_TRY_STATUS(
+            state->adaptive_gpu.decide(src, nullptr, adaptive.tolerance, dst, changed_params, stream, &gate));
       P3D_CUDA_TRY_STATUS(p3d::pack_gpu(params, src, dst, stream, gate));
       if (keep) P3D_CUDA_TRY_STATUS(state->adaptive_gpu.finish(dst, stream));
       return p3d::CudaStatus{};

@@ -223,7 +223,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
       p3d::StageGate gate;
       if (keep)
         P3D_CUDA_TRY_STATUS(state->adaptive_gpu.decide(src, p3d::gst::frame_depth_plane(inbuf), adaptive.tolerance,
-                                                       changed_params, stream, &gate));
+                                                       dst, changed_params, stream, &gate));
       if (rect != whole)
         P3D_CUDA_TRY_STATUS(state->active_gpu.render(state->gpu, params, pack, src, yuv, grid, rect, dst, stream, gate));
       else

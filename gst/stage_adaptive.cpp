@@ -57,17 +57,21 @@ bool WholeOutputGpu::begin(bool adaptive) {
   return comparing_;
 }
 
-CudaStatus WholeOutputGpu::decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, bool whole,
-                                  cudaStream_t stream, StageGate *gate) {
+CudaStatus WholeOutputGpu::decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance,
+                                  const FrameView &out, bool whole, cudaStream_t stream, StageGate *gate) {
   P3D_CUDA_TRY_STATUS(inputs_.compare(frame, depth, tolerance, stream));
-  P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), whole, stream));
+  P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), out, whole, stream));
   *gate = output_.gate();
   return {};
 }
 
 void WholeOutputGpu::end(bool ok) {
+  if (!ok) {  // the histories may have moved on without the output
+    reset();
+    return;
+  }
   // Any change makes such a stage compute the whole frame: it is busy.
-  if (ok && comparing_ && inputs_.compared()) backoff_.observe(output_.last_ran());
+  if (comparing_ && inputs_.compared()) backoff_.observe(output_.last_changed());
 }
 
 void WholeOutputGpu::reset() {

@@ -99,11 +99,13 @@ class WholeOutputGpu {
   // not, what was kept is dropped and the frame is computed whole.
   bool begin(bool adaptive);
   // Compares the inputs (depth: as InputHistoryGpu::compare) and queues
-  // the decision; whole: the parameters changed. *gate: the stage's.
-  CudaStatus decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, bool whole,
-                    cudaStream_t stream, StageGate *gate);
+  // the decision for the output `out`; whole: the parameters changed.
+  // *gate: the stage's.
+  CudaStatus decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, const FrameView &out,
+                    bool whole, cudaStream_t stream, StageGate *gate);
   CudaStatus finish(const FrameView &out, cudaStream_t stream) { return output_.finish(out, stream); }
-  // After the frame's work was waited for (ok: it succeeded).
+  // After the frame's work was waited for (ok: it succeeded; a failed
+  // frame leaves nothing kept).
   void end(bool ok);
   void reset();
 

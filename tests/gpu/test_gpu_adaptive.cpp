@@ -126,8 +126,9 @@ GstElement *element_c(GstHarness *hx) {
   return c;
 }
 
-// Properties changed between frames, adaptive toggled, a flush: what the
-// GPU stages kept is not used where it was made otherwise.
+// Properties changed between frames (the layout among them, which changes
+// the output's size), adaptive toggled, a flush: what the GPU stages kept
+// is not used where it was made otherwise.
 TEST(GpuAdaptive, PropertyChangesTogglesAndFlushes) {
   const std::vector<cv::Mat> frames = changing_sequence(160, 96, 11);
   const std::string chain = "pseudo3dconvert layout=side-by-side-half name=c";
@@ -135,12 +136,14 @@ TEST(GpuAdaptive, PropertyChangesTogglesAndFlushes) {
     GstElement *c = element_c(hx);
     if (k == 1) g_object_set(c, "max-disparity", 6.0f, NULL);  // an unchanged frame
     if (k == 5) g_object_set(c, "radius", 2, NULL);
+    // Frames 7 and 8 are unchanged: the output of another size, then kept.
+    if (k == 7) gst_util_set_object_arg(G_OBJECT(c), "layout", "side-by-side");
     if (k == 8) g_object_set(c, "fill", 0, NULL);  // background
     if (k == 9) g_object_set(c, "convergence", 0.2f, NULL);
     if (k == 11) g_object_set(c, "hypothesis", 1, NULL);
     if (k == 12) g_object_set(c, "adaptive", FALSE, NULL);
     if (k == 13) g_object_set(c, "adaptive", TRUE, NULL);
-    if (k == 7) {
+    if (k == 10) {
       gst_harness_push_event(hx, gst_event_new_flush_start());
       gst_harness_push_event(hx, gst_event_new_flush_stop(TRUE));
       GstSegment seg;

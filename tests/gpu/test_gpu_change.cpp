@@ -214,11 +214,11 @@ TEST(GpuChange, KeptOutputRunsKeepsAndRestores) {
     for (size_t k = 0; k < steps.size(); ++k) {
       check_cuda(changes.fill(steps[k].flags == 2, nullptr));
       if (steps[k].flags == 1) check_cuda(CudaStatus{cudaMemset(changes.data() + 1, 1, 1)});
-      check_cuda(kept.decide(changes, steps[k].whole, nullptr));
       const HostFrame fresh = stage_output(f, w, h, 40 + static_cast<uint32_t>(k));
       const DeviceFrame src = DeviceFrame::upload(fresh);
       DeviceFrame out = DeviceFrame::upload(stage_output(f, w, h, 999));  // a pool buffer's old bytes
       const FrameView o = out.view(), s = src.view();
+      check_cuda(kept.decide(changes, o, steps[k].whole, nullptr));
       for (int p = 0; p < frame_plane_count(f); ++p) {
         int row_bytes = 0, rows = 0;
         frame_plane_size(f, w, h, p, &row_bytes, &rows);
@@ -231,6 +231,23 @@ TEST(GpuChange, KeptOutputRunsKeepsAndRestores) {
       EXPECT_TRUE(same_bytes(got, want)) << format_name(f) << " step " << k << (steps[k].runs ? " runs" : " keeps");
       last = got;
     }
+    // An output of another size with no tile changed: what is kept does
+    // not fit it, so the frame runs (and nothing is copied out of bounds).
+    const HostFrame wider = stage_output(f, w + 30, h, 77);
+    const DeviceFrame src = DeviceFrame::upload(wider);
+    DeviceFrame out = DeviceFrame::upload(stage_output(f, w + 30, h, 998));
+    check_cuda(changes.fill(false, nullptr));
+    check_cuda(kept.decide(changes, out.view(), false, nullptr));
+    EXPECT_FALSE(kept.gate().state == nullptr);
+    const FrameView o = out.view(), s = src.view();
+    for (int p = 0; p < frame_plane_count(f); ++p) {
+      int row_bytes = 0, rows = 0;
+      frame_plane_size(f, w + 30, h, p, &row_bytes, &rows);
+      check_cuda(copy_rows_gated(o.plane[p], o.stride[p], s.plane[p], s.stride[p], row_bytes, rows, kept.gate(),
+                                 nullptr));
+    }
+    check_cuda(kept.finish(o, nullptr));
+    EXPECT_TRUE(same_bytes(out.download(), wider)) << format_name(f) << ": another size runs";
   }
 }
 

@@ -141,7 +141,7 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
       check(s.warp_changes.fill(true, s.stream));
     else
       check(mark_grid_changes_gpu(as_const(s.filter_planes[prev].view), as_const(filtered), s.warp_changes, s.stream));
-    check(s.kept.decide(s.warp_changes, false, s.stream));
+    check(s.kept.decide(s.warp_changes, out, false, s.stream));
     check(s.warp.render_packed(s.p.warp, s.p.pack, src, s.p.yuv, as_const(filtered), out, s.stream, nullptr,
                                s.kept.gate()));
     check(s.kept.finish(out, s.stream));
@@ -152,7 +152,7 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
   check(cudaEventSynchronize(s.marks[3]), "cudaEventSynchronize");
   if (depth_compares && s.depth_frame.compared()) s.depth_backoff.observe(s.depth_changes.last_share() > 0);
   if (!filter_whole && s.filter_frame.compared()) s.filter_backoff.observe(s.dirty.last_share() > 0);
-  if (warp_compares && s.warp_frame.compared() && !first) s.warp_backoff.observe(s.kept.last_ran());
+  if (warp_compares && s.warp_frame.compared() && !first) s.warp_backoff.observe(s.kept.last_changed());
   s.filter_has_last = filter_compares;
   float t[3] = {0, 0, 0};
   for (int i = 0; i < 3; ++i) check(cudaEventElapsedTime(&t[i], s.marks[i], s.marks[i + 1]), "cudaEventElapsedTime");
