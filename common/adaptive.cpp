@@ -9,15 +9,29 @@ namespace {
 constexpr double kWholeFilterShare = 0.75;
 }  // namespace
 
+bool StageInputs::begin(bool adaptive) {
+  if (!adaptive) {
+    reset();
+    return false;
+  }
+  if (backoff_.compare_next()) return true;
+  frame_.reset();
+  compared_ = false;
+  return false;
+}
+
 ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> depth, ImageView<const float> prev_depth,
                                float tolerance) {
   ChangeMap changes = frame_.compare(frame, tolerance);
-  if (depth.empty() || changes.all()) return changes;  // nothing left for the depth to add
-  if (prev_depth.empty()) {
-    changes.mark_all();
-  } else if (depth.data != prev_depth.data) {
-    changes.merge(compare_planes(prev_depth, depth));
+  compared_ = frame_.compared() && (depth.empty() || !prev_depth.empty());
+  if (!depth.empty() && !changes.all()) {  // all: nothing left for the depth to add
+    if (prev_depth.empty()) {
+      changes.mark_all();
+    } else if (depth.data != prev_depth.data) {
+      changes.merge(compare_planes(prev_depth, depth));
+    }
   }
+  if (compared_) backoff_.observe(ChangeBackOff::busy_on_cpu(changes.fraction()));
   return changes;
 }
 

@@ -19,19 +19,34 @@ namespace p3d {
 
 // A stage's inputs of the previous frame: the frame's bytes (a copy) and
 // the depth map, which the caller holds on to (the stages never write a
-// map once they hand it on).
+// map once they hand it on); and the stage's back-off (ChangeBackOff,
+// busy_on_cpu).
 class StageInputs {
  public:
+  // Before a frame: whether it is compared (adaptive and not backing off).
+  // When not, the history is dropped and the stage computes the frame
+  // whole, dropping what it kept too.
+  bool begin(bool adaptive);
   // The tiles in which this frame, or its depth map when `depth` is given,
   // differ from the previous call's. prev_depth: the previous call's depth
   // map (empty: none, every tile counts as changed); the same data pointer
-  // as depth: the same map, unchanged.
+  // as depth: the same map, unchanged. A comparison with the previous
+  // inputs feeds the back-off.
   ChangeMap compare(const FrameView &frame, ImageView<const float> depth, ImageView<const float> prev_depth,
                     float tolerance);
-  void reset() { frame_.reset(); }
+  // Whether the last compare() had the previous call's inputs (else it
+  // flagged every tile).
+  bool compared() const { return compared_; }
+  void reset() {
+    frame_.reset();
+    compared_ = false;
+    backoff_.reset();
+  }
 
  private:
   FrameHistory frame_;
+  bool compared_ = false;
+  ChangeBackOff backoff_;
 };
 
 // The filter of the tiles within bilateral_reach() of a changed one.

@@ -2,6 +2,7 @@
 #include "bilateral.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -52,7 +53,8 @@ constexpr int kStrip = 16;
 inline void window_strip(const uint8_t *tap_guide, ptrdiff_t guide_step, const float *tap_depth,
                          ptrdiff_t depth_step_bytes, int dy0, int dy1, int dx0, int dx1, const float *space_centre,
                          int side, const float *range, float *out) {
-  float sum_w[kStrip] = {}, sum_wd[kStrip] = {};
+  float sum_w[kStrip] = {}, sum_wd[kStrip] = {}, centre[kStrip];
+  for (int k = 0; k < kStrip; ++k) centre[k] = tap_depth[k];
   for (int dy = dy0; dy <= dy1; ++dy)
     for (int dx = dx0; dx <= dx1; ++dx) {
       const uint8_t *tg = tap_guide + guide_step * dy + dx;
@@ -62,10 +64,10 @@ inline void window_strip(const uint8_t *tap_guide, ptrdiff_t guide_step, const f
 #pragma GCC unroll 16
       for (int k = 0; k < kStrip; ++k) {
         const int g = static_cast<int>(tg[k]) - static_cast<int>(tap_guide[k]);
-        bilateral_accumulate(space_w, range[g], td[k], sum_w[k], sum_wd[k]);
+        bilateral_accumulate(space_w, range[g], td[k], centre[k], sum_w[k], sum_wd[k]);
       }
     }
-  for (int k = 0; k < kStrip; ++k) out[k] = sum_wd[k] / sum_w[k];
+  for (int k = 0; k < kStrip; ++k) out[k] = bilateral_result(centre[k], sum_w[k], sum_wd[k]);
 }
 
 // The strips' starting columns for a run [x0, x1) of at least kStrip
@@ -250,6 +252,23 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
     if (!r.empty()) guide_luma_rect(guide, grown(r, fine.radius, whole.x1, whole.y1), luma);
   for (const PixelRect &r : where)
     if (!r.empty()) filter_on_luma(fine, luma, depth_in, depth_out, r, scratch.mid);
+}
+
+bool bilateral_keeps(ImageView<const float> depth) {
+  if (depth.empty()) return true;
+  const float v = depth.row(0)[0];
+  if (v != v || (v == 0.f && std::signbit(v))) return false;
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  for (int y = 0; y < depth.height; ++y) {
+    const float *row = depth.row(y);
+    for (int x = 0; x < depth.width; ++x) {
+      uint32_t b;
+      std::memcpy(&b, &row[x], sizeof b);
+      if (b != bits) return false;
+    }
+  }
+  return true;
 }
 
 int bilateral_reach(const BilateralParams &params, int width, int height) {

@@ -9,9 +9,11 @@
 //   range_weight(g)  = exp(-g^2 / (2 sigma_range^2)), and for sigma_range == 0:
 //                      1 where g == 0, else 0.
 // The centre weight is exactly 1, so the sum never underflows to 0 and the
-// result is never NaN; a constant depth map comes back unchanged (up to float
-// rounding of the normalisation), and sigma_range -> 0 averages only over
-// pixels with the centre's exact guide value.
+// result is never NaN. It is computed as depth(p) + sum_q w(p,q) *
+// (depth(q) - depth(p)) / sum_q w(p,q) (bilateral_accumulate): a window of
+// one depth value, and so a constant depth map, comes back bit for bit.
+// sigma_range -> 0 averages only over pixels with the centre's exact guide
+// value.
 // guide(p) is load_luma() of the frame (8-bit). radius 0 is the identity (the
 // element passes the buffer through).
 //
@@ -230,12 +232,19 @@ inline void bilateral_mirror_range(float *signed_range) {
 }
 
 // One tap of the window: the float operations every path performs, in this
-// order, so that all of them round alike.
-P3D_HD void bilateral_accumulate(float space_w, float range_w, float depth, float &sum_w, float &sum_wd) {
+// order, so that all of them round alike. The tap's depth enters as its
+// difference from the centre pixel's (`centre`), and the output is the
+// centre plus the weighted mean difference (bilateral_result): a window of
+// one depth value sums differences of exactly 0 and returns that value,
+// bit for bit, whatever the weights, so the filter leaves a constant depth
+// map (a flat scene) as it is and a stage may skip it there.
+P3D_HD void bilateral_accumulate(float space_w, float range_w, float depth, float centre, float &sum_w,
+                                 float &sum_wd) {
   const float w = space_w * range_w;
   sum_w += w;
-  sum_wd += w * depth;
+  sum_wd += w * (depth - centre);
 }
+P3D_HD float bilateral_result(float centre, float sum_w, float sum_wd) { return centre + sum_wd / sum_w; }
 
 // One output pixel: the shared per-pixel maths of the CPU loop and the kernel.
 // guide(qx, qy) returns the 8-bit guide value and depth(qx, qy) the input
@@ -252,15 +261,16 @@ P3D_HD float bilateral_pixel(int x, int y, int width, int height, int radius, co
   const int y1 = y + radius > height - 1 ? height - 1 : y + radius;
   const int x0 = x - radius < 0 ? 0 : x - radius;
   const int x1 = x + radius > width - 1 ? width - 1 : x + radius;
+  const float centre_depth = depth(x, y);
   float sum_w = 0.f, sum_wd = 0.f;
   for (int qy = y0; qy <= y1; ++qy) {
     const float *space_row = space + (qy - y + radius) * side + radius;  // index by qx - x
     for (int qx = x0; qx <= x1; ++qx) {
       const int g = static_cast<int>(guide(qx, qy)) - centre;
-      bilateral_accumulate(space_row[qx - x], range[g < 0 ? -g : g], depth(qx, qy), sum_w, sum_wd);
+      bilateral_accumulate(space_row[qx - x], range[g < 0 ? -g : g], depth(qx, qy), centre_depth, sum_w, sum_wd);
     }
   }
-  return sum_wd / sum_w;
+  return bilateral_result(centre_depth, sum_w, sum_wd);
 }
 
 // One pass of the Separable mode at (x, y): taps along x (step_x 1, step_y 0,
@@ -276,13 +286,14 @@ P3D_HD float bilateral_pass_pixel(int x, int y, int step_x, int step_y, int leng
   const int d0 = pos - radius < 0 ? -pos : -radius;
   const int d1 = pos + radius > length - 1 ? length - 1 - pos : radius;
   const float *space_row = space + radius * (2 * radius + 1) + radius;  // index by d
+  const float centre_depth = depth(x, y);
   float sum_w = 0.f, sum_wd = 0.f;
   for (int d = d0; d <= d1; ++d) {
     const int qx = x + d * step_x, qy = y + d * step_y;
     const int g = static_cast<int>(guide(qx, qy)) - centre;
-    bilateral_accumulate(space_row[d], range[g < 0 ? -g : g], depth(qx, qy), sum_w, sum_wd);
+    bilateral_accumulate(space_row[d], range[g < 0 ? -g : g], depth(qx, qy), centre_depth, sum_w, sum_wd);
   }
-  return sum_wd / sum_w;
+  return bilateral_result(centre_depth, sum_w, sum_wd);
 }
 
 // depth_in and depth_out may alias (the CPU copies the input first; the GPU
@@ -291,6 +302,14 @@ P3D_HD float bilateral_pass_pixel(int x, int y, int step_x, int step_y, int leng
 // otherwise). Empty images are a no-op.
 void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth_in,
                           ImageView<float> depth_out);
+
+// Whether the filter returns `depth` itself, bit for bit, whatever the
+// guide and the parameters: a map of one value (every window sums
+// differences of 0; bilateral_accumulate) that is neither NaN nor -0 (to
+// which the +0 difference adds up as +0). An adaptive stage passes such a
+// map on unfiltered: a flat scene costs the filter one read of the map.
+// The scan stops at the first value that differs.
+bool bilateral_keeps(ImageView<const float> depth);
 
 // How far, in pixels across and down, a change of the guide or of the
 // depth can move the filter's output (the adaptive stages recompute the

@@ -119,6 +119,7 @@ ChangeMap ChangeMap::cropped(PixelRect r) const {
 ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
   const int n = frame_plane_count(frame.format);
   const bool fresh = planes_.empty() || frame.format != format_ || frame.width != width_ || frame.height != height_;
+  compared_ = !fresh;
   if (fresh) {
     format_ = frame.format;
     width_ = frame.width;

@@ -113,14 +113,20 @@ P3D_HD bool tile_over_tolerance(unsigned long long diff, unsigned long long samp
 // its histories reset (what they hold is then out of date), and compares
 // again after them: the first comparison of a fresh history finds every
 // tile changed and is not observed; the one after it tells whether the
-// scene calmed down. The pause doubles while the frames stay busy, from
+// scene calmed down. Busy on the CPU: more than kBusyShare of the tiles
+// changed (busy_on_cpu), where a stage's saving is small beside the
+// comparison and the copies into the histories; a partly changed frame
+// there saves more than it costs, so the stage goes on comparing. The pause doubles while the frames stay busy, from
 // kBackOffFrames up to kBackOffMax, so that a film pays a comparison
 // every few seconds and a scene that stops is found within that. Whole
 // frames are what adaptive=false computes: the output stays exact.
 constexpr int kBackOffFrames = 16;
+constexpr double kBusyShare = 0.75;
 constexpr int kBackOffMax = 128;
 class ChangeBackOff {
  public:
+  // A compared frame's changes on the CPU: busy or not.
+  static bool busy_on_cpu(double changed_share) { return changed_share > kBusyShare; }
   // Before a frame: false when the stage computes it whole, uncompared.
   bool compare_next() {
     if (skip_ == 0) return true;
@@ -153,7 +159,12 @@ class FrameHistory {
   // tile, when there is no previous frame or it had another size or
   // format. Records the changed tiles' bytes as the new reference.
   ChangeMap compare(const FrameView &frame, float tolerance = 0.f);
-  void reset() { planes_.clear(); }
+  // Whether the last compare() had a previous frame of its size and format.
+  bool compared() const { return compared_; }
+  void reset() {
+    planes_.clear();
+    compared_ = false;
+  }
 
  private:
   struct Plane {
@@ -163,6 +174,7 @@ class FrameHistory {
   PixelFormat format_ = PixelFormat::RGBA;
   int width_ = 0, height_ = 0;
   std::vector<Plane> planes_;
+  bool compared_ = false;
 };
 
 // The tiles in which two float planes of one size differ in any byte

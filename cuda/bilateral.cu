@@ -250,15 +250,16 @@ __device__ __forceinline__ bool kept_block(const TileFlags &dirty, const DepthGr
 template <int R, int J0, int J1>
 __device__ __forceinline__ void accumulate_row(const Texel *row, int t, const float *space,
                                                const unsigned char *const range_c[kRowsPerThread],
-                                               float sum_w[kRowsPerThread], float sum_wd[kRowsPerThread]) {
+                                               const float centre[kRowsPerThread], float sum_w[kRowsPerThread],
+                                               float sum_wd[kRowsPerThread]) {
   constexpr int kSide = Geometry<R>::kSide;
 #pragma unroll
   for (int dx = 0; dx < kSide; ++dx) {
     const Texel q = row[dx];
 #pragma unroll
     for (int j = J0; j <= J1; ++j)
-      bilateral_accumulate(space[(t - j) * kSide + dx], range_weight(range_c[j], q.luma4), q.depth, sum_w[j],
-                           sum_wd[j]);
+      bilateral_accumulate(space[(t - j) * kSide + dx], range_weight(range_c[j], q.luma4), q.depth, centre[j],
+                           sum_w[j], sum_wd[j]);
   }
 }
 
@@ -267,12 +268,13 @@ __device__ __forceinline__ void accumulate_row(const Texel *row, int t, const fl
 template <int R, int T, int TEnd>
 __device__ __forceinline__ void unroll_rows(const Texel *row, const float *space,
                                             const unsigned char *const range_c[kRowsPerThread],
-                                            float sum_w[kRowsPerThread], float sum_wd[kRowsPerThread]) {
+                                            const float centre[kRowsPerThread], float sum_w[kRowsPerThread],
+                                            float sum_wd[kRowsPerThread]) {
   if constexpr (T < TEnd) {
     constexpr int J0 = T - 2 * R > 0 ? T - 2 * R : 0;
     constexpr int J1 = T < kRowsPerThread - 1 ? T : kRowsPerThread - 1;
-    accumulate_row<R, J0, J1>(row + T * Geometry<R>::kTileW, T, space, range_c, sum_w, sum_wd);
-    unroll_rows<R, T + 1, TEnd>(row, space, range_c, sum_w, sum_wd);
+    accumulate_row<R, J0, J1>(row + T * Geometry<R>::kTileW, T, space, range_c, centre, sum_w, sum_wd);
+    unroll_rows<R, T + 1, TEnd>(row, space, range_c, centre, sum_w, sum_wd);
   }
 }
 
@@ -288,23 +290,25 @@ __device__ void filter_unclipped(const Texel *tile, const float *range_sym, cons
   constexpr int K = kRowsPerThread, kLastDy = 2 * R;
   const Texel *row = tile + threadIdx.y * K * G::kTileW + threadIdx.x;  // tap (-R, -R) of output 0
   const unsigned char *range_c[K];
-  float sum_w[K], sum_wd[K];
+  float centre[K], sum_w[K], sum_wd[K];
 #pragma unroll
   for (int j = 0; j < K; ++j) {
-    range_c[j] = range_centred(range_sym, row[(R + j) * G::kTileW + R].luma4);  // index by neighbour luma
+    const Texel c = row[(R + j) * G::kTileW + R];
+    range_c[j] = range_centred(range_sym, c.luma4);  // index by neighbour luma
+    centre[j] = c.depth;
     sum_w[j] = sum_wd[j] = 0.f;
   }
   // Rows 0 .. K-2: outputs 0 .. t (and dy = t - j <= 2R).
-  unroll_rows<R, 0, K - 1>(row, space, range_c, sum_w, sum_wd);
+  unroll_rows<R, 0, K - 1>(row, space, range_c, centre, sum_w, sum_wd);
   // Rows K-1 .. 2R: every output.
 #pragma unroll 1
   for (int t = K - 1; t <= kLastDy; ++t)
-    accumulate_row<R, 0, K - 1>(row + t * G::kTileW, t, space, range_c, sum_w, sum_wd);
+    accumulate_row<R, 0, K - 1>(row + t * G::kTileW, t, space, range_c, centre, sum_w, sum_wd);
   // Rows max(2R+1, K-1) .. 2R+K-1: outputs t-2R .. K-1.
   constexpr int kDownStart = kLastDy + 1 > K - 1 ? kLastDy + 1 : K - 1;
-  unroll_rows<R, kDownStart, kLastDy + K>(row, space, range_c, sum_w, sum_wd);
+  unroll_rows<R, kDownStart, kLastDy + K>(row, space, range_c, centre, sum_w, sum_wd);
 #pragma unroll
-  for (int j = 0; j < K; ++j) out[j] = sum_wd[j] / sum_w[j];
+  for (int j = 0; j < K; ++j) out[j] = bilateral_result(centre[j], sum_w[j], sum_wd[j]);
 }
 
 template <int R, GridIo kIo>
@@ -377,10 +381,11 @@ __device__ __forceinline__ float pass_unclipped(int centre4, const float (&space
                                                 const LumaFn &luma4, const DepthFn &depth) {
   float sum_w = 0.f, sum_wd = 0.f;
   const unsigned char *range_c = range_centred(range_sym, centre4);
+  const float centre = depth(0);
 #pragma unroll
   for (int d = -R; d <= R; ++d)
-    bilateral_accumulate(space_1d[d + R], range_weight(range_c, luma4(d)), depth(d), sum_w, sum_wd);
-  return sum_wd / sum_w;
+    bilateral_accumulate(space_1d[d + R], range_weight(range_c, luma4(d)), depth(d), centre, sum_w, sum_wd);
+  return bilateral_result(centre, sum_w, sum_wd);
 }
 
 // As many blocks as an SM holds threads for (6 from sm_80 up, 4 on sm_75;

@@ -627,7 +627,7 @@ static void gst_pseudo3d_base_class_init(GstPseudo3DBaseClass *klass) {
                            "Recompute only what changed since the previous frame (tiles of 32x32 pixels and the "
                            "output they reach); an unchanged frame costs a comparison. With reuse-tolerance 0 the "
                            "output is byte for byte that of adaptive=false. On CUDA memory the comparison and "
-                           "the decisions stay on the device; a stage whose frames keep changing computes them "
+                           "the decisions stay on the device. A stage whose frames keep changing computes them "
                            "whole for a while without comparing",
                            DEFAULT_ADAPTIVE,
                            (GParamFlags)(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS | GST_PARAM_MUTABLE_PLAYING)));

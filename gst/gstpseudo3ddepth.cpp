@@ -67,7 +67,7 @@ struct DepthState {
   p3d::gst::DepthPlanePool pool;
   // adaptive (stage_adaptive.h): the frame's bytes and the plane of the
   // previous frame, which an unchanged depth reuses. Streaming thread.
-  p3d::FrameHistory history;
+  p3d::gst::InputHistory history;
   p3d::gst::DepthPlanePtr last_plane;
   // crop-bars (common/bars.h), streaming thread: the bars decided from
   // the frames so far, and the rect the last frame's depth was estimated
@@ -253,9 +253,10 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   const bool crop = crop_bars(self);
   const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base);
   DepthState *state = self->state;
-  const bool adaptive_cpu = adaptive.on && path == GST_PSEUDO3D_PATH_CPU;
+  // On the CPU, while frames keep changing, uncompared (ChangeBackOff).
+  const bool adaptive_cpu = path == GST_PSEUDO3D_PATH_CPU && state->history.begin(adaptive.on);
   p3d::ChangeMap changes;
-  if (adaptive_cpu) changes = state->history.compare(view, adaptive.tolerance);
+  if (adaptive_cpu) changes = state->history.compare(view, nullptr, adaptive.tolerance);
   if (crop && observe_bars(self, path, view, adaptive_cpu && !changes.any()) != GST_FLOW_OK) return GST_FLOW_ERROR;
   bool moved = false;
   const p3d::PixelRect rect = frame_rect(self, path, params, view, crop, &moved);
@@ -278,7 +279,8 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
     pseudo3d_buffer_set_depth(buf, state->last_plane);
     return GST_FLOW_OK;
   }
-  state->history.reset();
+  // (On the CPU history.begin() dropped the history and kept its back-off.)
+  if (path != GST_PSEUDO3D_PATH_CPU) state->history.reset();
   state->last_plane.reset();
   // On CUDA memory the plane holds a value a block (no full-size copy;
   // depth_plane.h) where the block is a power of two.

@@ -74,6 +74,13 @@ struct _GstPseudo3DFilter {
 G_DEFINE_TYPE(GstPseudo3DFilter, gst_pseudo3d_filter, GST_TYPE_PSEUDO3D_BASE);
 GST_ELEMENT_REGISTER_DEFINE(pseudo3dfilter, "pseudo3dfilter", GST_RANK_NONE, GST_TYPE_PSEUDO3D_FILTER);
 
+// A flat scene (adaptive=true, on the CPU): a depth map of one value in
+// the rect is its own filtered map (bilateral_keeps), so the frame keeps
+// its depth plane as it is.
+static bool flat_depth(p3d::gst::DepthPlane *depth, p3d::PixelRect rect) {
+  return p3d::bilateral_keeps(p3d::sub_image(p3d::as_const(depth->view()), rect));
+}
+
 // The CPU filter with adaptive=true: the tiles within the filter's reach
 // of a changed guide or depth tile are filtered again, the others keep the
 // previous output; no change at all keeps the previous plane itself.
@@ -85,6 +92,10 @@ static GstFlowReturn filter_adaptive(GstPseudo3DFilter *self, GstBuffer *buf, co
   const p3d::ChangeMap changes = state->inputs.compare(guide, depth, tolerance);
   const bool whole = state->params.changed({params, rect}) || !state->last_out;
   GST_LOG_OBJECT(self, "%.0f%% of the tiles changed%s", 100.0 * changes.fraction(), whole ? ", filtering all" : "");
+  if (flat_depth(depth.get(), rect)) {
+    state->last_out = depth;
+    return GST_FLOW_OK;
+  }
   p3d::gst::DepthPlanePtr out = p3d::gst::new_depth(base, state->pool, GST_PSEUDO3D_PATH_CPU, depth->width, depth->height);
   if (!out || !p3d::gst::set_active(base, out.get(), rect)) return GST_FLOW_ERROR;
   const p3d::ImageView<const float> prev =
@@ -125,10 +136,17 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   if (gst_pseudo3d_base_take_history_reset(base)) self->state->forget();
   const p3d::PixelRect rect = filter_rect(path, depth, params);
   const p3d::gst::AdaptiveSettings adaptive = p3d::gst::adaptive_settings(base);
-  if (adaptive.on && path == GST_PSEUDO3D_PATH_CPU)
-    return filter_adaptive(self, buf, guide, params, rect, adaptive.tolerance);
   FilterState *state = self->state;
-  if (!adaptive.on) state->forget();
+  if (path == GST_PSEUDO3D_PATH_CPU) {
+    // While frames keep changing, uncompared (ChangeBackOff): the history
+    // is dropped, and so is the output kept.
+    if (state->inputs.begin(adaptive.on)) return filter_adaptive(self, buf, guide, params, rect, adaptive.tolerance);
+    state->params.reset();
+    state->last_out.reset();
+    if (adaptive.on && flat_depth(depth, rect)) return GST_FLOW_OK;
+  } else if (!adaptive.on) {
+    state->forget();
+  }
   // On CUDA memory the output holds a value a cell of the coarse grid (no
   // full-size copy; depth_plane.h) where the grid step is a power of two.
   const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), rect.width(), rect.height());

@@ -218,19 +218,23 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   // again, the rest is the previous output.
   p3d::ChangeMap changes;
   bool whole = true;
-  if (adaptive.on) {
+  // While frames keep changing, uncompared (ChangeBackOff): the history
+  // is dropped, and so is the output kept.
+  const bool compare = state->input.begin(adaptive.on);
+  if (compare) {
     changes = state->input.compare(src, nullptr, adaptive.tolerance);
     // A change in every row of tiles: nothing of the previous output survives.
     whole = state->params.changed(params) || changes.all_rows() || !state->output.copy_into(&base->out_info, out);
   } else {
-    state->forget();
+    state->params.reset();
+    state->output.reset();
   }
   if (!p3d::pack_changed_cpu(params, src, dst, whole ? nullptr : &changes)) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the layout"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (adaptive.on) state->output.update(&base->out_info, out, changes, whole);
+  if (compare) state->output.update(&base->out_info, out, changes, whole);
   return GST_FLOW_OK;
 }
 

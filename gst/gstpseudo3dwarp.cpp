@@ -153,14 +153,18 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   const p3d::FrameView dst = p3d::gst::frame_view(out);
   p3d::ChangeMap changes;
   bool whole = true;
-  if (adaptive.on) {
+  // While frames keep changing, uncompared (ChangeBackOff): the history
+  // is dropped, and so is the output kept.
+  const bool compare = state->inputs.begin(adaptive.on);
+  if (compare) {
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
     // A change in every row of tiles: nothing of the previous output
     // survives (the warp redoes whole rows).
     whole = state->params.changed({params, pack, yuv, rect}) || changes.all_rows() ||
             !state->output.copy_into(&base->out_info, out);
   } else {
-    state->forget();
+    state->params.reset();
+    state->output.reset();
   }
   // The pair into the output where the layout is the pair itself, else
   // into the pair buffer (kept from frame to frame), then packed.
@@ -180,7 +184,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (adaptive.on) state->output.update(&base->out_info, out, changes, whole);
+  if (compare) state->output.update(&base->out_info, out, changes, whole);
   GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
   return GST_FLOW_OK;
 }

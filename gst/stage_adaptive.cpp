@@ -15,6 +15,12 @@ AdaptiveSettings adaptive_settings(GstPseudo3DBase *self) {
   return s;
 }
 
+bool InputHistory::begin(bool adaptive) {
+  const bool compare = inputs_.begin(adaptive);
+  if (!compare) depth_.reset();
+  return compare;
+}
+
 ChangeMap InputHistory::compare(const FrameView &frame, const DepthPlanePtr &depth, float tolerance) {
   const ImageView<const float> prev = depth_ && !depth_->on_device ? as_const(depth_->view()) : ImageView<const float>();
   ChangeMap changes = inputs_.compare(frame, depth ? as_const(depth->view()) : ImageView<const float>(), prev, tolerance);

@@ -28,10 +28,13 @@ struct AdaptiveSettings {
 };
 AdaptiveSettings adaptive_settings(GstPseudo3DBase *self);
 
-// A stage's inputs of the previous frame (common/adaptive.h StageInputs),
-// holding on to the depth plane (planes never change once attached).
+// A stage's inputs of the previous frame (common/adaptive.h StageInputs,
+// with its back-off), holding on to the depth plane (planes never change
+// once attached).
 class InputHistory {
  public:
+  // StageInputs::begin: false when the frame is computed whole, uncompared.
+  bool begin(bool adaptive);
   // The tiles in which this frame or its depth (a host plane; null: the
   // stage reads none) differ from the previous call's; every tile after
   // reset().

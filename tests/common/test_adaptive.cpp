@@ -664,6 +664,43 @@ TEST(AdaptiveStageInputs, DepthChangesMergeIn) {
   EXPECT_FALSE(in.compare(f.view(), ImageView<const float>(), cview(d1), 0.f).any());
 }
 
+// On the CPU a stage backs off after a compared frame in which more than
+// kBusyShare of the tiles changed; its fresh first comparison after the
+// pause is not observed, the one after it is; adaptive=false resets.
+TEST(AdaptiveStageInputs, BacksOffAfterABusyFrameOnly) {
+  const int w = 128, h = 64;  // 4 x 2 tiles
+  HostFrame f(PixelFormat::RGBA, w, h, 0);
+  f.fill_random(41);
+  std::mt19937 rng(1);
+  StageInputs in;
+  auto frame = [&](bool expect_compared, const char *what) {
+    const bool compared = in.begin(true);
+    EXPECT_EQ(compared, expect_compared) << what;
+    if (compared) in.compare(f.view(), {}, {}, 0.f);
+    return compared;
+  };
+  frame(true, "first frame");  // fresh: every tile, not observed
+  EXPECT_FALSE(in.compared());
+  frame(true, "after a fresh comparison");
+  EXPECT_TRUE(in.compared());
+  // 6 of 8 tiles changed: 75 %, not busy.
+  scribble(f, PixelRect{0, 0, 96, 64}, rng);
+  frame(true, "three quarters changed");
+  frame(true, "not busy: compared again");
+  // Every tile changed: busy, a pause of kBackOffFrames frames.
+  f.fill_random(42);
+  frame(true, "compared");
+  for (int k = 0; k < kBackOffFrames; ++k) frame(false, "backing off");
+  frame(true, "fresh comparison after the pause");
+  EXPECT_FALSE(in.compared()) << "the history was dropped during the pause";
+  f.fill_random(43);
+  frame(true, "observed comparison");
+  for (int k = 0; k < 2 * kBackOffFrames; ++k) frame(false, "busy again: the pause doubled");
+  EXPECT_TRUE(in.begin(true));
+  EXPECT_FALSE(in.begin(false)) << "adaptive=false";
+  EXPECT_TRUE(in.begin(true)) << "adaptive=false reset the back-off";
+}
+
 // ---- depth estimator -----------------------------------------------------------------
 
 // A picture of flat rectangles on a gradient with light noise: regions for

@@ -52,6 +52,8 @@ TEST(AdaptiveElements, SameBytesAsFullComputation) {
       {"pseudo3ddepth processing=cpu ! pseudo3dfilter processing=cpu ! pseudo3dwarp processing=cpu layout=left "
        "fill=none ! capsfilter caps=video/x-raw,format=NV12",
        PixelFormat::RGBx},
+      // A flat depth map (one value): the filter passes it on unfiltered.
+      {"pseudo3dconvert processing=cpu hypothesis=flat layout=side-by-side-half", PixelFormat::I420},
   };
   for (const Case &c : cases) {
     const std::vector<cv::Mat> frames = changing_sequence(w, h, 7);
@@ -59,6 +61,39 @@ TEST(AdaptiveElements, SameBytesAsFullComputation) {
     const auto adaptive = output_bytes(with_adaptive(c.chain, true), c.format, frames);
     expect_same_bytes(full, adaptive, c.chain);
   }
+}
+
+// Busy frames make the stages back off (ChangeBackOff: whole frames,
+// uncompared, their histories dropped); calm frames after the pause make
+// them compare and keep again. Every frame is byte for byte the full
+// computation's across both transitions. 160 x 100: 20 tiles, so that a
+// small box is not busy.
+TEST(AdaptiveElements, BackingOffAndBackChangesNoByte) {
+  const int w = 160, h = 100;
+  std::vector<cv::Mat> frames;
+  std::mt19937 rng(17);
+  cv::Mat cur;
+  for (int k = 0; k < 60; ++k) {
+    // Cuts at 0-3 and 30-32; between, a small box moves on every third
+    // frame and the others are unchanged.
+    if (k < 4 || (k >= 30 && k < 33)) {
+      cur = textured_picture(w, h, 200 + k);
+    } else if (k % 3 == 0) {
+      cur = cur.clone();
+      const cv::Rect r(static_cast<int>(rng() % (w - 12)), static_cast<int>(rng() % (h - 10)), 12, 10);
+      cv::rectangle(cur, r, cv::Scalar(rng() % 256, rng() % 256, rng() % 256), cv::FILLED);
+    }
+    frames.push_back(cur);
+  }
+  const std::vector<Case> cases = {
+      {"pseudo3dconvert processing=cpu layout=side-by-side-half", PixelFormat::I420},
+      {"pseudo3ddepth processing=cpu ! pseudo3dfilter processing=cpu ! pseudo3dwarp processing=cpu ! "
+       "pseudo3dpack processing=cpu layout=top-bottom-half",
+       PixelFormat::RGBA},
+  };
+  for (const Case &c : cases)
+    expect_same_bytes(output_bytes(with_adaptive(c.chain, false), c.format, frames),
+                      output_bytes(with_adaptive(c.chain, true), c.format, frames), c.chain);
 }
 
 // A property changed between frames: the stage recomputes what it kept.

@@ -142,9 +142,11 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
 // gstpseudo3ddepth.cpp process_ip: the bars counted (again only where the
 // frame changed) and decided; only the blocks of changed tiles are summed
 // again; when no block depth changed the frame gets the previous plane
-// itself. A new rect starts the estimator and the planes over.
+// itself. A new rect starts the estimator and the planes over. Backing
+// off (StageInputs::begin): the whole estimate into a new plane.
 AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *changes) {
-  *changes = depth_history_.compare(src, tolerance_);
+  const bool compare = depth_inputs_.begin(true);
+  *changes = compare ? depth_inputs_.compare(src, {}, {}, tolerance_) : ChangeMap(src.width, src.height, true);
   if (changes->any() || counts_.rows.empty()) bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_);
   bars_.observe(counts_);
   const PixelRect rect = bars_.active(src.width, src.height);
@@ -155,6 +157,13 @@ AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *chang
     changes->mark_all();
     if (rect.x0 != 0 || rect.x1 != src.width)
       active_pair_ = HostFrame(target_.pair(out_.view()).format, 2 * rect.width(), rect.height());
+  }
+  if (!compare) {
+    depth_last_.reset();
+    Plane plane = depth_pool_.acquire();
+    zero_outside(*plane, rect);
+    estimator_.estimate(p_.depth, sub_frame(src, rect), sub_image(depth_view_of(*plane), rect));
+    return plane;
   }
   const ChangeMap active_changes = changes->cropped(rect);
   estimator_.estimate_blocks(p_.depth, sub_frame(src, rect), &active_changes);
@@ -170,12 +179,31 @@ AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *chang
 // gstpseudo3dfilter.cpp filter_adaptive: the tiles a changed guide or depth
 // reaches are filtered into a new plane holding the rest of the previous
 // output; none reached: the previous output itself. Inside the rect.
+// Backing off: the whole filter into a new plane, nothing kept. A flat
+// depth map (bilateral_keeps) is the output itself.
 AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &depth, ChangeMap *changes) {
+  const bool flat = bilateral_keeps(sub_image(const_view(*depth), rect_));
+  if (!filter_inputs_.begin(true)) {
+    filter_depth_.reset();
+    filter_last_.reset();
+    *changes = ChangeMap(src.width, src.height, true);
+    if (flat) return depth;
+    Plane out = filter_pool_.acquire();
+    zero_outside(*out, rect_);
+    bilateral_filter_cpu(p_.filter, sub_frame(src, rect_), sub_image(const_view(*depth), rect_),
+                         sub_image(depth_view_of(*out), rect_));
+    return out;
+  }
   const ImageView<const float> prev_depth = filter_depth_ ? const_view(*filter_depth_) : ImageView<const float>();
   *changes = filter_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
   filter_depth_ = depth;
   const bool whole = !filter_last_ || filter_rect_ != rect_;
   filter_rect_ = rect_;
+  if (flat) {
+    filter_last_ = depth;
+    if (whole) changes->mark_all();
+    return depth;
+  }
   Plane out = filter_pool_.acquire();
   zero_outside(*out, rect_);
   const ImageView<const float> prev_out =
@@ -192,7 +220,19 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
 // gstpseudo3dwarp.cpp render_cpu: a new output buffer that starts as a copy
 // of the previous output (unless every tile changed), the rows a change
 // reaches warped and packed again, and the output copied when it changed.
+// Backing off: the whole frame, nothing kept.
 void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *changes) {
+  const ActiveArea area{rect_, active_pair_.view()};
+  if (!warp_inputs_.begin(true)) {
+    warp_depth_.reset();
+    have_output_ = seen_ = false;
+    *changes = ChangeMap(src.width, src.height, true);
+    const FrameView dst = out_.view();
+    if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst,
+                              warp_scratch_, nullptr, &area) < 0)
+      warp_failed();
+    return;
+  }
   const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
   *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
   warp_depth_ = depth;
@@ -200,7 +240,6 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
   warp_rect_ = rect_;
   if (!whole) copy_frame(kept_, out_);
   const FrameView dst = out_.view();
-  const ActiveArea area{rect_, active_pair_.view()};
   if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst, warp_scratch_,
                             whole ? nullptr : changes, &area) < 0)
     warp_failed();

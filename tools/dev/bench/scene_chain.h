@@ -127,7 +127,7 @@ class AdaptiveChain {
   float tolerance_;
   // pseudo3ddepth: the frame history, the estimator and the last plane;
   // the bars and the rect the depth was estimated in.
-  FrameHistory depth_history_;
+  StageInputs depth_inputs_;
   DepthEstimatorCpu estimator_;
   PlanePool depth_pool_;
   Plane depth_last_;

@@ -38,6 +38,7 @@ cv::Mat bilateral_stride2(const BilateralParams &params, const FrameView &guide,
       float *o = out.ptr<float>(y);
       for (int x = 0; x < w; ++x) {
         const int centre = gc[x];
+        const float centre_depth = depth.ptr<float>(y)[x];
         float sum_w = 0.f, sum_wd = 0.f;
         for (int dy = -r; dy <= r; dy += 2) {
           const int qy = y + dy;
@@ -48,10 +49,11 @@ cv::Mat bilateral_stride2(const BilateralParams &params, const FrameView &guide,
             const int qx = x + dx;
             if (qx < 0 || qx >= w) continue;
             const int diff = static_cast<int>(g[qx]) - centre;
-            bilateral_accumulate(t.space_at(dx, dy), t.range[diff < 0 ? -diff : diff], d[qx], sum_w, sum_wd);
+            bilateral_accumulate(t.space_at(dx, dy), t.range[diff < 0 ? -diff : diff], d[qx], centre_depth, sum_w,
+                                 sum_wd);
           }
         }
-        o[x] = sum_wd / sum_w;
+        o[x] = bilateral_result(centre_depth, sum_w, sum_wd);
       }
     }
   });
