@@ -31,7 +31,7 @@ ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> de
       changes.merge(compare_planes(prev_depth, depth));
     }
   }
-  if (compared_) backoff_.observe(ChangeBackOff::busy_on_cpu(changes.fraction()));
+  if (compared_) backoff_.observe(whole_rows_ ? changes.all_rows() : ChangeBackOff::busy_on_cpu(changes.fraction()));
   return changes;
 }
 

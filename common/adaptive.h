@@ -23,6 +23,10 @@ namespace p3d {
 // busy_on_cpu).
 class StageInputs {
  public:
+  // whole_rows: the stage redoes whole rows of tiles (the warp, the pack),
+  // so a frame that changed a tile in every row is busy for it; else busy
+  // is ChangeBackOff::busy_on_cpu of the share of tiles changed.
+  explicit StageInputs(bool whole_rows = false) : whole_rows_(whole_rows) {}
   // Before a frame: whether it is compared (adaptive and not backing off).
   // When not, the history is dropped and the stage computes the frame
   // whole, dropping what it kept too.
@@ -45,6 +49,7 @@ class StageInputs {
 
  private:
   FrameHistory frame_;
+  bool whole_rows_;
   bool compared_ = false;
   ChangeBackOff backoff_;
 };

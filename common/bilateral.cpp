@@ -257,7 +257,7 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
 bool bilateral_keeps(ImageView<const float> depth) {
   if (depth.empty()) return true;
   const float v = depth.row(0)[0];
-  if (v != v || (v == 0.f && std::signbit(v))) return false;
+  if (!std::isfinite(v) || (v == 0.f && std::signbit(v))) return false;
   uint32_t bits;
   std::memcpy(&bits, &v, sizeof bits);
   for (int y = 0; y < depth.height; ++y) {

@@ -9,7 +9,7 @@
 //   range_weight(g)  = exp(-g^2 / (2 sigma_range^2)), and for sigma_range == 0:
 //                      1 where g == 0, else 0.
 // The centre weight is exactly 1, so the sum never underflows to 0 and the
-// result is never NaN. It is computed as depth(p) + sum_q w(p,q) *
+// result of finite depth is never NaN. It is computed as depth(p) + sum_q w(p,q) *
 // (depth(q) - depth(p)) / sum_q w(p,q) (bilateral_accumulate): a window of
 // one depth value, and so a constant depth map, comes back bit for bit.
 // sigma_range -> 0 averages only over pixels with the centre's exact guide
@@ -304,9 +304,9 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
                           ImageView<float> depth_out);
 
 // Whether the filter returns `depth` itself, bit for bit, whatever the
-// guide and the parameters: a map of one value (every window sums
-// differences of 0; bilateral_accumulate) that is neither NaN nor -0 (to
-// which the +0 difference adds up as +0). An adaptive stage passes such a
+// guide and the parameters: a map of one finite value (every window sums
+// differences of 0; bilateral_accumulate) other than -0 (to which the +0
+// difference adds up as +0; an infinite centre gives inf - inf = NaN). An adaptive stage passes such a
 // map on unfiltered: a flat scene costs the filter one read of the map.
 // The scan stops at the first value that differs.
 bool bilateral_keeps(ImageView<const float> depth);

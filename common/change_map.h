@@ -115,8 +115,10 @@ P3D_HD bool tile_over_tolerance(unsigned long long diff, unsigned long long samp
 // tile changed and is not observed; the one after it tells whether the
 // scene calmed down. Busy on the CPU: more than kBusyShare of the tiles
 // changed (busy_on_cpu), where a stage's saving is small beside the
-// comparison and the copies into the histories; a partly changed frame
-// there saves more than it costs, so the stage goes on comparing. The pause doubles while the frames stay busy, from
+// comparison and the copies into the histories, or, for a stage that redoes
+// whole rows of tiles, a change in every row (common/adaptive.h
+// StageInputs); a partly changed frame there saves more than it costs, so
+// the stage goes on comparing. The pause doubles while the frames stay busy, from
 // kBackOffFrames up to kBackOffMax, so that a film pays a comparison
 // every few seconds and a scene that stops is found within that. Whole
 // frames are what adaptive=false computes: the output stays exact.

@@ -212,7 +212,12 @@ static GstFlowReturn observe_bars(GstPseudo3DDepth *self, GstPseudo3DPath path, 
 static p3d::PixelRect frame_rect(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::DepthParams &params,
                                  const p3d::FrameView &view, bool crop, bool *moved) {
   DepthState *state = self->state;
-  if (!crop) state->bars.reset();
+  if (!crop) {
+    // Counts kept from before would stand for a frame they were not taken
+    // of when crop-bars comes back on.
+    state->bars.reset();
+    state->counts = p3d::BarCounts();
+  }
   p3d::PixelRect rect = state->bars.active(view.width, view.height);
   const int shift = path == GST_PSEUDO3D_PATH_GPU ? p3d::block_grid_shift(params, rect.width(), rect.height()) : 0;
   if (rect.x0 % (1 << shift) != 0 || rect.y0 % (1 << shift) != 0) rect = p3d::whole_picture(view.width, view.height);
@@ -279,7 +284,8 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
     pseudo3d_buffer_set_depth(buf, state->last_plane);
     return GST_FLOW_OK;
   }
-  // (On the CPU history.begin() dropped the history and kept its back-off.)
+  // (On the CPU history.begin() dropped the history: backing off, it kept
+  // the back-off; with adaptive=false it reset that too.)
   if (path != GST_PSEUDO3D_PATH_CPU) state->history.reset();
   state->last_plane.reset();
   // On CUDA memory the plane holds a value a block (no full-size copy;

@@ -65,7 +65,7 @@ enum {
 // adaptive (stage_adaptive.h), streaming thread: the previous frame's
 // input, parameters and output.
 struct PackState {
-  p3d::gst::InputHistory input;
+  p3d::gst::InputHistory input{true};  // the pack redoes whole rows
   p3d::gst::KeptParams<p3d::PackParams> params;
   p3d::gst::OutputHistory output;
 #if HAVE_CUDA

@@ -67,7 +67,7 @@ struct WarpState {
   p3d::WarpCpuScratch cpu;  // the CPU path's planes, reused frame to frame (streaming thread only)
   // adaptive (stage_adaptive.h), streaming thread: the previous frame's
   // inputs, parameters and output.
-  p3d::gst::InputHistory inputs;
+  p3d::gst::InputHistory inputs{true};  // the warp redoes whole rows
   p3d::gst::KeptParams<std::tuple<p3d::WarpParams, p3d::PackParams, p3d::YuvToRgb, p3d::PixelRect>> params;
   p3d::gst::OutputHistory output;
   // The views of a picture narrower than the frame (pillarbox bars), kept

@@ -33,6 +33,8 @@ AdaptiveSettings adaptive_settings(GstPseudo3DBase *self);
 // once attached).
 class InputHistory {
  public:
+  // whole_rows: as StageInputs'.
+  explicit InputHistory(bool whole_rows = false) : inputs_(whole_rows) {}
   // StageInputs::begin: false when the frame is computed whole, uncompared.
   bool begin(bool adaptive);
   // The tiles in which this frame or its depth (a host plane; null: the

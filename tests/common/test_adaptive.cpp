@@ -699,6 +699,22 @@ TEST(AdaptiveStageInputs, BacksOffAfterABusyFrameOnly) {
   EXPECT_TRUE(in.begin(true));
   EXPECT_FALSE(in.begin(false)) << "adaptive=false";
   EXPECT_TRUE(in.begin(true)) << "adaptive=false reset the back-off";
+
+  // A stage that redoes whole rows of tiles: one tile in each row changed
+  // (2 of 8) is busy for it, and not for the others.
+  StageInputs rows(true), tiles;
+  for (StageInputs *s : {&rows, &tiles})
+    for (int k = 0; k < 2; ++k) {
+      ASSERT_TRUE(s->begin(true));
+      s->compare(f.view(), {}, {}, 0.f);
+    }
+  scribble(f, PixelRect{32, 0, 64, 64}, rng);
+  for (StageInputs *s : {&rows, &tiles}) {
+    ASSERT_TRUE(s->begin(true));
+    EXPECT_EQ(s->compare(f.view(), {}, {}, 0.f).fraction(), 0.25);
+  }
+  EXPECT_FALSE(rows.begin(true)) << "a change in every row of tiles";
+  EXPECT_TRUE(tiles.begin(true)) << "a quarter of the tiles";
 }
 
 // ---- depth estimator -----------------------------------------------------------------

@@ -156,16 +156,18 @@ TEST(BilateralCpu, DepthStepUnderConstantGuideIsGaussianSmoothed) {
   EXPECT_GT(filter(wide, guide, depth).at<float>(10, w / 2 - 1), 0.3f);  // really blurred
 }
 
-// bilateral_keeps: one value, neither NaN nor -0, is its own filter output,
-// bit for bit (-0 comes back +0; NaN is left to the filter).
+// bilateral_keeps: one finite value other than -0 is its own filter
+// output, bit for bit (-0 comes back +0, inf as NaN; NaN is left to the
+// filter).
 TEST(BilateralCpu, KeepsExactlyTheMapsItReturnsUnchanged) {
   const int w = 41, h = 19;
   HostFrame guide(PixelFormat::NV12, w, h, 3);
   guide.fill_random(12);
-  for (const float value : {0.f, 0.5f, 0.123f, 1.f, 7.f, -0.f, std::nanf("")}) {
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const float value : {0.f, 0.5f, 0.123f, 1.f, 7.f, -0.f, std::nanf(""), inf, -inf}) {
     const cv::Mat depth(h, w, CV_32FC1, cv::Scalar(value));
     const bool keeps = bilateral_keeps(depth_view_of(depth));
-    EXPECT_EQ(keeps, value == value && !(value == 0.f && std::signbit(value))) << value;
+    EXPECT_EQ(keeps, std::isfinite(value) && !(value == 0.f && std::signbit(value))) << value;
     BilateralParams p = default_filter_params();
     const cv::Mat out = filter(p, guide, depth);
     const bool same = std::memcmp(out.data, depth.data, depth.total() * sizeof(float)) == 0;
