@@ -190,6 +190,32 @@ TEST(CropBars, OffAndNewCapsStartFromTheWholeFrame) {
   gst_harness_teardown(h);
 }
 
+// crop-bars switched off and on again while playing, over unchanged
+// frames: the frame it comes back on is counted afresh (the counts taken
+// before it was switched off were of a letterbox whose top bar has gone
+// since), with and without adaptive. The top bar is a quarter of the
+// tiles: not busy, so the adaptive stage goes on comparing.
+TEST(CropBars, BackOnCountsTheFrameItself) {
+  std::vector<cv::Mat> frames = in_bars(film(160, 80, 3, 13), 24, 0);
+  cv::Mat no_top_bar = frames.back().clone();
+  textured_picture(160, 24, 14).copyTo(no_top_bar(cv::Rect(0, 0, 160, 24)));
+  for (int k = 0; k < 5; ++k) frames.push_back(no_top_bar);
+  auto toggle = [](int k, GstHarness *h) {
+    if (k != 3 && k != 6) return;
+    GstElement *depth = gst_bin_get_by_name(GST_BIN(h->element), "d");
+    g_object_set(depth, "crop-bars", k == 3 ? 0 : 1, NULL);
+    gst_object_unref(depth);
+  };
+  for (const bool adaptive : {false, true}) {
+    const std::string launch = std::string("pseudo3ddepth name=d processing=cpu adaptive=") + (adaptive ? "true" : "false");
+    const Output out = run(launch, PixelFormat::I420, frames, toggle);
+    ASSERT_EQ(out.info.size(), frames.size());
+    EXPECT_EQ(out.info[2].active, (PixelRect{0, 24, 160, 104}));
+    for (size_t k = 3; k < out.info.size(); ++k)
+      EXPECT_EQ(out.info[k].active, (PixelRect{0, 0, 160, 128})) << "adaptive " << adaptive << " frame " << k;
+  }
+}
+
 TEST(CropBars, AdaptiveGivesTheSameBytes) {
   // A letterbox and a pillarbox, each with a cut to a full frame and back.
   for (const bool pillar : {false, true}) {
