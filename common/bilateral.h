@@ -306,9 +306,10 @@ void bilateral_filter_cpu(const BilateralParams &params, const FrameView &guide,
 // Whether the filter returns `depth` itself, bit for bit, whatever the
 // guide and the parameters: a map of one finite value (every window sums
 // differences of 0; bilateral_accumulate) other than -0 (to which the +0
-// difference adds up as +0; an infinite centre gives inf - inf = NaN). An adaptive stage passes such a
-// map on unfiltered: a flat scene costs the filter one read of the map.
-// The scan stops at the first value that differs.
+// difference adds up as +0; an infinite centre gives inf - inf = NaN).
+// An adaptive stage passes such a map on unfiltered: a flat scene costs
+// the filter one read of the map. The scan stops at the first value that
+// differs.
 bool bilateral_keeps(ImageView<const float> depth);
 
 // How far, in pixels across and down, a change of the guide or of the

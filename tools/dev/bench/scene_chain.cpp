@@ -222,35 +222,34 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
 // reaches warped and packed again, and the output copied when it changed.
 // Backing off: the whole frame, nothing kept.
 void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *changes) {
-  const ActiveArea area{rect_, active_pair_.view()};
-  if (!warp_inputs_.begin(true)) {
+  const bool compare = warp_inputs_.begin(true);
+  bool whole = true;
+  if (compare) {
+    const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
+    *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
+    warp_depth_ = depth;
+    whole = !have_output_ || changes->all_rows() || warp_rect_ != rect_;
+  } else {
     warp_depth_.reset();
     have_output_ = seen_ = false;
     *changes = ChangeMap(src.width, src.height, true);
-    const FrameView dst = out_.view();
-    if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst,
-                              warp_scratch_, nullptr, &area) < 0)
-      warp_failed();
-    return;
   }
-  const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
-  *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
-  warp_depth_ = depth;
-  const bool whole = !have_output_ || changes->all_rows() || warp_rect_ != rect_;
   warp_rect_ = rect_;
   if (!whole) copy_frame(kept_, out_);
   const FrameView dst = out_.view();
+  const ActiveArea area{rect_, active_pair_.view()};
   if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst, warp_scratch_,
                             whole ? nullptr : changes, &area) < 0)
     warp_failed();
-  // gst/stage_adaptive.cpp OutputHistory::update.
-  const bool first = !seen_;
-  seen_ = true;
-  if (changes->all_rows() && !first) {
-    have_output_ = false;
-  } else if (whole || changes->any()) {
-    copy_frame(out_, kept_);
-    have_output_ = true;
+  if (compare) {  // gst/stage_adaptive.cpp OutputHistory::update.
+    const bool first = !seen_;
+    seen_ = true;
+    if (changes->all_rows() && !first) {
+      have_output_ = false;
+    } else if (whole || changes->any()) {
+      copy_frame(out_, kept_);
+      have_output_ = true;
+    }
   }
   if (whole) changes->mark_all();
 }
