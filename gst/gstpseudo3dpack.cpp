@@ -153,6 +153,8 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
     g_free(text);
     return FALSE;
   }
+  if (fit == p3d::gst::InputFit::NeedsSdr)
+    return gst_pseudo3d_base_refuse_caps(base, p3d::gst::kNeedsSdrText, p3d::gst::kNeedsSdrHint, why);
   if (fit != p3d::gst::InputFit::Fits || f.width != GST_VIDEO_INFO_WIDTH(out) ||
       f.height != GST_VIDEO_INFO_HEIGHT(out)) {
     return gst_pseudo3d_base_refuse_caps(base, "The input frame does not hold a stereo pair of the declared kind",

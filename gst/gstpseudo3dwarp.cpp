@@ -125,7 +125,9 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
   p3d::gst::StereoPacking *packing = GST_PSEUDO3D_WARP(base)->packing;
   p3d::gst::PackedFrame f;
   const char *why = nullptr;
-  packing->frame_for(packing->commit(), in, &f, &why);  // a rendered pair always fits
+  // A rendered pair always fits the layout; its colours may not fit an anaglyph.
+  if (packing->frame_for(packing->commit(), in, &f, &why) == p3d::gst::InputFit::NeedsSdr)
+    return gst_pseudo3d_base_refuse_caps(base, p3d::gst::kNeedsSdrText, p3d::gst::kNeedsSdrHint, why);
   if (GST_VIDEO_INFO_WIDTH(out) != f.width || GST_VIDEO_INFO_HEIGHT(out) != f.height) {
     return gst_pseudo3d_base_refuse_caps(base, "The output does not have the size of the layout's frame",
                                          "input %dx%d, output %dx%d, layout's frame %dx%d", GST_VIDEO_INFO_WIDTH(in),
@@ -355,4 +357,9 @@ static void gst_pseudo3d_warp_init(GstPseudo3DWarp *self) {
   GST_PSEUDO3D_BASE(self)->staged = self->packing->staged();
   self->state = new WarpState();
   gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), FALSE);
+  // The input is never the output (2D in, a stereo frame out): upstream
+  // must not be offered the output's caps first, or it would label 2D
+  // video as a pair and convert its colours to the output's colorimetry
+  // (a PQ film turned to BT.709 before the 3D stages).
+  gst_base_transform_set_prefer_passthrough(GST_BASE_TRANSFORM(self), FALSE);
 }

@@ -1,6 +1,7 @@
 #include "stereo_caps.h"
 
 #include "caps_geometry.h"
+#include "colour_caps.h"
 #include "video_util.h"
 
 namespace p3d::gst {
@@ -94,15 +95,7 @@ void set_multiview_fields(GstStructure *s, const MultiviewSignal &sig, guint mas
 GstCaps *packed_output_caps(GstStructure *s) {
   GstStructure *yuv = gst_structure_copy(s);
   gst_pseudo3d_set_formats(yuv, P3D_YUV420_FORMATS);
-  GValue list = G_VALUE_INIT, item = G_VALUE_INIT;
-  gst_value_list_init(&list, 3);
-  g_value_init(&item, G_TYPE_STRING);
-  for (const char *c : {"bt709", "bt601", "bt2020"}) {
-    g_value_set_string(&item, c);
-    gst_value_list_append_value(&list, &item);
-  }
-  g_value_unset(&item);
-  gst_structure_take_value(yuv, "colorimetry", &list);
+  offer_yuv_colorimetry(s, yuv);
   gst_structure_set(yuv, "chroma-site", G_TYPE_STRING, "jpeg", NULL);
   return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), yuv);
 }

@@ -42,8 +42,9 @@ void set_multiview_fields(GstStructure *s, const MultiviewSignal &sig, guint mas
 // output's size, multiview fields and packed formats: s itself first (kept
 // unless downstream asks otherwise), then a 4:2:0 variant for encoders, in
 // a colorimetry stated rather than left to GStreamer's size-based default
-// (BT.2020 from 2160 rows up, which the R'G'B' views, decoded from
-// BT.709/601 video, are not); chroma-site jpeg: each chroma sample is the
+// (BT.2020 from 2160 rows up, which the R'G'B' views of BT.709 video are
+// not): s's transfer and primaries with their matrix first
+// (offer_yuv_colorimetry()); chroma-site jpeg: each chroma sample is the
 // mean of its 2x2 block.
 GstCaps *packed_output_caps(GstStructure *s);
 // Whether a caps structure's format (a name or a list) names NV12 or I420.

@@ -1,10 +1,15 @@
 #include "stereo_packing.h"
 
 #include "caps_geometry.h"
+#include "colour_caps.h"
 #include "stereo_caps.h"
 #include "video_util.h"
 
 namespace p3d::gst {
+
+const char kNeedsSdrText[] = "An anaglyph needs SDR video: choose another layout for HDR (PQ or HLG) video";
+const char kNeedsSdrHint[] =
+    "%s: choose another layout, which keeps the HDR signal, or convert the video to SDR first";
 
 namespace {
 
@@ -149,7 +154,10 @@ GstCaps *StereoPacking::output_caps(const GstStructure *in, const PackingGeometr
     if (!arrangement_from_structure(in, &arrangement, &right_first, &why)) arrangement = StereoInput::SideBySide;
   }
   GstStructure *s = through(in, SizeWay::ToSrc, g.layout, arrangement);
-  if (source_ == PairSource::Rendered) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);  // the rendered pair's
+  if (source_ == PairSource::Rendered) {
+    gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);  // the rendered pair's
+    carry_colour_to_rgb(in, s);
+  }
   set_multiview_fields(s, layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
   return packed_output_caps(s);  // the pair's own format, then 4:2:0
 }
@@ -171,6 +179,10 @@ InputFit StereoPacking::frame_for(const PackingGeometry &g, const GstVideoInfo *
                                                : "a full side-by-side pair needs an even width";
       return InputFit::NoViews;
     }
+  }
+  if (p.layout == PackLayout::Anaglyph && is_hdr_transfer(in->colorimetry.transfer)) {
+    *why = "an anaglyph mixes the views' colours as SDR code values, and this input is HDR (PQ or HLG)";
+    return InputFit::NeedsSdr;
   }
   pack_size(p.layout, vw, vh, &f->width, &f->height);
   return InputFit::Fits;

@@ -89,7 +89,13 @@ enum class InputFit {
   Fits,
   NoPair,   // the input caps hold no stereo pair (PairSource::InputFrame, from-caps)
   NoViews,  // the frame cannot hold the pair as declared (a full top-bottom pair of odd height)
+  NeedsSdr,  // an anaglyph of HDR input (colour_caps.h): refused rather than written as SDR
 };
+
+// The refusal of InputFit::NeedsSdr: its message, and its debug text
+// with a %s for frame_for()'s *why.
+extern const char kNeedsSdrText[];
+extern const char kNeedsSdrHint[];
 
 class StereoPacking {
  public:

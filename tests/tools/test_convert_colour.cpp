@@ -1,0 +1,146 @@
+// pseudo3d-convert on HDR and 10-bit input: HDR10 (PQ, mastering display,
+// content light level), HLG and 10-bit SDR clips made by x265enc, converted
+// and read back with ffprobe. The output states the input's transfer,
+// primaries and matrix, and with H.265 the same mastering-display and
+// light-level values; H.264 with HDR10 input says what it leaves out; an
+// anaglyph of HDR input is refused with a message.
+#include <gtest/gtest.h>
+
+#include <glib/gstdio.h>
+#include <gst/gst.h>
+
+#include <string>
+#include <vector>
+
+#include "convert_helpers.h"
+#include "element_helpers.h"
+#include "stereo_readers.h"
+
+using namespace p3d::test;
+
+namespace {
+
+const char kMastering[] = "34000:16000:13250:34500:7500:3000:15635:16450:10000000:1";
+
+struct Clip {
+  const char *name, *colorimetry;
+  bool static_hdr;  // carries mastering-display-info and content-light-level
+  const char *transfer, *primaries, *space;  // as ffprobe names them
+};
+
+const Clip kClips[] = {
+    {"hdr10", "bt2100-pq", true, "smpte2084", "bt2020", "bt2020nc"},
+    {"hlg", "bt2100-hlg", false, "arib-std-b67", "bt2020", "bt2020nc"},
+    {"sdr10", "bt709", false, "bt709", "bt709", "bt709"},
+};
+
+bool have_element(const char *name) {
+  GstElementFactory *f = gst_element_factory_find(name);
+  if (f) gst_object_unref(f);
+  return f != nullptr;
+}
+
+// 1 s of 10-bit HEVC at 160x96 stating the clip's colours (x265enc writes
+// the VUI and the HDR10 SEI from the caps).
+std::string make_hevc10(const std::string &dir, const Clip &c) {
+  const std::string path = dir + "/" + c.name + ".mp4";
+  std::string caps = std::string("video/x-raw,format=I420_10LE,width=160,height=96,framerate=25/1,colorimetry=") +
+                     c.colorimetry;
+  if (c.static_hdr)
+    caps += std::string(",mastering-display-info=(string)") + kMastering + ",content-light-level=(string)1000:400";
+  const std::string error = make_clip("videotestsrc num-buffers=25 pattern=ball ! " + caps +
+                                      " ! x265enc speed-preset=ultrafast ! h265parse ! mp4mux ! filesink location=" +
+                                      path);
+  return error.empty() ? path : "";
+}
+
+// The key=value lines ffprobe gives for the first video frame, its side
+// data (mastering display, content light level) included.
+std::string ffprobe_first_frame(const std::string &path) {
+  std::string out, err;
+  run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-read_intervals", "%+#1", "-show_frames", "-of",
+               "default=noprint_wrappers=1", path},
+              &out, &err);
+  return out;
+}
+
+class ConvertColour : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!have_element("x265enc")) GTEST_SKIP() << "x265enc is not installed (gstreamer1.0-plugins-bad)";
+    if (!have_program("ffprobe")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
+    dir_ = output_dir() + "/convert-colour";
+    g_mkdir_with_parents(dir_.c_str(), 0755);
+  }
+  std::string dir_;
+};
+
+}  // namespace
+
+// Each clip through the converter into H.265 in MP4 and Matroska: the
+// transfer, primaries and matrix ffprobe reads are the input's, and so are
+// the mastering-display and light-level values of HDR10.
+TEST_F(ConvertColour, H265KeepsTheInputsColourSignal) {
+  for (const Clip &c : kClips) {
+    const std::string in = make_hevc10(dir_, c);
+    ASSERT_FALSE(in.empty()) << c.name << ": could not make the clip";
+    const std::string in_frame = ffprobe_first_frame(in);
+    ASSERT_EQ(ffprobe_value(in_frame, "color_transfer"), c.transfer) << c.name << ": the clip itself";
+    for (const char *ext : {".mp4", ".mkv"}) {
+      const std::string out = dir_ + "/" + c.name + "-sbs" + ext;
+      const ToolRun r = run_convert({in, out, "--codec", "h265", "--preset", "ultrafast", "--processing", "cpu",
+                                     "--force"});
+      ASSERT_EQ(r.status, 0) << c.name << ext << ": " << r.err;
+      const std::string what = std::string(c.name) + ext;
+      const std::string s = ffprobe_stream(out, "v:0", "color_transfer,color_primaries,color_space,color_range");
+      EXPECT_EQ(ffprobe_value(s, "color_transfer"), c.transfer) << what;
+      EXPECT_EQ(ffprobe_value(s, "color_primaries"), c.primaries) << what;
+      EXPECT_EQ(ffprobe_value(s, "color_space"), c.space) << what;
+      EXPECT_EQ(ffprobe_value(s, "color_range"), "tv") << what;
+      const std::string out_frame = ffprobe_first_frame(out);
+      for (const char *key : {"red_x", "red_y", "green_x", "green_y", "blue_x", "blue_y", "white_point_x",
+                              "white_point_y", "min_luminance", "max_luminance", "max_content", "max_average"})
+        EXPECT_EQ(ffprobe_value(out_frame, key), ffprobe_value(in_frame, key)) << what << ": " << key;
+      if (c.static_hdr) {
+        EXPECT_EQ(ffprobe_value(out_frame, "max_luminance"), "10000000/10000") << what;
+        EXPECT_EQ(ffprobe_value(out_frame, "max_content"), "1000") << what;
+        EXPECT_EQ(ffprobe_value(out_frame, "max_average"), "400") << what;
+      }
+    }
+  }
+}
+
+// H.264 of HDR10: the colours are stated, and the converter says that the
+// mastering-display and light-level metadata is left out and how to keep it.
+TEST_F(ConvertColour, H264OfHdr10SaysWhatItLeavesOut) {
+  const std::string in = make_hevc10(dir_, kClips[0]);
+  ASSERT_FALSE(in.empty());
+  const std::string out = dir_ + "/hdr10-h264.mp4";
+  const ToolRun r = run_convert({in, out, "--preset", "ultrafast", "--processing", "cpu", "--force"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("mastering-display and light-level metadata is not written by x264enc"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("--codec h265 keeps it"), std::string::npos) << r.err;
+  const std::string s = ffprobe_stream(out, "v:0", "color_transfer,color_primaries");
+  EXPECT_EQ(ffprobe_value(s, "color_transfer"), "smpte2084");
+  EXPECT_EQ(ffprobe_value(s, "color_primaries"), "bt2020");
+}
+
+// An anaglyph of PQ or HLG video: one line naming the reason, no output.
+TEST_F(ConvertColour, AnaglyphOfHdrIsRefused) {
+  for (const Clip &c : kClips) {
+    const std::string in = make_hevc10(dir_, c);
+    ASSERT_FALSE(in.empty());
+    const std::string out = dir_ + "/" + c.name + "-anaglyph.mp4";
+    g_remove(out.c_str());
+    const ToolRun r = run_convert({in, out, "--layout", "anaglyph", "--preset", "ultrafast", "--processing", "cpu",
+                                   "--quiet"});
+    if (c.static_hdr || std::string(c.transfer) == "arib-std-b67") {
+      EXPECT_NE(r.status, 0) << c.name;
+      EXPECT_NE(r.err.find("An anaglyph needs SDR video"), std::string::npos) << c.name << ": " << r.err;
+      EXPECT_FALSE(g_file_test(out.c_str(), G_FILE_TEST_EXISTS)) << c.name;
+    } else {
+      EXPECT_EQ(r.status, 0) << c.name << ": " << r.err;
+    }
+  }
+}
