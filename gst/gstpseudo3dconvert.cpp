@@ -74,6 +74,7 @@ static const char *const kEveryStage[] = {"adaptive", "reuse-tolerance"};
 
 struct _GstPseudo3DConvert {
   GstBin parent;
+  GstElement *deinterlace; /* the bin's first element; null without gst-plugins-good */
   GstElement *stage[N_STAGES];
   GstElement *upload, *to_cuda, *download; /* present while the chain runs on the GPU */
   GstPad *sinkpad, *srcpad;       /* ghost pads */
@@ -144,6 +145,7 @@ static gboolean configure_processing(GstPseudo3DConvert *self) {
   }
   GstElement *first = self->stage[STAGE_DEPTH], *last = self->stage[STAGE_WARP];
   if (want_gpu && !self->upload) {
+    if (self->deinterlace) gst_element_unlink(self->deinterlace, first);
     self->upload = gst_element_factory_make("cudaupload", "upload");
     self->to_cuda = gst_element_factory_make("capsfilter", "to_cuda");
     self->download = gst_element_factory_make("cudadownload", "download");
@@ -161,26 +163,35 @@ static gboolean configure_processing(GstPseudo3DConvert *self) {
     g_object_set(self->download, "cuda-device-id", self->device_id, NULL);
     gst_bin_add_many(GST_BIN(self), self->upload, self->to_cuda, self->download, NULL);
     // Retarget the ghost pads first: a ghost pad's target is linked to it.
-    GstPad *in = gst_element_get_static_pad(self->upload, "sink"), *out = gst_element_get_static_pad(self->download, "src");
-    const gboolean retargeted = gst_ghost_pad_set_target(GST_GHOST_PAD(self->sinkpad), in) &&
-                                gst_ghost_pad_set_target(GST_GHOST_PAD(self->srcpad), out);
-    gst_object_unref(in);
+    GstPad *out = gst_element_get_static_pad(self->download, "src");
+    gboolean retargeted = gst_ghost_pad_set_target(GST_GHOST_PAD(self->srcpad), out);
+    if (!self->deinterlace) {
+      GstPad *in = gst_element_get_static_pad(self->upload, "sink");
+      retargeted = retargeted && gst_ghost_pad_set_target(GST_GHOST_PAD(self->sinkpad), in);
+      gst_object_unref(in);
+    }
     gst_object_unref(out);
-    if (!retargeted || !gst_element_link_many(self->upload, self->to_cuda, first, NULL) ||
-        !gst_element_link(last, self->download)) {
+    if (!retargeted || (self->deinterlace && !gst_element_link(self->deinterlace, self->upload)) ||
+        !gst_element_link_many(self->upload, self->to_cuda, first, NULL) || !gst_element_link(last, self->download)) {
       GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, ("Could not put the stages between cudaupload and cudadownload"),
                         (nullptr));
       return FALSE;
     }
     GST_INFO_OBJECT(self, "processing on the GPU (cudaupload ! stages ! cudadownload)");
   } else if (!want_gpu && self->upload) {
+    if (self->deinterlace) gst_element_unlink(self->deinterlace, self->upload);
     gst_element_unlink_many(self->upload, self->to_cuda, first, NULL);
     gst_element_unlink(last, self->download);
-    GstPad *in = gst_element_get_static_pad(first, "sink"), *out = gst_element_get_static_pad(last, "src");
-    gst_ghost_pad_set_target(GST_GHOST_PAD(self->sinkpad), in);
+    GstPad *out = gst_element_get_static_pad(last, "src");
     gst_ghost_pad_set_target(GST_GHOST_PAD(self->srcpad), out);
-    gst_object_unref(in);
     gst_object_unref(out);
+    if (self->deinterlace) {
+      gst_element_link(self->deinterlace, first);
+    } else {
+      GstPad *in = gst_element_get_static_pad(first, "sink");
+      gst_ghost_pad_set_target(GST_GHOST_PAD(self->sinkpad), in);
+      gst_object_unref(in);
+    }
     gst_bin_remove_many(GST_BIN(self), self->upload, self->to_cuda, self->download, NULL);
     self->upload = self->to_cuda = self->download = nullptr;
     GST_INFO_OBJECT(self, "processing on the CPU");
@@ -255,6 +266,18 @@ static void gst_pseudo3d_convert_init(GstPseudo3DConvert *self) {
     gst_bin_add(GST_BIN(self), self->stage[i]);
   }
   gst_element_link_many(self->stage[0], self->stage[1], self->stage[2], NULL);
+  // Interlaced video is deinterlaced in front of the stages, which take
+  // progressive frames only: GStreamer's deinterlace in its defaults
+  // (mode auto: progressive frames pass through untouched; every field
+  // becomes a frame, so 1080i50 comes out as 1080p50; linear
+  // interpolation of the missing lines). It deinterlaces system memory;
+  // on CUDA memory it passes frames through, and the depth stage refuses
+  // interlaced ones with its message.
+  self->deinterlace = gst_element_factory_make("deinterlace", "deinterlace");
+  if (self->deinterlace) {
+    gst_bin_add(GST_BIN(self), self->deinterlace);
+    gst_element_link(self->deinterlace, self->stage[STAGE_DEPTH]);
+  }
   // The stages start at the bin's defaults (the pack's, for the warp's
   // layout: anaglyph).
   for (guint i = 0; i < G_N_ELEMENTS(kProxied); ++i) {
@@ -265,7 +288,7 @@ static void gst_pseudo3d_convert_init(GstPseudo3DConvert *self) {
     g_object_set_property(G_OBJECT(self->stage[kProxied[i].stage]), kProxied[i].name, &v);
     g_value_unset(&v);
   }
-  GstPad *sink = gst_element_get_static_pad(self->stage[STAGE_DEPTH], "sink");
+  GstPad *sink = gst_element_get_static_pad(self->deinterlace ? self->deinterlace : self->stage[STAGE_DEPTH], "sink");
   GstPad *src = gst_element_get_static_pad(self->stage[STAGE_WARP], "src");
   GstElementClass *klass = GST_ELEMENT_GET_CLASS(self);
   self->sinkpad = gst_ghost_pad_new_from_template("sink", sink, gst_element_class_get_pad_template(klass, "sink"));

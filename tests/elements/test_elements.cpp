@@ -331,14 +331,40 @@ TEST(Signal, H265StereoIsMonoWithAWarning) {
   }
 }
 
-// Inside pseudo3dconvert the refusal names the element the user placed,
-// not the bin's hidden child ("put deinterlace before depth").
-TEST(Convert, InterlacedRefusalNamesTheBin) {
-  const std::string err = run_to_eos(
-      "videotestsrc num-buffers=2 ! video/x-raw,width=64,height=48,interlace-mode=interleaved ! "
-      "pseudo3dconvert name=conv3d ! fakesink");
-  EXPECT_NE(err.find("Interlaced video is not supported"), std::string::npos) << err;
-  EXPECT_NE(err.find("put deinterlace before conv3d"), std::string::npos) << err;
+// pseudo3dconvert deinterlaces in front of its stages: interlaced frames
+// (top field first) come out progressive, a frame for each field at twice
+// the frame rate, each half a frame long; progressive input passes the
+// deinterlacer untouched (same count and rate).
+TEST(Convert, InterlacedInputIsDeinterlacedAtFieldRate) {
+  for (bool interlaced : {true, false}) {
+    GstHarness *h = gst_harness_new_parse("pseudo3dconvert processing=cpu layout=side-by-side-half");
+    gst_harness_set_src_caps_str(
+        h, raw_caps(PixelFormat::I420, 64, 48, interlaced ? ",interlace-mode=interleaved,field-order=top-field-first" : "")
+               .c_str());
+    const int frames = 4;
+    for (int i = 0; i < frames; ++i) {
+      GstBuffer *b = buffer_from_frame(test_frame(PixelFormat::I420, 64, 48, i + 1));
+      GST_BUFFER_PTS(b) = i * GST_SECOND / 30;
+      GST_BUFFER_DURATION(b) = GST_SECOND / 30;
+      if (interlaced) GST_BUFFER_FLAG_SET(b, GST_VIDEO_BUFFER_FLAG_INTERLACED | GST_VIDEO_BUFFER_FLAG_TFF);
+      ASSERT_EQ(gst_harness_push(h, b), GST_FLOW_OK) << (interlaced ? "interlaced" : "progressive");
+    }
+    gst_harness_push_event(h, gst_event_new_eos());
+    EXPECT_EQ(gst_harness_buffers_received(h), static_cast<guint>(interlaced ? 2 * frames : frames));
+    GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+    ASSERT_NE(caps, nullptr);
+    GstVideoInfo info;
+    ASSERT_TRUE(gst_video_info_from_caps(&info, caps));
+    EXPECT_EQ(GST_VIDEO_INFO_INTERLACE_MODE(&info), GST_VIDEO_INTERLACE_MODE_PROGRESSIVE);
+    EXPECT_EQ(GST_VIDEO_INFO_FPS_N(&info), interlaced ? 60 : 30);
+    EXPECT_EQ(GST_VIDEO_INFO_FPS_D(&info), 1);
+    gst_caps_unref(caps);
+    GstBuffer *first = gst_harness_pull(h);
+    ASSERT_NE(first, nullptr);
+    EXPECT_EQ(GST_BUFFER_DURATION(first), interlaced ? GST_SECOND / 60 : GST_SECOND / 30);
+    gst_buffer_unref(first);
+    gst_harness_teardown(h);
+  }
 }
 
 // The caps admit what the kernels accept: frames up to 8192 pixels a side

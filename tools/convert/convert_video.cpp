@@ -78,6 +78,8 @@ struct Job {
         return;
       }
       source.gate_pad(pad, false);
+      for (const std::string &n : {colour_loss(caps, encoder), deinterlacing_note(caps)})
+        if (!n.empty()) note(n);
       if (!chain.attach(pad, caps))
         post_error(pipeline, chain.refusal().empty() ? "could not link the decoded video to the 3D conversion"
                                                      : chain.refusal());

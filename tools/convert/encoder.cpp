@@ -2,6 +2,8 @@
 
 #include "mkv_stereo.h"
 
+#include <gst/video/video.h>
+
 #include <cstring>
 
 namespace p3d::convert {
@@ -53,6 +55,25 @@ const char *nvenc_preset(const std::string &p) {
 }
 
 }  // namespace
+
+std::string colour_loss(const GstCaps *decoded, const EncoderChoice &c) {
+  if (!decoded || gst_caps_is_empty(decoded)) return "";
+  const GstStructure *s = gst_caps_get_structure(decoded, 0);
+  std::string loss;
+  const gchar *format = gst_structure_get_string(s, "format");
+  const GstVideoFormatInfo *finfo = format ? gst_video_format_get_info(gst_video_format_from_string(format)) : nullptr;
+  if (finfo && GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0) > 8)
+    loss = "the input has " + std::to_string(GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0)) +
+           " bits a sample; the 3D conversion and the output have 8";
+  const bool static_hdr = gst_structure_has_field(s, "mastering-display-info") ||
+                          gst_structure_has_field(s, "content-light-level");
+  if (static_hdr && c.factory != "x265enc" && c.factory != "nvh265enc") {
+    if (!loss.empty()) loss += "; ";
+    loss += "the input's HDR mastering-display and light-level metadata is not written by " + c.factory +
+            " (its transfer and colours are): --codec h265 keeps it";
+  }
+  return loss;
+}
 
 int default_crf(Codec codec) { return codec == Codec::H264 ? 20 : 24; }
 

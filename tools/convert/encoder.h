@@ -29,6 +29,14 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
 // (--preset) and threads (all cores) set.
 GstElement *make_encoder(const EncoderChoice &choice, const Options &o);
 
+// What the output loses of the decoded video's colour signal with this
+// encoder, as a note for the user; empty when nothing is lost. The 3D
+// stages work in 8 bits a sample, so deeper input loses its low bits;
+// only x265enc and nvh265enc write the mastering-display and light-level
+// metadata of HDR10 (the transfer, primaries and matrix every encoder
+// writes from the caps).
+std::string colour_loss(const GstCaps *decoded, const EncoderChoice &choice);
+
 // Default constant quality per codec: about the same visual quality.
 int default_crf(Codec codec);
 

@@ -2,6 +2,7 @@
 
 #include <gst/video/video.h>
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -172,6 +173,31 @@ GstPadProbeReturn refuse_rotation(GstPad *, GstPadProbeInfo *info, gpointer user
 
 }  // namespace
 
+namespace {
+
+bool known_interlaced(const GstCaps *caps, GstVideoInfo *info = nullptr) {
+  GstVideoInfo local;
+  GstVideoInfo *i = info ? info : &local;
+  return gst_caps_is_fixed(caps) && gst_video_info_from_caps(i, caps) && GST_VIDEO_INFO_IS_INTERLACED(i);
+}
+
+}  // namespace
+
+std::string deinterlacing_note(const GstCaps *decoded) {
+  GstVideoInfo info;
+  if (!known_interlaced(decoded, &info)) return "";
+  char text[200];
+  const int n = GST_VIDEO_INFO_FPS_N(&info), d = GST_VIDEO_INFO_FPS_D(&info);
+  const double fps = d ? static_cast<double>(n) / d : 0;
+  if (fps > 0)
+    std::snprintf(text, sizeof text,
+                  "the video is interlaced (%g frames/s): it is deinterlaced to %g frames/s, a frame for each field",
+                  fps, 2 * fps);
+  else
+    std::snprintf(text, sizeof text, "the video is interlaced: it is deinterlaced, a frame for each field");
+  return text;
+}
+
 bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   GstCapsFeatures *features = gst_caps_get_features(caps, 0);
   cuda_input_ = features && gst_caps_features_contains(features, "memory:CUDAMemory");
@@ -185,6 +211,11 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   const bool known = subsampled_ && gst_caps_is_fixed(caps) && gst_video_info_from_caps(&info, caps);
   const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
   const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
+  if (cuda_input_ && known_interlaced(caps)) {
+    // GStreamer 1.22 has no deinterlacer for CUDA memory.
+    refusal_ = "the GPU path cannot deinterlace interlaced video: use --processing cpu";
+    return false;
+  }
   if (cuda_input_) {
     // NVDEC's CUDA frames are not cropped (no CUDA crop in 1.22's nvcodec):
     // refuse an odd size here, with the reason, rather than let x264 fail.

@@ -68,6 +68,11 @@ class VideoChain {
 // (NVDEC's output) first on the GPU path, system memory in any format.
 GstCaps *video_caps_for(Processing processing);
 
+// What happens to interlaced video, as a note for the user ("" for
+// progressive video): pseudo3dconvert deinterlaces it, a frame for each
+// field.
+std::string deinterlacing_note(const GstCaps *decoded);
+
 // A bounded queue (frames): keeps the threads apart without holding much video.
 GstElement *make_frame_queue(guint frames);
 

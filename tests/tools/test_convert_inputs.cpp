@@ -1,9 +1,12 @@
-// pseudo3d-convert on HDR and 10-bit input: HDR10 (PQ, mastering display,
-// content light level), HLG and 10-bit SDR clips made by x265enc, converted
-// and read back with ffprobe. The output states the input's transfer,
-// primaries and matrix, and with H.265 the same mastering-display and
-// light-level values; H.264 with HDR10 input says what it leaves out; an
-// anaglyph of HDR input is refused with a message.
+// pseudo3d-convert on the inputs of real films, clips made by GStreamer's
+// encoders, converted and read back with ffprobe:
+//  * HDR and 10-bit: HDR10 (PQ, mastering display, content light level),
+//    HLG and 10-bit SDR. The output states the input's transfer, primaries
+//    and matrix, and with H.265 the same mastering-display and light-level
+//    values; H.264 with HDR10 input says what it leaves out; an anaglyph
+//    of HDR input is refused with a message.
+//  * Interlaced: 576i (SAR 64:45) and 1080i come out progressive, a frame
+//    for each field, with the input's duration and SAR.
 #include <gtest/gtest.h>
 
 #include <glib/gstdio.h>
@@ -64,12 +67,12 @@ std::string ffprobe_first_frame(const std::string &path) {
   return out;
 }
 
-class ConvertColour : public ::testing::Test {
+class ConvertInputs : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!have_element("x265enc")) GTEST_SKIP() << "x265enc is not installed (gstreamer1.0-plugins-bad)";
     if (!have_program("ffprobe")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
-    dir_ = output_dir() + "/convert-colour";
+    dir_ = output_dir() + "/convert-inputs";
     g_mkdir_with_parents(dir_.c_str(), 0755);
   }
   std::string dir_;
@@ -80,7 +83,7 @@ class ConvertColour : public ::testing::Test {
 // Each clip through the converter into H.265 in MP4 and Matroska: the
 // transfer, primaries and matrix ffprobe reads are the input's, and so are
 // the mastering-display and light-level values of HDR10.
-TEST_F(ConvertColour, H265KeepsTheInputsColourSignal) {
+TEST_F(ConvertInputs, H265KeepsTheInputsColourSignal) {
   for (const Clip &c : kClips) {
     const std::string in = make_hevc10(dir_, c);
     ASSERT_FALSE(in.empty()) << c.name << ": could not make the clip";
@@ -112,7 +115,7 @@ TEST_F(ConvertColour, H265KeepsTheInputsColourSignal) {
 
 // H.264 of HDR10: the colours are stated, and the converter says that the
 // mastering-display and light-level metadata is left out and how to keep it.
-TEST_F(ConvertColour, H264OfHdr10SaysWhatItLeavesOut) {
+TEST_F(ConvertInputs, H264OfHdr10SaysWhatItLeavesOut) {
   const std::string in = make_hevc10(dir_, kClips[0]);
   ASSERT_FALSE(in.empty());
   const std::string out = dir_ + "/hdr10-h264.mp4";
@@ -127,7 +130,7 @@ TEST_F(ConvertColour, H264OfHdr10SaysWhatItLeavesOut) {
 }
 
 // An anaglyph of PQ or HLG video: one line naming the reason, no output.
-TEST_F(ConvertColour, AnaglyphOfHdrIsRefused) {
+TEST_F(ConvertInputs, AnaglyphOfHdrIsRefused) {
   for (const Clip &c : kClips) {
     const std::string in = make_hevc10(dir_, c);
     ASSERT_FALSE(in.empty());
@@ -142,5 +145,46 @@ TEST_F(ConvertColour, AnaglyphOfHdrIsRefused) {
     } else {
       EXPECT_EQ(r.status, 0) << c.name << ": " << r.err;
     }
+  }
+}
+
+// Interlaced clips (top field first, as x264enc codes them): the output is
+// progressive at the field rate, twice the frames over the same duration,
+// with the input's sample aspect ratio.
+TEST_F(ConvertInputs, InterlacedVideoIsDeinterlacedAtFieldRate) {
+  struct Interlaced {
+    const char *name;
+    int width, height, frames;
+    const char *par, *sar;
+  };
+  for (const Interlaced &c : {Interlaced{"576i", 720, 576, 25, "64/45", "64:45"},
+                              Interlaced{"1080i", 1920, 1080, 10, "1/1", "1:1"}}) {
+    const std::string in = dir_ + "/" + c.name + ".mp4", out = dir_ + "/" + c.name + "-sbs.mkv";
+    const std::string clip_error = make_clip(
+        "videotestsrc num-buffers=" + std::to_string(c.frames) + " pattern=ball ! video/x-raw,format=I420,width=" +
+        std::to_string(c.width) + ",height=" + std::to_string(c.height) + ",framerate=25/1,pixel-aspect-ratio=" +
+        c.par + ",interlace-mode=interleaved,field-order=top-field-first ! x264enc interlaced=true "
+        "speed-preset=ultrafast ! h264parse ! mp4mux ! filesink location=" + in);
+    ASSERT_EQ(clip_error, "") << c.name;
+    const std::string probe_in = ffprobe_stream(in, "v:0", "field_order");
+    ASSERT_EQ(ffprobe_value(probe_in, "field_order"), "tt") << c.name << ": the clip is not interlaced";
+    const ToolRun r = run_convert({in, out, "--preset", "ultrafast", "--processing", "cpu", "--force"});
+    ASSERT_EQ(r.status, 0) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find("deinterlaced to 50 frames/s"), std::string::npos) << c.name << ": " << r.err;
+    std::string frames;
+    run_program({"ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+                 "stream=nb_read_frames,field_order,sample_aspect_ratio,r_frame_rate,width,height", "-of",
+                 "default=noprint_wrappers=1", out},
+                &frames);
+    EXPECT_EQ(ffprobe_value(frames, "field_order"), "progressive") << c.name;
+    EXPECT_EQ(ffprobe_value(frames, "nb_read_frames"), std::to_string(2 * c.frames)) << c.name;
+    EXPECT_EQ(ffprobe_value(frames, "r_frame_rate"), "50/1") << c.name;
+    EXPECT_EQ(ffprobe_value(frames, "sample_aspect_ratio"), c.sar) << c.name;
+    EXPECT_EQ(ffprobe_value(frames, "width"), std::to_string(c.width)) << c.name;
+    std::string format;
+    run_program({"ffprobe", "-v", "error", "-show_entries", "format=duration", "-of", "default=noprint_wrappers=1",
+                 out},
+                &format);
+    EXPECT_NEAR(std::stod("0" + ffprobe_value(format, "duration")), c.frames / 25.0, 0.021) << c.name;
   }
 }
