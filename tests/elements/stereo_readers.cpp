@@ -108,16 +108,18 @@ int gst_decoded_frames(const std::string &file, bool has_audio, std::string *err
 FfprobeVideo ffprobe_video(const std::string &file) {
   FfprobeVideo r;
   std::string out;
-  if (run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries",
-                   "stream=sample_aspect_ratio:stream_tags=stereo_mode", "-of", "default=nw=1", file},
+  if (run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_streams", "-of", "default=nw=1", file},
                   &out) != 0)
     return r;
   r.ok = true;
   std::istringstream lines(out);
+  bool in_stereo = false;  // within the stream's "Stereo 3D" side data
   for (std::string line; std::getline(lines, line);) {
-    const std::string sar = "sample_aspect_ratio=", tag = "TAG:stereo_mode=";
+    const std::string sar = "sample_aspect_ratio=", tag = "TAG:stereo_mode=", side = "side_data_type=";
     if (line.rfind(sar, 0) == 0) r.sar = line.substr(sar.size());
     if (line.rfind(tag, 0) == 0) r.stereo_mode = line.substr(tag.size());
+    if (line.rfind(side, 0) == 0) in_stereo = line == side + "Stereo 3D";
+    if (in_stereo && line.rfind("type=", 0) == 0) r.stereo_side_data = line.substr(5);
   }
   return r;
 }

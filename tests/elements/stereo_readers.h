@@ -34,12 +34,15 @@ GstStereo gst_parsed_stereo(const std::string &file);
 // has_audio: the file has an audio track too (it needs a sink as well).
 int gst_decoded_frames(const std::string &file, bool has_audio, std::string *error);
 
-// ffprobe's first video stream: sample_aspect_ratio and the stereo_mode tag
-// ("" when absent). ok is false when ffprobe failed.
+// ffprobe's first video stream: sample_aspect_ratio, the stereo_mode tag
+// (Matroska) and the type of the stream's Stereo 3D side data (MP4's st3d
+// box: "side by side", "top and bottom"), "" when absent. ok is false when
+// ffprobe failed.
 struct FfprobeVideo {
   bool ok = false;
   std::string sar;
   std::string stereo_mode;
+  std::string stereo_side_data;
 };
 FfprobeVideo ffprobe_video(const std::string &file);
 // Every AVStereo3D side data of the first decoded frame as ffmpeg's

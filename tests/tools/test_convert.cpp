@@ -234,6 +234,29 @@ TEST_F(Convert, FfprobeReadsLayoutEyeOrderAndAudio) {
   EXPECT_EQ(ffprobe_value(ffprobe_stream(fx().ana_mp4, "a:0", "codec_name"), "codec_name"), "aac");
 }
 
+// MP4 carries the layout in the Spherical Video V2 st3d box as well, for
+// players that read the container: left-first side by side and top-bottom
+// get one (ffprobe's stream side data), the anaglyph and the right eye
+// first (which st3d cannot say) none; GStreamer still decodes every frame.
+TEST_F(Convert, Mp4St3dBoxSaysTheLayout) {
+  if (!have_program("ffprobe") || !have_program("ffmpeg")) GTEST_SKIP() << "ffprobe not installed (apt-get install ffmpeg)";
+  ASSERT_EQ(fx().sbs_run.status, 0);
+  EXPECT_EQ(ffprobe_video(fx().sbs_mp4).stereo_side_data, "side by side");
+  EXPECT_EQ(ffprobe_video(fx().ana_mp4).stereo_side_data, "");
+  const std::string tb = fx().dir + "/tb-half.mp4", swapped = fx().dir + "/sbs-swapped.mp4";
+  const ToolRun tb_run =
+      run_convert({fx().aac_mp4, tb, "--layout", "top-bottom-half", "--preset", "ultrafast", "--quiet", "--force"});
+  ASSERT_EQ(tb_run.status, 0) << tb_run.err;
+  EXPECT_EQ(ffprobe_video(tb).stereo_side_data, "top and bottom");
+  const ToolRun swapped_run =
+      run_convert({fx().aac_mp4, swapped, "--swap-eyes", "--preset", "ultrafast", "--quiet", "--force"});
+  ASSERT_EQ(swapped_run.status, 0) << swapped_run.err;
+  EXPECT_EQ(ffprobe_video(swapped).stereo_side_data, "");
+  EXPECT_EQ(ffmpeg_stereo3d(swapped), "side by side (inverted)") << "the SEI still says it";
+  std::string error;
+  EXPECT_EQ(gst_decoded_frames(tb, true, &error), read_back(fx().aac_mp4).video_frames) << error;
+}
+
 TEST_F(Convert, StartAndDurationConvertAPiece) {
   const std::string out = fx().dir + "/piece.mkv";
   g_remove(out.c_str());

@@ -13,7 +13,7 @@
 #include "gpu.h"
 #include "gst_run.h"
 #include "media_source.h"
-#include "mkv_stereo_hook.h"
+#include "container_stereo.h"
 #include "output_file.h"
 #include "progress.h"
 #include "stage_settings.h"
@@ -170,10 +170,16 @@ struct Job {
     std::fprintf(stderr, "%s\n", line.c_str());
     for (const std::string &n : notes) std::fprintf(stderr, "pseudo3d-convert: note: %s\n", n.c_str());
     if (is_stereo_layout(layout) && !encoder.writes_stereo_sei)
-      std::fprintf(stderr,
-                   "pseudo3d-convert: note: %s writes no frame-packing SEI, so the 3D layout is signalled %s\n",
-                   encoder.factory.c_str(),
-                   o.kind == OutputKind::Mkv ? "in the Matroska container only" : "nowhere (use .mkv or --codec h264)");
+      std::fprintf(stderr, "pseudo3d-convert: note: %s writes no frame-packing SEI, so the 3D layout is signalled %s\n",
+                   encoder.factory.c_str(), container_only_signal().c_str());
+  }
+
+  // Where the layout is signalled when the stream carries no SEI.
+  std::string container_only_signal() const {
+    if (o.kind == OutputKind::Mkv) return "in the Matroska container only";
+    return mp4_stereo_box_says(layout, right_view_first(o))
+               ? "in the MP4 st3d box only (which GStreamer does not read)"
+               : "nowhere (use .mkv or --codec h264)";
   }
 
   // encoder ! parser ! pseudo3dsignal ! queue ! mux ! filesink.
@@ -270,6 +276,9 @@ bool convert_video(const Options &o, std::string *error) {
   const GstClockTime short_by = job.progress.shortfall();
   if (o.kind == OutputKind::Mkv &&
       !set_mkv_container_stereo_mode(out.temp_path(), job.layout, right_view_first(o), error))
+    return false;
+  if ((o.kind == OutputKind::Mp4 || o.kind == OutputKind::Mov) &&
+      !set_mp4_stereo_box(out.temp_path(), job.layout, right_view_first(o), error))
     return false;
   if (!out.commit(error)) return false;
   job.progress.finish();

@@ -88,9 +88,11 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
   const char *sw = h264 ? "x264enc" : "x265enc";
   const char *hw = h264 ? "nvh264enc" : "nvh265enc";
   // NVENC writes no frame-packing SEI. For H.264 stereo in MP4 that SEI is
-  // the only signalling players read (mp4mux's own box is wrong, see
-  // pseudo3dsignal), so x264 is kept there; Matroska gets its StereoMode
-  // after muxing instead (mkv_stereo_hook.h).
+  // the only signalling GStreamer reads, and of the interleaved layouts and
+  // the right eye first the only one at all (the st3d box written after
+  // muxing says left-first side by side and top-bottom only; mp4mux's own
+  // box is wrong, see pseudo3dsignal), so x264 is kept there; Matroska gets
+  // its StereoMode after muxing instead (container_stereo.h).
   const bool mp4_family = o.kind == OutputKind::Mp4 || o.kind == OutputKind::Mov;
   const bool sei_needed = h264 && is_stereo_layout(layout) && mp4_family;
   const bool use_hw = processing == Processing::Gpu && have(hw) && !(sei_needed && have(sw));

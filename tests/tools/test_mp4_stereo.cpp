@@ -1,0 +1,86 @@
+// The MP4 st3d box editor (tools/support/mp4_stereo.h) on files GStreamer
+// writes: mp4mux's default (mdat, then moov, then a uuid box), mp4mux
+// faststart=true (moov before mdat: every chunk offset moves) and qtmux
+// (.mov). After the edit ffprobe reads the layout from the box, GStreamer
+// and ffmpeg still decode every frame (the offsets are right), a second
+// edit replaces the box instead of adding one, and files that are not
+// MP4 or hold no video are refused and left as they were.
+#include <gtest/gtest.h>
+
+#include <glib/gstdio.h>
+
+#include <string>
+#include <vector>
+
+#include "element_helpers.h"
+#include "mkv_files.h"
+#include "mp4_stereo.h"
+#include "stereo_readers.h"
+
+using namespace p3d;
+using namespace p3d::test;
+
+namespace {
+
+constexpr int kFrames = 12;
+
+std::string clip(const std::string &name, const std::string &muxer) {
+  const std::string path = mkv_out_dir() + "/" + name;
+  const std::string error = run_to_eos("videotestsrc num-buffers=" + std::to_string(kFrames) +
+                                       " ! video/x-raw,width=96,height=64,framerate=25/1 ! x264enc "
+                                       "speed-preset=ultrafast ! h264parse ! " +
+                                       muxer + " ! filesink location=" + path);
+  return error.empty() ? path : "";
+}
+
+int count_of(const Bytes &b, const char *four) {
+  int n = 0;
+  for (size_t i = 0; i + 4 <= b.size(); ++i) n += std::equal(four, four + 4, b.begin() + i);
+  return n;
+}
+
+struct Case {
+  const char *name, *muxer;
+};
+const Case kCases[] = {{"default.mp4", "mp4mux"}, {"faststart.mp4", "mp4mux faststart=true"}, {"movie.mov", "qtmux"}};
+
+}  // namespace
+
+TEST(Mp4StereoBox, WrittenReadAndReplaced) {
+  const bool ffprobe = have_program("ffprobe") && have_program("ffmpeg");
+  for (const Case &c : kCases) {
+    const std::string path = clip(c.name, c.muxer);
+    ASSERT_FALSE(path.empty()) << c.name;
+    const size_t before = read_bytes(path).size();
+    std::string error;
+    ASSERT_TRUE(mp4_set_stereo_box(path, Mp4StereoMode::LeftRight, &error)) << c.name << ": " << error;
+    const Bytes once = read_bytes(path);
+    EXPECT_EQ(once.size(), before + 13) << c.name << ": one 13-byte box added";
+    EXPECT_EQ(count_of(once, "st3d"), 1) << c.name;
+    ASSERT_TRUE(mp4_set_stereo_box(path, Mp4StereoMode::TopBottom, &error)) << c.name << ": " << error;
+    const Bytes twice = read_bytes(path);
+    EXPECT_EQ(twice.size(), once.size()) << c.name << ": the box is replaced, not added";
+    EXPECT_EQ(count_of(twice, "st3d"), 1) << c.name;
+    EXPECT_EQ(gst_decoded_frames(path, false, &error), kFrames) << c.name << ": " << error;
+    if (ffprobe) {
+      EXPECT_EQ(ffprobe_video(path).stereo_side_data, "top and bottom") << c.name;
+      std::string out, err;
+      EXPECT_EQ(run_program({"ffmpeg", "-v", "error", "-i", path, "-f", "null", "-"}, &out, &err), 0) << c.name;
+      EXPECT_EQ(err, "") << c.name << ": ffmpeg decodes without complaint";
+    }
+  }
+}
+
+TEST(Mp4StereoBox, RefusesWhatIsNotAnMp4WithVideo) {
+  const std::string text = mkv_out_dir() + "/not-mp4.mp4";
+  ASSERT_TRUE(write_bytes(text, Bytes(300, 'x')));
+  const std::string audio = mkv_out_dir() + "/audio-only.mp4";
+  ASSERT_EQ(run_to_eos("audiotestsrc num-buffers=20 ! avenc_aac ! aacparse ! mp4mux ! filesink location=" + audio), "");
+  for (const std::string &path : {text, audio}) {
+    const Bytes before = read_bytes(path);
+    std::string error;
+    EXPECT_FALSE(mp4_set_stereo_box(path, Mp4StereoMode::LeftRight, &error)) << path;
+    EXPECT_NE(error.find(path), std::string::npos) << error;
+    EXPECT_EQ(read_bytes(path), before) << path << ": left as it was";
+  }
+}
