@@ -848,6 +848,121 @@ TEST_F(Convert, PhotoJpsIsTheCrossEyedPair) {
 // JPEG holds full-range Y'CbCr: black stays 0 and white 255 (TV range
 // would read back as 16 and 235, a washed-out picture), in every JPEG the
 // converter writes (.jpg here; .jps and .mpo share the encoder).
+// Depth from a file (--depth) for a photo: the same depth given as 8-bit
+// near-white and as 16-bit near-dark (--depth-convention) gives the same
+// picture, another depth another picture, and the estimate another again;
+// the MPO output takes it too, upright, with the photo's EXIF. The depth
+// is the upright picture's (120x160), as the photo is shown.
+TEST_F(Convert, PhotoDepthFileFollowsItsConvention) {
+  const std::string in = make_rotated_jpeg(fx().dir);
+  cv::Mat near_white(160, 120, CV_8U), steps(160, 120, CV_8U);
+  for (int y = 0; y < 160; ++y)
+    for (int x = 0; x < 120; ++x) {
+      near_white.at<uint8_t>(y, x) = static_cast<uint8_t>(x < 60 ? 40 + y : 230 - y);
+      steps.at<uint8_t>(y, x) = static_cast<uint8_t>(x < 60 ? 255 : 0);
+    }
+  cv::Mat near_dark16;
+  near_white.convertTo(near_dark16, CV_16U, -257.0, 65535.0);  // 65535 - 257 v: the same depth, dark = near
+  const std::string d8 = fx().dir + "/depth8.png", d16 = fx().dir + "/depth16-dark.png",
+                    dsteps = fx().dir + "/depth-steps.png";
+  ASSERT_TRUE(cv::imwrite(d8, near_white) && cv::imwrite(d16, near_dark16) && cv::imwrite(dsteps, steps));
+  auto convert = [&](const std::string &out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {in, out, "--quiet", "--force", "--layout", "side-by-side"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ToolRun r = run_convert(args);
+    EXPECT_EQ(r.status, 0) << out << ": " << r.err;
+    return cv::imread(out, cv::IMREAD_COLOR);
+  };
+  const cv::Mat from8 = convert(fx().dir + "/depth8.png.out.png", {"--depth", d8});
+  const cv::Mat from16 = convert(fx().dir + "/depth16.png.out.png", {"--depth", d16, "--depth-convention", "near-dark"});
+  const cv::Mat from_steps = convert(fx().dir + "/steps.png.out.png", {"--depth", dsteps});
+  const cv::Mat estimated = convert(fx().dir + "/estimated.png.out.png", {});
+  ASSERT_FALSE(from8.empty() || from16.empty() || from_steps.empty() || estimated.empty());
+  EXPECT_EQ(from8.cols, 240);
+  EXPECT_EQ(from8.rows, 160);
+  EXPECT_EQ(cv::norm(from8, from16, cv::NORM_INF), 0) << "the same depth in two conventions";
+  EXPECT_GT(cv::norm(from8, from_steps, cv::NORM_L1), 0) << "another depth";
+  EXPECT_GT(cv::norm(from8, estimated, cv::NORM_L1), 0) << "the file's depth, not the estimate";
+
+  const std::string mpo = fx().dir + "/depth-file.mpo";
+  const ToolRun r = run_convert({in, mpo, "--quiet", "--force", "--depth", d8});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<uint8_t> file = read_bytes(mpo);
+  const MpoIndex idx = parse_mpo(file);
+  ASSERT_TRUE(idx.found) << idx.error;
+  ASSERT_EQ(idx.entries.size(), 2u);
+  const std::vector<uint8_t> first(file.begin(), file.begin() + idx.entries[0].size);
+  EXPECT_TRUE(jpeg_exif_contains(first, "P3DTEST")) << "the photo's EXIF is kept";
+  const cv::Mat left = cv::imdecode(first, cv::IMREAD_COLOR);
+  EXPECT_EQ(left.cols, 120);
+  EXPECT_EQ(left.rows, 160);
+}
+
+// Depth from a file for a video: a depth video and a depth picture of the
+// same flat depth give the same frames (within the encoder's loss), a
+// picture of other depth other frames; every frame of the input is
+// converted. Bad uses are refused with one line: a missing depth file, an
+// estimate option with --depth, a depth option without it, --start with a
+// depth video.
+TEST_F(Convert, VideoDepthFileVideoOrPicture) {
+  if (!have_program("ffmpeg")) GTEST_SKIP() << "no ffmpeg to read the frames back";
+  const std::string in = fx().dir + "/smpte.mp4";
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=25 pattern=smpte ! video/x-raw,width=160,height=120,framerate=25/1 ! "
+                      "x264enc speed-preset=ultrafast ! h264parse ! mp4mux ! filesink location=" + in),
+            "");
+  const std::string flat_video = fx().dir + "/depth-flat.mkv";
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=25 pattern=solid-color foreground-color=0xff202020 ! "
+                      "video/x-raw,width=80,height=60,framerate=25/1 ! x264enc speed-preset=ultrafast ! h264parse ! "
+                      "matroskamux ! filesink location=" + flat_video),
+            "");
+  // Frames as grey bytes, through a file (ffmpeg's raw output).
+  auto grey_frames = [&](const std::string &video, const std::vector<std::string> &limit) {
+    const std::string raw = video + ".gray";
+    std::vector<std::string> args = {"ffmpeg", "-v", "error", "-y", "-i", video};
+    args.insert(args.end(), limit.begin(), limit.end());
+    args.insert(args.end(), {"-f", "rawvideo", "-pix_fmt", "gray", raw});
+    std::string out;
+    EXPECT_EQ(run_program(args, &out), 0) << video;
+    return read_bytes(raw);
+  };
+  // The first picture of the depth video as GStreamer decodes it to grey
+  // (ffmpeg's grey differs: it keeps the limited-range values).
+  const std::string flat_png = fx().dir + "/depth-flat.png", steps_png = fx().dir + "/depth-steps-video.png";
+  ASSERT_EQ(make_clip("filesrc location=" + flat_video + " ! decodebin ! videoconvert ! video/x-raw,format=GRAY8 ! "
+                      "pngenc snapshot=true ! filesink location=" + flat_png),
+            "");
+  cv::Mat steps(60, 80, CV_8U, cv::Scalar(0));
+  steps(cv::Rect(0, 0, 40, 60)).setTo(255);
+  ASSERT_TRUE(cv::imwrite(steps_png, steps));
+  auto frames = [&](const std::string &depth) {
+    const std::string out = fx().dir + "/with-" + depth.substr(depth.find_last_of('/') + 1) + ".mkv";
+    const ToolRun r = run_convert({in, out, "--depth", depth, "--preset", "ultrafast", "--quiet", "--force"});
+    EXPECT_EQ(r.status, 0) << depth << ": " << r.err;
+    return grey_frames(out, {});
+  };
+  const std::vector<uint8_t> from_video = frames(flat_video), from_picture = frames(flat_png), from_steps = frames(steps_png);
+  ASSERT_EQ(from_video.size(), 25u * 160u * 120u) << "every frame converted";
+  ASSERT_EQ(from_picture.size(), from_video.size());
+  ASSERT_EQ(from_steps.size(), from_video.size());
+  auto mean_diff = [](const std::vector<uint8_t> &a, const std::vector<uint8_t> &b) {
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) sum += std::abs(static_cast<int>(a[i]) - b[i]);
+    return sum / a.size();
+  };
+  EXPECT_LT(mean_diff(from_video, from_picture), 0.5) << "the video's depth is the picture's";
+  EXPECT_GT(mean_diff(from_steps, from_picture), 2.0) << "another depth moves the picture";
+
+  for (const auto &args : std::vector<std::vector<std::string>>{
+           {in, fx().dir + "/x.mkv", "--depth", fx().dir + "/none.png"},
+           {in, fx().dir + "/x.mkv", "--depth", flat_png, "--hypothesis", "flat"},
+           {in, fx().dir + "/x.mkv", "--depth-convention", "near-dark"},
+           {in, fx().dir + "/x.mkv", "--depth", flat_video, "--start", "0.2"}}) {
+    const ToolRun r = run_convert(args);
+    EXPECT_NE(r.status, 0) << args[3];
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+  }
+}
+
 TEST_F(Convert, PhotoJpegKeepsFullRange) {
   cv::Mat bw(64, 128, CV_8UC3, cv::Scalar(0, 0, 0));
   bw.colRange(64, 128).setTo(cv::Scalar(255, 255, 255));

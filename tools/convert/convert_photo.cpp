@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "depth_source.h"
 #include "gpu.h"
 #include "image_io.h"
 #include "jpeg_meta.h"
@@ -37,14 +38,19 @@ bool write_file(const std::string &path, const Bytes &data) {
 //   pseudo3dfilter ! [tee ! queue !] pseudo3dwarp ! pseudo3dpack ! [cudadownload !]
 //   video/x-raw,format=RGBA ! appsink
 //   [tee. ! queue ! pseudo3ddepthout ! GRAY16_LE ! videoconvert ! GRAY16_BE ! pngenc ! appsink]
+// With --depth, pseudo3ddepthmux takes the place of pseudo3ddepth, fed by
+// the depth file's reader (depth_source.h).
 // `layout`/`swap` decide the packing.
 bool render(const Options &o, Processing processing, const Image &in, const std::string &layout, bool swap,
             Image *out, Bytes *depth_png, std::string *error) {
-  const std::string stages = std::string("pseudo3ddepth name=depth ! pseudo3dfilter name=filter ! ") +
-                             (depth_png ? "tee name=t ! queue ! " : "") +
+  const bool depth_file = !o.depth.empty();
+  const std::string stages = std::string(depth_file ? "depth.video pseudo3ddepthmux name=depth"
+                                                    : "pseudo3ddepth name=depth") +
+                             " ! pseudo3dfilter name=filter ! " + (depth_png ? "tee name=t ! queue ! " : "") +
                              "pseudo3dwarp name=warp ! pseudo3dpack name=pack";
   std::string description = "appsrc name=src format=time ! " + on_processing(processing, stages) +
                             " ! video/x-raw,format=RGBA ! appsink name=sink sync=false";
+  if (depth_file) description += " " + depth_reader_description("depth.depth");
   if (depth_png)
     description += " t. ! queue ! pseudo3ddepthout ! video/x-raw,format=GRAY16_LE ! videoconvert ! "
                    "video/x-raw,format=GRAY16_BE ! pngenc ! appsink name=depth_png sync=false";
@@ -53,7 +59,12 @@ bool render(const Options &o, Processing processing, const Image &in, const std:
   GstElement *stage_elements[] = {by_name(pipeline, "depth"), by_name(pipeline, "filter"), by_name(pipeline, "warp"),
                                   by_name(pipeline, "pack")};
   for (GstElement *s : stage_elements)
-    gst_util_set_object_arg(G_OBJECT(s), "processing", processing_nick(processing));
+    if (!depth_file || s != stage_elements[0])  // pseudo3ddepthmux runs wherever its frames are
+      gst_util_set_object_arg(G_OBJECT(s), "processing", processing_nick(processing));
+  if (depth_file) {
+    set_depth_location(pipeline, o.depth);
+    apply_depth_values(o, stage_elements[0]);
+  }
   apply_to_stages(o, stage_elements, 4, layout, swap);
   GstCaps *caps = nullptr;
   GstBuffer *buf = image_to_buffer(in, &caps);
@@ -93,6 +104,7 @@ bool encode_failed(const std::string &path, std::string *error) {
 bool convert_photo(const Options &o, std::string *error) {
   Processing processing;
   if (!resolve_processing(o.processing, &processing, error)) return false;
+  if (!depth_file_readable(o, error)) return false;
   Bytes source;
   if (!read_file(o.input, &source)) {
     *error = o.input + ": cannot read";

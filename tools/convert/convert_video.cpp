@@ -14,6 +14,7 @@
 #include "gst_run.h"
 #include "media_source.h"
 #include "container_stereo.h"
+#include "depth_source.h"
 #include "output_file.h"
 #include "progress.h"
 #include "stage_settings.h"
@@ -233,6 +234,7 @@ bool convert_video(const Options &o, std::string *error) {
   if (!resolve_processing(o.processing, &job.processing, error)) return false;
   if (job.processing == Processing::Gpu) prefer_gpu_decoders();
   job.layout = effective_layout(o);
+  if (!depth_file_readable(o, error)) return false;
   if (!choose_encoder(o, job.processing, job.layout, &job.encoder, error)) return false;
   OutputFile out;
   if (!out.open(o.output, o.force, error)) return false;
@@ -257,6 +259,8 @@ bool convert_video(const Options &o, std::string *error) {
     job.progress.abandon();
     if (!r.missing_plugin.empty() && !job.video_linked)
       *error = o.input + ": no GStreamer decoder for " + r.missing_plugin + " is installed";
+    else if (!o.depth.empty() && r.source.find(kDepthReaderMark) != std::string::npos)
+      *error = o.depth + ": " + r.error;
     else
       *error = (r.from_filesink ? o.output : o.input) + ": " + r.error;
     return false;

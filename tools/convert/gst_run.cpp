@@ -68,11 +68,16 @@ struct LoopState {
   bool failed = false;
 };
 
-void fail(LoopState *s, const std::string &error, bool from_filesink) {
+void fail(LoopState *s, const std::string &error, bool from_filesink, GstObject *source = nullptr) {
   if (!s->failed) {
     s->failed = true;
     s->result.error = error;
     s->result.from_filesink = from_filesink;
+    if (source) {
+      gchar *path = gst_object_get_path_string(source);
+      s->result.source = path ? path : "";
+      g_free(path);
+    }
   }
   g_main_loop_quit(s->loop);
 }
@@ -85,7 +90,7 @@ gboolean on_bus(GstBus *, GstMessage *msg, gpointer data) {
       break;
     case GST_MESSAGE_ERROR: {
       GstElementFactory *f = GST_IS_ELEMENT(GST_MESSAGE_SRC(msg)) ? gst_element_get_factory(GST_ELEMENT(GST_MESSAGE_SRC(msg))) : nullptr;
-      fail(s, error_text(msg), f && g_strcmp0(GST_OBJECT_NAME(f), "filesink") == 0);
+      fail(s, error_text(msg), f && g_strcmp0(GST_OBJECT_NAME(f), "filesink") == 0, GST_MESSAGE_SRC(msg));
       break;
     }
     case GST_MESSAGE_ELEMENT:

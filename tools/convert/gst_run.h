@@ -32,6 +32,7 @@ struct LoopResult {
   bool ok = false;
   std::string error;           // the first error, one line
   bool from_filesink = false;  // the error concerns the output file
+  std::string source;          // the path of the element that posted the error ("/pipeline/bin/element")
   std::string missing_plugin;  // decodebin's description of a missing decoder
 };
 

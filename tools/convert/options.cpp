@@ -72,6 +72,12 @@ bool ends_with(const std::string &s, const char *suffix) {
 
 }  // namespace
 
+bool is_still_picture_name(const std::string &path) {
+  for (const char *e : {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".pgm", ".bmp"})
+    if (ends_with(path, e)) return true;
+  return false;
+}
+
 bool is_photo(OutputKind k) {
   return k == OutputKind::Jpeg || k == OutputKind::Png || k == OutputKind::Mpo || k == OutputKind::Jps;
 }
@@ -164,6 +170,10 @@ void print_usage(FILE *f) {
       "  A photo into a video file becomes a still video of %d s at %d frames/s (--duration sets the length)\n"
       "General:\n"
       "  --processing auto|cpu|gpu   where the 3D conversion runs (default auto: GPU when usable)\n"
+      "  --depth FILE          take the depth from FILE (a picture, or a video of the same length)\n"
+      "                        instead of estimating it: 8- or 16-bit grey, any size\n"
+      "  --depth-convention C  near-white (default), near-dark, or metric (distances, with\n"
+      "  --depth-near N --depth-far N   the nearest and farthest distance in FILE's unit)\n"
       "  --depth-out FILE.png  photos: also write the depth map used (16-bit grey, white = near)\n"
       "  --force               overwrite OUTPUT if it exists\n"
       "  --quiet               no progress\n"
@@ -252,7 +262,8 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
         continue;
       }
       if (name != "codec" && name != "crf" && name != "preset" && name != "start" && name != "duration" &&
-          name != "processing" && name != "depth-out" && name != "benchmark-out" && name != "benchmark-runs") {
+          name != "processing" && name != "depth-out" && name != "benchmark-out" && name != "benchmark-runs" &&
+          name != "depth" && name != "depth-convention" && name != "depth-near" && name != "depth-far") {
         *error = "unknown option '" + arg + "' (see --help)";
         return ParseResult::ExitUsage;
       }
@@ -276,6 +287,11 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
       } else if (name == "depth-out") {
         ok = ends_with(v, ".png");
         o->depth_out = v;
+      } else if (name == "depth") {
+        ok = !v.empty();
+        o->depth = v;
+      } else if (name.rfind("depth-", 0) == 0) {  // checked against pseudo3ddepthmux later
+        o->depth_values.emplace_back(name.substr(6), v);
       } else if (name == "benchmark-out") {
         o->benchmark_out = v;
       } else if (name == "benchmark-runs") {
@@ -313,7 +329,22 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
     return ParseResult::ExitUsage;
   }
   o->input = positional[0];
-  if (o->benchmark) return ParseResult::Run;
+  if (!o->depth_values.empty() && o->depth.empty()) {
+    *error = "--depth-" + o->depth_values[0].first + " applies with --depth FILE only";
+    return ParseResult::ExitUsage;
+  }
+  for (const char *estimated : {"hypothesis", "crop-bars"})
+    if (!o->depth.empty() && o->has_stage_value(estimated)) {
+      *error = std::string("--") + estimated + " does not apply with --depth (the depth comes from " + o->depth + ")";
+      return ParseResult::ExitUsage;
+    }
+  if (o->benchmark) {
+    if (!o->depth.empty()) {
+      *error = "--depth does not apply to --benchmark";
+      return ParseResult::ExitUsage;
+    }
+    return ParseResult::Run;
+  }
   o->output = positional[1];
   if (!output_kind_of(o->output, &o->kind)) {
     const size_t dot = o->output.find_last_of("./");
@@ -323,6 +354,11 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
   }
   if (is_photo(o->kind) && video_option_given) {
     *error = video_option + " applies to video outputs, not to " + o->output;
+    return ParseResult::ExitUsage;
+  }
+  if (!o->depth.empty() && !is_still_picture_name(o->depth) && GST_CLOCK_TIME_IS_VALID(o->start)) {
+    *error = "--start with a depth video is not supported (the depth video would play from its beginning): "
+             "cut the video and its depth to the piece first";
     return ParseResult::ExitUsage;
   }
   if (!is_photo(o->kind) && !o->depth_out.empty()) {

@@ -44,6 +44,12 @@ struct Options {
   bool quiet = false;
   bool force = false;
   std::string depth_out;  // photos: 16-bit grey PNG of the depth used
+  // --depth FILE: the depth comes from this picture or video (depth_source.h)
+  // instead of being estimated; depth_values: pseudo3ddepthmux's
+  // convention, near and far from --depth-convention, --depth-near and
+  // --depth-far, by property name, in command-line order.
+  std::string depth;
+  std::vector<std::pair<std::string, std::string>> depth_values;
   // --benchmark INPUT: decode-only against convert-to-fakesink (benchmark.h).
   bool benchmark = false;
   std::string benchmark_out;
@@ -61,6 +67,10 @@ enum class ParseResult { Run, ExitOk, ExitUsage };
 
 ParseResult parse_args(int argc, char **argv, Options *o, std::string *error);
 void print_usage(FILE *f);
+
+// Whether a --depth file is a still picture, by its extension (.png, .jpg,
+// .jpeg, .tif, .tiff, .pgm, .bmp); anything else is taken as a video.
+bool is_still_picture_name(const std::string &path);
 
 // "90", "1:30", "01:02:03.5" -> nanoseconds; false if malformed.
 bool parse_time(const std::string &s, GstClockTime *t);

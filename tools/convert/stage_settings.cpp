@@ -24,8 +24,10 @@ const char *owner_of(const std::string &property) {
   return nullptr;
 }
 
-GParamSpec *bin_pspec(const char *property) {
-  GstElementFactory *f = gst_element_factory_find("pseudo3dconvert");
+// A property of a plugin element's class (the plugin stays loaded, so the
+// pspec stays valid); null if there is none.
+GParamSpec *element_pspec(const char *factory, const char *property) {
+  GstElementFactory *f = gst_element_factory_find(factory);
   if (!f) return nullptr;
   GstPluginFeature *loaded = gst_plugin_feature_load(GST_PLUGIN_FEATURE(f));
   gst_object_unref(f);
@@ -34,7 +36,7 @@ GParamSpec *bin_pspec(const char *property) {
       g_type_class_ref(gst_element_factory_get_element_type(GST_ELEMENT_FACTORY(loaded))));
   gst_object_unref(loaded);
   GParamSpec *p = g_object_class_find_property(klass, property);
-  g_type_class_unref(klass);  // the plugin stays loaded, so the pspec stays valid
+  g_type_class_unref(klass);
   return p;
 }
 
@@ -66,35 +68,51 @@ bool ensure_plugin(std::string *error) {
   return true;
 }
 
+namespace {
+
+// Checks `value` of option --`option` against property pspec p: enum
+// nicks, numeric ranges; one-line *error naming the accepted values.
+bool check_value(GParamSpec *p, const std::string &option, const std::string &value, std::string *error) {
+  GValue v = G_VALUE_INIT;
+  g_value_init(&v, p->value_type);
+  const bool number =
+      G_IS_PARAM_SPEC_FLOAT(p) || G_IS_PARAM_SPEC_DOUBLE(p) || G_IS_PARAM_SPEC_INT(p) || G_IS_PARAM_SPEC_UINT(p);
+  const bool parsed = (!number || is_plain_decimal(value, true)) && gst_value_deserialize(&v, value.c_str());
+  // g_param_value_validate() returns TRUE when it had to clamp the value.
+  const bool in_range = parsed && !g_param_value_validate(p, &v);
+  g_value_unset(&v);
+  if (in_range) return true;
+  std::string accepted;
+  if (G_IS_PARAM_SPEC_ENUM(p)) {
+    accepted = enum_nicks(p);
+  } else if (G_IS_PARAM_SPEC_FLOAT(p)) {
+    auto *f = G_PARAM_SPEC_FLOAT(p);
+    char range[64];
+    std::snprintf(range, sizeof range, "a number from %g to %g", f->minimum, f->maximum);
+    accepted = range;
+  }
+  *error = "invalid value '" + value + "' for --" + option + (accepted.empty() ? "" : " (" + accepted + ")");
+  return false;
+}
+
+}  // namespace
+
 bool check_stage_values(const Options &o, std::string *error) {
   for (const auto &kv : o.stage_values) {
-    GParamSpec *p = bin_pspec(kv.first.c_str());
+    GParamSpec *p = element_pspec("pseudo3dconvert", kv.first.c_str());
     if (!p) {
       *error = "the pseudo3d plugin has no property '" + kv.first + "'";
       return false;
     }
-    GValue v = G_VALUE_INIT;
-    g_value_init(&v, p->value_type);
-    const bool number = G_IS_PARAM_SPEC_FLOAT(p) || G_IS_PARAM_SPEC_DOUBLE(p) || G_IS_PARAM_SPEC_INT(p) ||
-                        G_IS_PARAM_SPEC_UINT(p);
-    const bool parsed =
-        (!number || is_plain_decimal(kv.second, true)) && gst_value_deserialize(&v, kv.second.c_str());
-    // g_param_value_validate() returns TRUE when it had to clamp the value.
-    const bool in_range = parsed && !g_param_value_validate(p, &v);
-    g_value_unset(&v);
-    if (!in_range) {
-      std::string accepted;
-      if (G_IS_PARAM_SPEC_ENUM(p)) {
-        accepted = enum_nicks(p);
-      } else if (G_IS_PARAM_SPEC_FLOAT(p)) {
-        auto *f = G_PARAM_SPEC_FLOAT(p);
-        char range[64];
-        std::snprintf(range, sizeof range, "a number from %g to %g", f->minimum, f->maximum);
-        accepted = range;
-      }
-      *error = "invalid value '" + kv.second + "' for --" + kv.first + (accepted.empty() ? "" : " (" + accepted + ")");
+    if (!check_value(p, kv.first, kv.second, error)) return false;
+  }
+  for (const auto &kv : o.depth_values) {
+    GParamSpec *p = element_pspec("pseudo3ddepthmux", kv.first.c_str());
+    if (!p) {
+      *error = "pseudo3ddepthmux has no property '" + kv.first + "'";
       return false;
     }
+    if (!check_value(p, "depth-" + kv.first, kv.second, error)) return false;
   }
   return true;
 }

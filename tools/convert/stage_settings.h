@@ -26,7 +26,8 @@ bool check_stage_values(const Options &o, std::string *error);
 std::string effective_layout(const Options &o);
 bool right_view_first(const Options &o);  // --swap-eyes
 
-// Sets the given values plus the layout on a pseudo3dconvert bin.
+// Sets the given values plus the layout on a pseudo3dconvert bin, or on a
+// pseudo3dwarp that packs (the names it lacks are left out).
 void apply_to_bin(const Options &o, GstElement *bin);
 // Sets each value on the stage element of the matching factory
 // (pseudo3ddepth, pseudo3dwarp, pseudo3dpack...) among `stages`;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "depth_source.h"
 #include "gpu.h"
 #include "gst_run.h"
 #include "progress.h"
@@ -79,7 +80,12 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   processing_ = processing;
   std::string missing;
   head_ = make_frame_queue(8);
-  convert_ = make("pseudo3dconvert", &missing);
+  if (o.depth.empty()) {
+    convert_ = make("pseudo3dconvert", &missing);
+  } else if (!(convert_ = make_depth_file_chain(o, processing, error))) {
+    if (head_) gst_object_unref(gst_object_ref_sink(head_));
+    return false;
+  }
   // System memory after the 3D stages: the CPU encoders and videoconvert
   // take nothing else (pseudo3dconvert downloads once when on the GPU), in
   // the encoder's format where the bin's warp can pack into it.
@@ -94,8 +100,10 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
     *error = "GStreamer element " + (missing.empty() ? std::string("queue") : missing) + " is missing";
     return false;
   }
-  apply_to_bin(o, convert_);
-  gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing_nick(processing));
+  if (o.depth.empty()) {  // the depth file's chain is set up already
+    apply_to_bin(o, convert_);
+    gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing_nick(processing));
+  }
   // The bin's warp packs into I420/NV12 itself, as pseudo3dpack would (on
   // the GPU when the frames are there): a third of the bytes to download
   // and no CPU conversion; the videoconvert after it then passes frames

@@ -4,6 +4,8 @@
 //   (encoder, or fakesink to benchmark)
 // (the bracket on system memory: videocrop for odd sizes and 4:2:0
 // encoders, videoflip turning rotation-tagged video upright)
+// With --depth FILE, the depth file's chain (depth_source.h) stands where
+// pseudo3dconvert stands.
 // On the GPU path NVDEC's CUDA memory goes straight into pseudo3dconvert,
 // which keeps every stage on the device and downloads once (a rotation tag
 // there is refused: nothing on CUDA memory turns it upright); the formats the
