@@ -10,6 +10,14 @@
  * pseudo3dwarp). Usable wherever one video filter is expected, such as
  * playbin's video-filter.
  *
+ * Interlaced video is deinterlaced in front of the stages (GStreamer's
+ * deinterlace, when gst-plugins-good is installed, in its defaults: a
+ * frame for each field, so 1080i50 comes out as 1080p50, the missing lines
+ * interpolated; progressive frames pass it untouched). It deinterlaces
+ * system memory; interlaced video in CUDA memory is refused with a message.
+ * For another mode (frame rate, a motion-adaptive method), put your own
+ * deinterlace before the element.
+ *
  * With processing=auto (default) and a CUDA device with nvcodec's
  * cudaupload/cudadownload available, the chain is wrapped as cudaupload !
  * ... ! cudadownload: system-memory video is uploaded once, every stage runs

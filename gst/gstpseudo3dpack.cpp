@@ -16,10 +16,14 @@
  *
  * The output is in the input's packed RGB format, or NV12/I420 when
  * downstream asks for it (an encoder's caps): the pair is packed and
- * converted in one pass (BT.709/BT.601 and the range from the output caps'
- * colorimetry, chroma the mean of each 2x2 block), on the GPU when the
- * frames are there, so no videoconvert and a third of the bytes to
- * download.
+ * converted in one pass (BT.709/BT.601/BT.2020 and the range from the
+ * output caps' colorimetry, chroma the mean of each 2x2 block), on the GPU
+ * when the frames are there, so no videoconvert and a third of the bytes
+ * to download. The output caps keep the input's transfer and primaries
+ * (PQ, HLG, BT.2020, BT.709; 4:2:0 output first offers the matrix of those
+ * primaries) and its HDR fields (mastering-display-info,
+ * content-light-level). An anaglyph mixes the views' colours as SDR code
+ * values: PQ and HLG input is refused for it.
  *
  * Plain 2D input is refused: declare how the frame holds the pair with
  * input-layout (and input-right-first). An output in the input's own

@@ -15,7 +15,10 @@
  * output for encoders), and on the GPU an anaglyph is rendered in one pass
  * with the views where it can be: the row kernel writes the anaglyph pixels
  * itself, and the full pair never goes through memory (docs/benchmarks.md,
- * "Fused pack"). pseudo3dconvert packs this way.
+ * "Fused pack"). pseudo3dconvert packs this way. The views keep the input's
+ * transfer and primaries, which the output caps state (R'G'B' with the
+ * input's transfer and primaries; 4:2:0 as pseudo3dpack writes it), and
+ * an anaglyph of PQ or HLG input is refused, as pseudo3dpack refuses it.
  *
  * Parallax of a pixel is max-disparity% x width x (depth - convergence):
  * depth above the convergence plane comes out of the screen.
