@@ -286,10 +286,14 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
   gboolean accepted;
   if (GST_VIDEO_INFO_IS_INTERLACED(&in))
     // The stages treat every row as part of one picture: fields would be torn apart.
-    accepted = gst_pseudo3d_base_refuse_caps(self, "Interlaced video is not supported",
-                                             "interlace-mode %s; put deinterlace before %s",
-                                             gst_video_interlace_mode_to_string(GST_VIDEO_INFO_INTERLACE_MODE(&in)),
-                                             placed_element_name(self));
+    // deinterlace takes system memory only (pseudo3dconvert's own passes
+    // CUDA memory through).
+    accepted = gst_pseudo3d_base_refuse_caps(
+        self, "Interlaced video is not supported", "interlace-mode %s; put deinterlace before %s%s",
+        gst_video_interlace_mode_to_string(GST_VIDEO_INFO_INTERLACE_MODE(&in)), placed_element_name(self),
+        cuda_caps ? ", in system memory (before cudaupload, or a decoder's output in system memory): deinterlace "
+                    "does not take CUDA memory"
+                  : "");
   else if (!cuda_caps && self->processing == GST_PSEUDO3D_PROCESSING_GPU)
     // System memory runs on the CPU (see GstPseudo3DPath): "gpu" cannot be kept.
     accepted = gst_pseudo3d_base_refuse_caps(

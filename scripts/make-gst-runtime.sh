@@ -23,7 +23,7 @@ scanner=$multiarch/gstreamer1.0/gstreamer-1.0/gst-plugin-scanner
 plugins=${GST_RUNTIME_PLUGINS:-"coreelements videotestsrc videoconvertscale app
   playback typefindfunctions isomp4 matroska videoparsersbad nvcodec x264
   png jpeg multifile debugutilsbad coretracers imagefreeze videorate pnm
-  rawparse videofilter autodetect"}
+  rawparse videofilter autodetect deinterlace"}
 
 need() { command -v "$1" >/dev/null || { echo "missing $1: apt-get install $2" >&2; exit 1; }; }
 need gst-launch-1.0 gstreamer1.0-tools

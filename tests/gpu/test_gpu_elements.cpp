@@ -339,6 +339,84 @@ TEST(GpuWarpLayout, PacksAsTheCpuChain) {
   expect_same(gpu, cpu, "pseudo3dconvert on CUDA memory");
 }
 
+// Colour signalling on CUDA memory, as on system memory (test_colour): the
+// bin between cudaupload and cudadownload, written as 4:2:0 and as R'G'B',
+// states the input's PQ transfer, BT.2020 primaries and HDR fields, and
+// its bytes are the CPU bin's; an anaglyph of PQ video is refused.
+TEST(GpuColourCaps, HdrSignalPassesOnCudaMemory) {
+  const std::string caps =
+      "video/x-raw,format=I420,width=64,height=48,framerate=25/1,colorimetry=bt2100-pq,"
+      "mastering-display-info=(string)34000:16000:13250:34500:7500:3000:15635:16450:10000000:1,"
+      "content-light-level=(string)1000:400";
+  const HostFrame frame = picture(PixelFormat::I420, 64, 48, 41);
+  for (const char *out : {"I420", "RGBA"}) {
+    GstBuffer *results[2] = {nullptr, nullptr};
+    for (int gpu = 0; gpu < 2; ++gpu) {
+      const std::string launch = std::string(gpu ? "cudaupload ! video/x-raw(memory:CUDAMemory) ! " : "") +
+                                 "pseudo3dconvert layout=side-by-side-half processing=" + (gpu ? "gpu" : "cpu") +
+                                 (gpu ? " ! cudadownload" : "") + " ! capsfilter caps=video/x-raw,format=" + out;
+      GstHarness *h = gst_harness_new_parse(launch.c_str());
+      gst_harness_set_src_caps_str(h, caps.c_str());
+      results[gpu] = gst_harness_push_and_pull(h, buffer_from_frame(frame));
+      ASSERT_NE(results[gpu], nullptr) << launch;
+      GstCaps *got = gst_pad_get_current_caps(h->sinkpad);
+      GstVideoInfo info;
+      ASSERT_TRUE(got && gst_video_info_from_caps(&info, got)) << launch;
+      EXPECT_EQ(info.colorimetry.transfer, GST_VIDEO_TRANSFER_SMPTE2084) << launch;
+      EXPECT_EQ(info.colorimetry.primaries, GST_VIDEO_COLOR_PRIMARIES_BT2020) << launch;
+      if (GST_VIDEO_INFO_IS_YUV(&info)) {
+        EXPECT_EQ(info.colorimetry.matrix, GST_VIDEO_COLOR_MATRIX_BT2020) << launch;
+      }
+      const GstStructure *st = gst_caps_get_structure(got, 0);
+      EXPECT_STREQ(gst_structure_get_string(st, "content-light-level"), "1000:400") << launch;
+      EXPECT_NE(gst_structure_get_string(st, "mastering-display-info"), nullptr) << launch;
+      gst_caps_unref(got);
+      gst_harness_teardown(h);
+    }
+    GstMapInfo a, b;
+    ASSERT_TRUE(gst_buffer_map(results[0], &a, GST_MAP_READ) && gst_buffer_map(results[1], &b, GST_MAP_READ));
+    EXPECT_EQ(a.size, b.size);
+    EXPECT_EQ(memcmp(a.data, b.data, std::min(a.size, b.size)), 0) << out << ": the GPU bin's bytes are the CPU's";
+    gst_buffer_unmap(results[0], &a);
+    gst_buffer_unmap(results[1], &b);
+    for (GstBuffer *r : results) gst_buffer_unref(r);
+  }
+  const std::string err =
+      run_to_eos("videotestsrc num-buffers=2 ! video/x-raw,format=I420,width=64,height=48,colorimetry=bt2100-pq ! "
+                 "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3dconvert layout=anaglyph ! cudadownload ! "
+                 "fakesink");
+  EXPECT_NE(err.find("An anaglyph needs SDR video"), std::string::npos) << err;
+}
+
+// Interlaced video: pseudo3dconvert deinterlaces system memory before it
+// uploads (a frame for each field, on the GPU), and refuses interlaced
+// CUDA memory, which deinterlace does not take, saying where to
+// deinterlace instead.
+TEST(GpuConvertBin, InterlacedVideoOnEitherMemory) {
+  const std::string src = "videotestsrc num-buffers=3 ! video/x-raw,format=I420,width=64,height=48,framerate=30/1,"
+                          "interlace-mode=interleaved ! ";
+  std::string rate;
+  EXPECT_EQ(run_to_eos(src + "pseudo3dconvert processing=gpu ! fakesink name=sink", 60,
+                       [&](GstElement *pipeline) {
+                         GstElement *sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
+                         GstPad *pad = gst_element_get_static_pad(sink, "sink");
+                         GstCaps *caps = gst_pad_get_current_caps(pad);
+                         GstVideoInfo info;
+                         if (caps && gst_video_info_from_caps(&info, caps))
+                           rate = std::to_string(GST_VIDEO_INFO_FPS_N(&info)) + "/" +
+                                  std::to_string(GST_VIDEO_INFO_FPS_D(&info));
+                         if (caps) gst_caps_unref(caps);
+                         gst_object_unref(pad);
+                         gst_object_unref(sink);
+                       }),
+            "");
+  EXPECT_EQ(rate, "60/1") << "a frame for each field";
+  const std::string err = run_to_eos(src + "cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3dconvert name=c3d ! "
+                                           "cudadownload ! fakesink");
+  EXPECT_NE(err.find("Interlaced video is not supported"), std::string::npos) << err;
+  EXPECT_NE(err.find("deinterlace does not take CUDA memory"), std::string::npos) << err;
+}
+
 // Device memory stays flat over 1000 frames (pools, no per-frame allocation).
 TEST(GpuChainMemory, FlatOver1000Frames) {
   const int w = 640, h = 360;
