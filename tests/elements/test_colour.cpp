@@ -162,3 +162,47 @@ TEST(ColourCaps, AnaglyphOfHdrIsRefusedWithAMessage) {
     }
   }
 }
+
+// An anaglyph asked for while PQ video plays: the value is refused with one
+// warning that says why, the layout goes back to the one in force, and the
+// stream goes on.
+TEST(ColourCaps, AnaglyphAskedWhilePlayingHdrIsRefusedLive) {
+  GstHarness *h = gst_harness_new_parse("pseudo3dconvert name=c processing=cpu layout=side-by-side-half");
+  BusMessages bus(h->element);
+  const std::string caps = std::string("video/x-raw,format=I420,width=64,height=48,framerate=25/1,colorimetry=bt2100-pq");
+  gst_harness_set_src_caps_str(h, caps.c_str());
+  GstVideoInfo info;
+  GstCaps *c = gst_caps_from_string(caps.c_str());
+  ASSERT_TRUE(gst_video_info_from_caps(&info, c));
+  gst_caps_unref(c);
+  auto push = [&]() {
+    GstBuffer *frame = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+    gst_buffer_memset(frame, 0, 100, GST_VIDEO_INFO_SIZE(&info));
+    return gst_harness_push_and_pull(h, frame);
+  };
+  GstBuffer *first = push();
+  ASSERT_NE(first, nullptr);
+  gst_buffer_unref(first);
+  GstElement *bin = gst_bin_get_by_name(GST_BIN(h->element), "c");
+  if (!bin) bin = GST_ELEMENT(gst_object_ref(h->element));
+  gst_util_set_object_arg(G_OBJECT(bin), "layout", "anaglyph");
+  GstBuffer *second = push();
+  EXPECT_NE(second, nullptr) << "the stream goes on";
+  if (second) gst_buffer_unref(second);
+  const std::vector<std::string> warnings = bus.take(GST_MESSAGE_WARNING);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("An anaglyph needs SDR video"), std::string::npos) << warnings[0];
+  EXPECT_TRUE(bus.take(GST_MESSAGE_ERROR).empty());
+  gint layout = -1;
+  g_object_get(bin, "layout", &layout, NULL);
+  GEnumValue *v = g_enum_get_value(static_cast<GEnumClass *>(g_type_class_peek(G_PARAM_SPEC_VALUE_TYPE(
+                                       g_object_class_find_property(G_OBJECT_GET_CLASS(bin), "layout")))),
+                                   layout);
+  EXPECT_STREQ(v ? v->value_nick : "", "side-by-side-half") << "the layout in force";
+  GstCaps *out = gst_pad_get_current_caps(h->sinkpad);
+  ASSERT_NE(out, nullptr);
+  EXPECT_STREQ(gst_structure_get_string(gst_caps_get_structure(out, 0), "multiview-mode"), "side-by-side");
+  gst_caps_unref(out);
+  gst_object_unref(bin);
+  gst_harness_teardown(h);
+}
