@@ -9,6 +9,7 @@
 
 #include <glib/gstdio.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -83,4 +84,41 @@ TEST(Mp4StereoBox, RefusesWhatIsNotAnMp4WithVideo) {
     EXPECT_NE(error.find(path), std::string::npos) << error;
     EXPECT_EQ(read_bytes(path), before) << path << ": left as it was";
   }
+}
+
+// Damaged files: cut short at many points, or with bytes overwritten in
+// the movie box. The editor never reads or writes out of bounds (the
+// sanitizer build runs this too) and either writes its 13 bytes or
+// refuses and leaves the file as it was.
+TEST(Mp4StereoBox, DamagedFilesAreRefusedUnchanged) {
+  const std::string good = clip("damaged-source.mp4", "mp4mux");
+  ASSERT_FALSE(good.empty());
+  const Bytes original = read_bytes(good);
+  const std::string path = mkv_out_dir() + "/damaged.mp4";
+  int refused = 0, written = 0;
+  auto check = [&](const Bytes &damaged, const std::string &what) {
+    ASSERT_TRUE(write_bytes(path, damaged));
+    std::string error;
+    if (mp4_set_stereo_box(path, Mp4StereoMode::LeftRight, &error)) {
+      ++written;
+      EXPECT_EQ(read_bytes(path).size(), damaged.size() + 13) << what;
+    } else {
+      ++refused;
+      EXPECT_EQ(read_bytes(path), damaged) << what << ": " << error;
+    }
+  };
+  for (size_t cut = 0; cut < original.size(); cut += 97)
+    check(Bytes(original.begin(), original.begin() + cut), "cut at " + std::to_string(cut));
+  // Overwrite words all through the movie box (mp4mux writes it after mdat).
+  const char kMoov[] = "moov";
+  const auto found = std::search(original.begin(), original.end(), kMoov, kMoov + 4);
+  ASSERT_NE(found, original.end());
+  const size_t moov = static_cast<size_t>(found - original.begin()) - 4;
+  for (size_t at = moov; at + 4 <= original.size(); at += 29) {
+    Bytes damaged = original;
+    for (int k = 0; k < 4; ++k) damaged[at + k] = static_cast<uint8_t>(0xFF - k * 0x3F);
+    check(damaged, "overwritten at " + std::to_string(at));
+  }
+  EXPECT_GT(refused, 0);
+  EXPECT_GT(written, 0);
 }

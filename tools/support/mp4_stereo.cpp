@@ -206,7 +206,10 @@ bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string
   std::vector<uint8_t> moov;
   int64_t delta = 0;
   std::string why = "not an MP4/MOV file with a movie box";
-  if (!have_moov || !read_range(f, moov_at, moov_size, &moov) || !edit_moov(moov, mode, &delta, &why) ||
+  // A walk that stops short of the end may have missed an mdat after moov,
+  // whose chunk offsets would then be left unshifted: such files are refused.
+  if (have_moov && at != file_size) why = "its boxes are damaged or cut short";
+  if (!have_moov || at != file_size || !read_range(f, moov_at, moov_size, &moov) || !edit_moov(moov, mode, &delta, &why) ||
       (mdat_after_moov && !shift_chunk_offsets(moov, delta, &why))) {
     std::fclose(f);
     *error = path + ": " + why;

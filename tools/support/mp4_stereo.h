@@ -24,8 +24,11 @@ enum class Mp4StereoMode : uint8_t { Mono = 0, TopBottom = 1, LeftRight = 2 };
 // chunk offsets (stco, co64) of every track move by the same amount.
 // When every mdat lies before moov (qtmux's default), only moov and what
 // follows it are rewritten; otherwise the file is copied with the new
-// moov and renamed over `path`. False with *error when the file is not an
-// MP4/MOV with a video track, or cannot be written (then it is unchanged).
+// moov and renamed over `path`. False with *error, the file unchanged, when
+// it is not an MP4/MOV with a video track or its top-level boxes do not
+// run to its end (damaged or cut short); false as well when a write fails,
+// which may leave the file damaged (the converter edits its temporary
+// file, which it then deletes).
 bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string *error);
 
 }  // namespace p3d
