@@ -26,7 +26,8 @@ void append_string(GValue *list, gchar *text) {
 
 bool stated_colorimetry(const GstStructure *s, GstVideoColorimetry *c) {
   const gchar *text = gst_structure_get_string(s, "colorimetry");
-  return text && gst_video_colorimetry_from_string(c, text);
+  return text && gst_video_colorimetry_from_string(c, text) && c->transfer != GST_VIDEO_TRANSFER_UNKNOWN &&
+         c->primaries != GST_VIDEO_COLOR_PRIMARIES_UNKNOWN;
 }
 
 void carry_colour_to_rgb(const GstStructure *in, GstStructure *rgb) {

@@ -13,9 +13,11 @@
 
 namespace p3d::gst {
 
-// The colorimetry a caps structure states in one "colorimetry" string;
-// false when it states none or a list (nothing to carry then: GStreamer's
-// defaults apply as before).
+// The colorimetry a caps structure states in one "colorimetry" string,
+// with a known transfer and primaries; false when it states none, a list,
+// or leaves either unknown (jpegdec's 1:4:0:0): nothing to carry then,
+// and the output is labelled as a stage without this labels it (sRGB for
+// R'G'B', BT.709 first for 4:2:0).
 bool stated_colorimetry(const GstStructure *s, GstVideoColorimetry *c);
 
 // Sets the "colorimetry" of `rgb` (R'G'B' views made from input `in`) to

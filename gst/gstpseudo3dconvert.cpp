@@ -153,7 +153,6 @@ static gboolean configure_processing(GstPseudo3DConvert *self) {
   }
   GstElement *first = self->stage[STAGE_DEPTH], *last = self->stage[STAGE_WARP];
   if (want_gpu && !self->upload) {
-    if (self->deinterlace) gst_element_unlink(self->deinterlace, first);
     self->upload = gst_element_factory_make("cudaupload", "upload");
     self->to_cuda = gst_element_factory_make("capsfilter", "to_cuda");
     self->download = gst_element_factory_make("cudadownload", "download");
@@ -167,6 +166,7 @@ static gboolean configure_processing(GstPseudo3DConvert *self) {
     GstCaps *cuda_caps = gst_caps_from_string("video/x-raw(memory:CUDAMemory)");
     g_object_set(self->to_cuda, "caps", cuda_caps, NULL);
     gst_caps_unref(cuda_caps);
+    if (self->deinterlace) gst_element_unlink(self->deinterlace, first);
     g_object_set(self->upload, "cuda-device-id", self->device_id, NULL);
     g_object_set(self->download, "cuda-device-id", self->device_id, NULL);
     gst_bin_add_many(GST_BIN(self), self->upload, self->to_cuda, self->download, NULL);

@@ -206,3 +206,24 @@ TEST(ColourCaps, AnaglyphAskedWhilePlayingHdrIsRefusedLive) {
   gst_object_unref(bin);
   gst_harness_teardown(h);
 }
+
+// Input that leaves its transfer and primaries unknown (jpegdec's 1:4:0:0)
+// has nothing to carry: 4:2:0 output is labelled BT.709, as without the
+// colour signalling, not "unknown".
+TEST(ColourCaps, UnknownTransferAndPrimariesAreNotCarried) {
+  GstHarness *h = gst_harness_new_parse(
+      "pseudo3dconvert processing=cpu layout=side-by-side-half ! capsfilter caps=video/x-raw,format=I420");
+  gst_harness_set_src_caps_str(h, "video/x-raw,format=I420,width=64,height=48,framerate=25/1,colorimetry=1:4:0:0");
+  GstVideoInfo info;
+  gst_video_info_set_format(&info, GST_VIDEO_FORMAT_I420, 64, 48);
+  GstBuffer *frame = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+  gst_buffer_memset(frame, 0, 90, GST_VIDEO_INFO_SIZE(&info));
+  GstBuffer *out = gst_harness_push_and_pull(h, frame);
+  ASSERT_NE(out, nullptr);
+  gst_buffer_unref(out);
+  GstCaps *caps = gst_pad_get_current_caps(h->sinkpad);
+  ASSERT_NE(caps, nullptr);
+  EXPECT_STREQ(gst_structure_get_string(gst_caps_get_structure(caps, 0), "colorimetry"), "bt709");
+  gst_caps_unref(caps);
+  gst_harness_teardown(h);
+}

@@ -1,10 +1,11 @@
 // The MP4 st3d box editor (tools/support/mp4_stereo.h) on files GStreamer
 // writes: mp4mux's default (mdat, then moov, then a uuid box), mp4mux
-// faststart=true (moov before mdat: every chunk offset moves) and qtmux
-// (.mov). After the edit ffprobe reads the layout from the box, GStreamer
-// and ffmpeg still decode every frame (the offsets are right), a second
-// edit replaces the box instead of adding one, and files that are not
-// MP4 or hold no video are refused and left as they were.
+// faststart=true (moov before mdat: every chunk offset moves), qtmux
+// (.mov), and an mdat on each side of moov. After the edit ffprobe reads
+// the layout from the box, GStreamer and ffmpeg still decode every frame
+// (the offsets are right), a second edit replaces the box instead of
+// adding one, and files that are not MP4, hold no video, are fragmented
+// or damaged are refused and left as they were.
 #include <gtest/gtest.h>
 
 #include <glib/gstdio.h>
@@ -72,12 +73,28 @@ TEST(Mp4StereoBox, WrittenReadAndReplaced) {
   }
 }
 
+// mdat before moov and another, empty, after it: only offsets past moov
+// move, so every frame still decodes.
+TEST(Mp4StereoBox, OnlyOffsetsPastTheMovieBoxMove) {
+  const std::string path = clip("mdat-both-sides.mp4", "mp4mux");
+  ASSERT_FALSE(path.empty());
+  Bytes b = read_bytes(path);
+  const uint8_t empty_mdat[8] = {0, 0, 0, 8, 'm', 'd', 'a', 't'};
+  b.insert(b.end(), empty_mdat, empty_mdat + 8);
+  ASSERT_TRUE(write_bytes(path, b));
+  std::string error;
+  ASSERT_TRUE(mp4_set_stereo_box(path, Mp4StereoMode::LeftRight, &error)) << error;
+  EXPECT_EQ(gst_decoded_frames(path, false, &error), kFrames) << error;
+}
+
 TEST(Mp4StereoBox, RefusesWhatIsNotAnMp4WithVideo) {
   const std::string text = mkv_out_dir() + "/not-mp4.mp4";
   ASSERT_TRUE(write_bytes(text, Bytes(300, 'x')));
   const std::string audio = mkv_out_dir() + "/audio-only.mp4";
   ASSERT_EQ(run_to_eos("audiotestsrc num-buffers=20 ! avenc_aac ! aacparse ! mp4mux ! filesink location=" + audio), "");
-  for (const std::string &path : {text, audio}) {
+  const std::string fragmented = clip("fragmented.mp4", "mp4mux fragment-duration=200");
+  ASSERT_FALSE(fragmented.empty());
+  for (const std::string &path : {text, audio, fragmented}) {
     const Bytes before = read_bytes(path);
     std::string error;
     EXPECT_FALSE(mp4_set_stereo_box(path, Mp4StereoMode::LeftRight, &error)) << path;

@@ -40,7 +40,8 @@ bool write_file(const std::string &path, const Bytes &data) {
 //   [tee. ! queue ! pseudo3ddepthout ! GRAY16_LE ! videoconvert ! GRAY16_BE ! pngenc ! appsink]
 // With --depth, pseudo3ddepthmux takes the place of pseudo3ddepth, fed by
 // the depth file's reader (depth_source.h).
-// `layout`/`swap` decide the packing.
+// `layout`/`swap` decide the packing. *error names the file at fault
+// (the photo, or the depth file when its reader failed).
 bool render(const Options &o, Processing processing, const Image &in, const std::string &layout, bool swap,
             Image *out, Bytes *depth_png, std::string *error) {
   const bool depth_file = !o.depth.empty();
@@ -55,7 +56,10 @@ bool render(const Options &o, Processing processing, const Image &in, const std:
     description += " t. ! queue ! pseudo3ddepthout ! video/x-raw,format=GRAY16_LE ! videoconvert ! "
                    "video/x-raw,format=GRAY16_BE ! pngenc ! appsink name=depth_png sync=false";
   GstElement *pipeline = launch(description, error);
-  if (!pipeline) return false;
+  if (!pipeline) {
+    *error = o.input + ": " + *error;
+    return false;
+  }
   GstElement *stage_elements[] = {by_name(pipeline, "depth"), by_name(pipeline, "filter"), by_name(pipeline, "warp"),
                                   by_name(pipeline, "pack")};
   for (GstElement *s : stage_elements)
@@ -73,11 +77,14 @@ bool render(const Options &o, Processing processing, const Image &in, const std:
   gst_caps_unref(caps);
   GstElement *sinks[] = {by_name(pipeline, "sink"), depth_png ? by_name(pipeline, "depth_png") : nullptr};
   GstSample *samples[2] = {nullptr, nullptr};
-  bool ok = run_for_samples(pipeline, src, buf, sinks, samples, depth_png ? 2 : 1, error);
+  std::string source;
+  bool ok = run_for_samples(pipeline, src, buf, sinks, samples, depth_png ? 2 : 1, error, &source);
   if (ok && !image_from_sample(samples[0], out)) {
     *error = "unexpected output of pseudo3dpack";
     ok = false;
   }
+  if (!ok)
+    *error = (depth_file && source.find(kDepthReaderMark) != std::string::npos ? o.depth : o.input) + ": " + *error;
   if (ok && depth_png) *depth_png = bytes_of_sample(samples[1]);
   for (GstSample *s : samples)
     if (s) gst_sample_unref(s);
@@ -127,10 +134,8 @@ bool convert_photo(const Options &o, std::string *error) {
   if (!o.depth_out.empty() && !depth_out.open(o.depth_out, o.force, error)) return false;
   Image packed;
   Bytes depth_png;
-  if (!render(o, processing, upright, layout, swap, &packed, o.depth_out.empty() ? nullptr : &depth_png, error)) {
-    *error = o.input + ": " + *error;
+  if (!render(o, processing, upright, layout, swap, &packed, o.depth_out.empty() ? nullptr : &depth_png, error))
     return false;
-  }
 
   Bytes bytes;
   const bool anaglyph = layout == "anaglyph";

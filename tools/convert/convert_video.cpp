@@ -257,10 +257,12 @@ bool convert_video(const Options &o, std::string *error) {
       });
   if (!r.ok) {
     job.progress.abandon();
-    if (!r.missing_plugin.empty() && !job.video_linked)
-      *error = o.input + ": no GStreamer decoder for " + r.missing_plugin + " is installed";
-    else if (!o.depth.empty() && r.source.find(kDepthReaderMark) != std::string::npos)
-      *error = o.depth + ": " + r.error;
+    const bool from_depth = !o.depth.empty() && r.source.find(kDepthReaderMark) != std::string::npos;
+    const std::string no_decoder = "no GStreamer decoder for " + r.missing_plugin + " is installed";
+    if (from_depth)
+      *error = o.depth + ": " + (r.missing_plugin.empty() ? r.error : no_decoder);
+    else if (!r.missing_plugin.empty() && !job.video_linked)
+      *error = o.input + ": " + no_decoder;
     else
       *error = (r.from_filesink ? o.output : o.input) + ": " + r.error;
     return false;

@@ -68,16 +68,12 @@ struct LoopState {
   bool failed = false;
 };
 
-void fail(LoopState *s, const std::string &error, bool from_filesink, GstObject *source = nullptr) {
+void fail(LoopState *s, const std::string &error, bool from_filesink, const std::string &source = "") {
   if (!s->failed) {
     s->failed = true;
     s->result.error = error;
     s->result.from_filesink = from_filesink;
-    if (source) {
-      gchar *path = gst_object_get_path_string(source);
-      s->result.source = path ? path : "";
-      g_free(path);
-    }
+    s->result.source = source;
   }
   g_main_loop_quit(s->loop);
 }
@@ -90,7 +86,7 @@ gboolean on_bus(GstBus *, GstMessage *msg, gpointer data) {
       break;
     case GST_MESSAGE_ERROR: {
       GstElementFactory *f = GST_IS_ELEMENT(GST_MESSAGE_SRC(msg)) ? gst_element_get_factory(GST_ELEMENT(GST_MESSAGE_SRC(msg))) : nullptr;
-      fail(s, error_text(msg), f && g_strcmp0(GST_OBJECT_NAME(f), "filesink") == 0, GST_MESSAGE_SRC(msg));
+      fail(s, error_text(msg), f && g_strcmp0(GST_OBJECT_NAME(f), "filesink") == 0, message_source_path(msg));
       break;
     }
     case GST_MESSAGE_ELEMENT:
@@ -112,6 +108,14 @@ gboolean on_bus(GstBus *, GstMessage *msg, gpointer data) {
   return TRUE;
 }
 }  // namespace
+
+std::string message_source_path(GstMessage *msg) {
+  if (!GST_MESSAGE_SRC(msg)) return "";
+  gchar *path = gst_object_get_path_string(GST_MESSAGE_SRC(msg));
+  std::string s = path ? path : "";
+  g_free(path);
+  return s;
+}
 
 void post_ready(GstElement *pipeline) {
   gst_element_post_message(pipeline, gst_message_new_application(GST_OBJECT(pipeline), gst_structure_new_empty(kReady)));

@@ -12,6 +12,10 @@ namespace p3d::convert {
 // the flow reason ("not-negotiated"...) GStreamer keeps in the debug text.
 std::string error_text(GstMessage *msg);
 
+// The path of the element that posted `msg`
+// ("/GstPipeline:p/GstDecodeBin:name/..."), "" if none.
+std::string message_source_path(GstMessage *msg);
+
 // Posts an error on `element`'s bus from any thread.
 void post_error(GstElement *element, const std::string &text);
 

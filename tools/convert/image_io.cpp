@@ -119,7 +119,7 @@ std::vector<uint8_t> bytes_of_sample(GstSample *sample) {
 }
 
 bool run_for_samples(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *const *sinks,
-                     GstSample **samples, int n, std::string *error) {
+                     GstSample **samples, int n, std::string *error, std::string *error_source) {
   for (int i = 0; i < n; ++i) samples[i] = nullptr;
   GstBus *bus = gst_element_get_bus(pipeline);
   bool failed = false;
@@ -139,6 +139,7 @@ bool run_for_samples(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer
           ++got;
         } else if (GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
           *error = error_text(msg);
+          if (error_source) *error_source = message_source_path(msg);
           gst_message_unref(msg);
           failed = true;
         } else if (gst_app_sink_is_eos(GST_APP_SINK(sinks[i]))) {
@@ -150,6 +151,7 @@ bool run_for_samples(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer
   } else {
     GstMessage *msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
     *error = msg ? error_text(msg) : "the pipeline did not start";
+    if (msg && error_source) *error_source = message_source_path(msg);
     if (msg) gst_message_unref(msg);
     failed = true;
   }

@@ -47,9 +47,11 @@ GstElement *by_name(GstElement *pipeline, const char *name);
 // Starts `pipeline`, pushes `buffer` (if any) and EOS into `appsrc`, and
 // waits for the first sample of each of the `n` appsinks `sinks` into
 // `samples` (new refs). False with *error, and no sample, on an error or
-// when one of them got none. Leaves the pipeline in NULL.
+// when one of them got none; *error_source (if given) is then the path of
+// the element that posted the error (message_source_path(), gst_run.h).
+// Leaves the pipeline in NULL.
 bool run_for_samples(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *const *sinks,
-                     GstSample **samples, int n, std::string *error);
+                     GstSample **samples, int n, std::string *error, std::string *error_source = nullptr);
 // The same for one appsink: its sample, or null with *error.
 GstSample *run_for_one_sample(GstElement *pipeline, GstElement *appsrc, GstBuffer *buffer, GstElement *appsink,
                               std::string *error);

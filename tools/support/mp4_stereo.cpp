@@ -1,5 +1,6 @@
 #include "mp4_stereo.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -75,8 +76,9 @@ void grow(std::vector<uint8_t> &b, const Box &box, int64_t delta) {
     put32(&b[box.offset], uint32_t(box.size + delta));
 }
 
-// Adds `delta` to every chunk offset of every track in moov `b`.
-bool shift_chunk_offsets(std::vector<uint8_t> &b, int64_t delta, std::string *error) {
+// Adds `delta` to the chunk offsets of every track in moov `b` that point
+// at or after `from` (the old end of moov: data before it does not move).
+bool shift_chunk_offsets(std::vector<uint8_t> &b, int64_t delta, uint64_t from, std::string *error) {
   Box moov, trak, mdia, minf, stbl, table;
   box_at(b, 0, b.size(), &moov);
   for (size_t at = moov.body(); at < moov.end() && box_at(b, at, moov.end(), &trak); at = trak.end()) {
@@ -95,7 +97,9 @@ bool shift_chunk_offsets(std::vector<uint8_t> &b, int64_t delta, std::string *er
     }
     for (uint32_t i = 0; i < count; ++i) {
       uint8_t *p = &b[first + i * width];
-      const uint64_t moved = (wide ? be64(p) : be32(p)) + delta;
+      const uint64_t offset = wide ? be64(p) : be32(p);
+      if (offset < from) continue;
+      const uint64_t moved = offset + delta;
       if (!wide && moved > UINT32_MAX) {
         *error = "the chunk offsets would pass 4 GiB in a 32-bit table";
         return false;
@@ -185,7 +189,7 @@ bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string
   fseeko(f, 0, SEEK_END);
   const uint64_t file_size = uint64_t(ftello(f));
   uint64_t moov_at = 0, moov_size = 0, at = 0;
-  bool have_moov = false, mdat_after_moov = false;
+  bool have_moov = false, mdat_after_moov = false, fragmented = false;
   while (at + 8 <= file_size) {
     std::vector<uint8_t> h;
     if (!read_range(f, at, file_size - at >= 16 ? 16 : 8, &h)) break;
@@ -200,6 +204,8 @@ bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string
       moov_size = size;
     } else if (type == fourcc("mdat") && have_moov) {
       mdat_after_moov = true;
+    } else if (type == fourcc("moof") || type == fourcc("mfra")) {
+      fragmented = true;
     }
     at += size;
   }
@@ -209,8 +215,10 @@ bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string
   // A walk that stops short of the end may have missed an mdat after moov,
   // whose chunk offsets would then be left unshifted: such files are refused.
   if (have_moov && at != file_size) why = "its boxes are damaged or cut short";
-  if (!have_moov || at != file_size || !read_range(f, moov_at, moov_size, &moov) || !edit_moov(moov, mode, &delta, &why) ||
-      (mdat_after_moov && !shift_chunk_offsets(moov, delta, &why))) {
+  // Fragments hold absolute offsets (tfra, base_data_offset) this does not move.
+  if (fragmented) why = "a fragmented MP4, which is not edited";
+  if (!have_moov || at != file_size || fragmented || !read_range(f, moov_at, moov_size, &moov) || !edit_moov(moov, mode, &delta, &why) ||
+      !shift_chunk_offsets(moov, delta, moov_at + moov_size, &why)) {
     std::fclose(f);
     *error = path + ": " + why;
     return false;
@@ -226,9 +234,14 @@ bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string
          (delta >= 0 || ftruncate(fileno(f), off_t(file_size + delta)) == 0);
     ok = std::fclose(f) == 0 && ok;
   } else {
-    const std::string temp = path + ".st3d";
-    std::FILE *out = std::fopen(temp.c_str(), "wb");
-    ok = out && copy_range(f, 0, moov_at, out) && std::fwrite(moov.data(), 1, moov.size(), out) == moov.size() &&
+    // A new file beside it, with its permissions, renamed over it.
+    std::string temp = path + ".st3d-XXXXXX";
+    const int fd = mkstemp(&temp[0]);
+    struct stat st;
+    std::FILE *out = fd >= 0 ? fdopen(fd, "wb") : nullptr;
+    if (fd >= 0 && !out) close(fd);
+    ok = out && fstat(fileno(f), &st) == 0 && fchmod(fileno(out), st.st_mode & 07777) == 0 &&
+         copy_range(f, 0, moov_at, out) && std::fwrite(moov.data(), 1, moov.size(), out) == moov.size() &&
          copy_range(f, tail_at, tail_size, out);
     if (out) ok = std::fclose(out) == 0 && ok;
     std::fclose(f);

@@ -20,15 +20,16 @@ enum class Mp4StereoMode : uint8_t { Mono = 0, TopBottom = 1, LeftRight = 2 };
 // first sample entry, after its codec configuration box (avcC, hvcC), as
 // the RFC places it: before the optional boxes (btrt, colr, pasp) at the
 // entry's end. An st3d already there is replaced. The sizes of the boxes
-// around it grow; when the movie box comes before the media data, the
-// chunk offsets (stco, co64) of every track move by the same amount.
+// around it grow, and the chunk offsets (stco, co64) that point after the
+// movie box move by the same amount. Fragmented files (moof, mfra) are
+// refused: their fragments hold absolute offsets this does not move.
 // When every mdat lies before moov (qtmux's default), only moov and what
 // follows it are rewritten; otherwise the file is copied with the new
-// moov and renamed over `path`. False with *error, the file unchanged, when
-// it is not an MP4/MOV with a video track or its top-level boxes do not
-// run to its end (damaged or cut short); false as well when a write fails,
-// which may leave the file damaged (the converter edits its temporary
-// file, which it then deletes).
+// moov and renamed over `path` (with its permissions). False with *error,
+// the file unchanged, when it is not an MP4/MOV with a video track, is
+// fragmented, or its top-level boxes do not run to its end (damaged or cut
+// short); false as well when a write fails, which may leave the file
+// damaged (the converter edits its temporary file, which it then deletes).
 bool mp4_set_stereo_box(const std::string &path, Mp4StereoMode mode, std::string *error);
 
 }  // namespace p3d
