@@ -183,6 +183,19 @@ GstPadProbeReturn refuse_rotation(GstPad *, GstPadProbeInfo *info, gpointer user
 
 namespace {
 
+// The formats the 3D stages take in CUDA memory (video_caps_for()).
+bool stages_take_on_device(GstVideoFormat f) {
+  switch (f) {
+    case GST_VIDEO_FORMAT_NV12:
+    case GST_VIDEO_FORMAT_I420:
+    case GST_VIDEO_FORMAT_RGBA:
+    case GST_VIDEO_FORMAT_BGRA:
+    case GST_VIDEO_FORMAT_RGBx:
+    case GST_VIDEO_FORMAT_BGRx: return true;
+    default: return false;
+  }
+}
+
 bool known_interlaced(const GstCaps *caps, GstVideoInfo *info = nullptr) {
   GstVideoInfo local;
   GstVideoInfo *i = info ? info : &local;
@@ -216,9 +229,9 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   // cut off in its first frame) has unfixed caps and no size: no frame
   // follows, so there is nothing to crop.
   GstVideoInfo info;
-  const bool known = subsampled_ && gst_caps_is_fixed(caps) && gst_video_info_from_caps(&info, caps);
-  const int crop_right = known ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
-  const int crop_bottom = known ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
+  const bool known = gst_caps_is_fixed(caps) && gst_video_info_from_caps(&info, caps);
+  const int crop_right = known && subsampled_ ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
+  const int crop_bottom = known && subsampled_ ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
   if (cuda_input_ && known_interlaced(caps)) {
     // GStreamer 1.22 has no deinterlacer for CUDA memory.
     refusal_ = "the GPU path cannot deinterlace interlaced video: use --processing cpu";
@@ -240,7 +253,28 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
                                                    GST_PAD_PROBE_TYPE_BUFFER_LIST),
                       refuse_rotation, new RotationGuard{head_},
                       [](gpointer p) { delete static_cast<RotationGuard *>(p); });
-    return gst_pad_link(decoded, head_sink_) == GST_PAD_LINK_OK && gst_element_link(head_, convert_);
+    if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
+    // Formats the stages do not take (NVDEC's P010 for 10-bit video) are
+    // converted on the device by nvcodec's cudaconvert where it is
+    // registered (it needs NVRTC); otherwise the frames are downloaded,
+    // converted by videoconvert and uploaded again by pseudo3dconvert.
+    GstElement *last = head_;
+    if (known && !stages_take_on_device(GST_VIDEO_INFO_FORMAT(&info))) {
+      std::vector<GstElement *> converters;
+      if (GstElement *on_device = add_to_bin(bin_, "cudaconvert")) {
+        converters.push_back(on_device);
+      } else {
+        GstElement *down = add_to_bin(bin_, "cudadownload"), *vconv = add_to_bin(bin_, "videoconvert");
+        if (!down || !vconv) return false;
+        g_object_set(vconv, "n-threads", 0u, NULL);
+        converters = {down, vconv};
+      }
+      for (GstElement *c : converters) {
+        if (!gst_element_link(last, c)) return false;
+        last = c;
+      }
+    }
+    return gst_element_link(last, convert_);
   }
   if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
   // System memory: videoconvert passes the formats the stages take through
