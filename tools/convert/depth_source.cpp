@@ -81,8 +81,10 @@ GstElement *make_depth_file_chain(const Options &o, Processing processing, std::
   apply_depth_values(o, stages_found[0]);
   for (GstElement *s : {stages_found[1], stages_found[2]})
     gst_util_set_object_arg(G_OBJECT(s), "processing", processing_nick(processing));
-  apply_to_stages(o, stages_found, 3, effective_layout(o), right_view_first(o));
-  apply_to_bin(o, stages_found[2]);  // the warp packs: it has the pack's properties, as the bin does
+  // Every command-line value that applies with --depth is the warp's: its
+  // own, and the pack's, which it has as the bin does (the estimate's are
+  // refused with --depth).
+  apply_to_bin(o, stages_found[2]);
   return bin;
 }
 

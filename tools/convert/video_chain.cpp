@@ -183,19 +183,6 @@ GstPadProbeReturn refuse_rotation(GstPad *, GstPadProbeInfo *info, gpointer user
 
 namespace {
 
-// The formats the 3D stages take in CUDA memory (video_caps_for()).
-bool stages_take_on_device(GstVideoFormat f) {
-  switch (f) {
-    case GST_VIDEO_FORMAT_NV12:
-    case GST_VIDEO_FORMAT_I420:
-    case GST_VIDEO_FORMAT_RGBA:
-    case GST_VIDEO_FORMAT_BGRA:
-    case GST_VIDEO_FORMAT_RGBx:
-    case GST_VIDEO_FORMAT_BGRx: return true;
-    default: return false;
-  }
-}
-
 bool known_interlaced(const GstCaps *caps, GstVideoInfo *info = nullptr) {
   GstVideoInfo local;
   GstVideoInfo *i = info ? info : &local;
@@ -259,7 +246,10 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
     // registered (it needs NVRTC); otherwise the frames are downloaded,
     // converted by videoconvert and uploaded again by pseudo3dconvert.
     GstElement *last = head_;
-    if (known && !stages_take_on_device(GST_VIDEO_INFO_FORMAT(&info))) {
+    GstCaps *taken = video_caps_for(Processing::Gpu);
+    const bool convert_format = known && !gst_caps_can_intersect(caps, taken);
+    gst_caps_unref(taken);
+    if (convert_format) {
       std::vector<GstElement *> converters;
       if (GstElement *on_device = add_to_bin(bin_, "cudaconvert")) {
         converters.push_back(on_device);
