@@ -13,7 +13,7 @@ namespace {
 // The bright pixels of row y into *row and the column counts `cols`.
 void count_row(const FrameView &f, int y, int luma_threshold, uint32_t *row, uint32_t *cols) {
   uint32_t n = 0;
-  if (is_packed_rgb(f.format)) {
+  if (is_packed_rgb(f.format) || is_deep(f.format)) {
     for (int x = 0; x < f.width; ++x) {
       const uint32_t bright = bar_pixel_bright(f, x, y, luma_threshold);
       n += bright;
@@ -57,28 +57,47 @@ void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *count
 namespace {
 
 // Pixels [x0, x1) of row y of the source into both views of the pair:
-// load_rgba's bytes as store_rgba writes them, two pixels a chroma sample.
+// load_rgba's bytes as store_rgba writes them (load_rgba16's for an RGBA64
+// pair), two pixels a chroma sample. Word: the pair's pixel word
+// (uint32_t, or uint64_t for RGBA64).
+template <class Word>
 void source_into_views(const FrameView &src, const YuvToRgb &m, int y, int x0, int x1, const FrameView &pair) {
+  constexpr size_t kBytes = sizeof(Word);
   uint8_t *left = pair.plane[0] + static_cast<size_t>(y) * pair.stride[0];
-  uint8_t *right = left + 4 * static_cast<size_t>(src.width);
+  uint8_t *right = left + kBytes * static_cast<size_t>(src.width);
   const bool bgr = is_bgr_order(pair.format);
-  auto put = [&](int x, uint32_t w) {
-    if (bgr) w = swap_rb_word(w);
-    std::memcpy(left + 4 * static_cast<size_t>(x), &w, 4);
-    std::memcpy(right + 4 * static_cast<size_t>(x), &w, 4);
+  auto put = [&](int x, Word w) {
+    if constexpr (kBytes == 4) {
+      if (bgr) w = swap_rb_word(w);
+    }
+    std::memcpy(left + kBytes * static_cast<size_t>(x), &w, kBytes);
+    std::memcpy(right + kBytes * static_cast<size_t>(x), &w, kBytes);
+  };
+  auto one = [&](int x) {
+    if constexpr (kBytes == 4)
+      put(x, rgba_word(load_rgba(src, x, y, m)));
+    else
+      put(x, rgba_word(load_rgba16(src, x, y, m)));
   };
   int x = x0;
   if (x < x1 && x % 2) {  // an odd start: one pixel
-    put(x, rgba_word(load_rgba(src, x, y, m)));
+    one(x);
     ++x;
   }
   for (; x + 1 < x1; x += 2) {
-    uint32_t w[2] = {0, 0};
+    Word w[2] = {0, 0};
     load_rgba_pair_words(src, x, y, m, w);
     put(x, w[0]);
     put(x + 1, w[1]);
   }
-  if (x < x1) put(x, rgba_word(load_rgba(src, x, y, m)));
+  if (x < x1) one(x);
+}
+
+void source_into_views(const FrameView &src, const YuvToRgb &m, int y, int x0, int x1, const FrameView &pair) {
+  if (pair.format == PixelFormat::RGBA64)
+    source_into_views<uint64_t>(src, m, y, x0, x1, pair);
+  else
+    source_into_views<uint32_t>(src, m, y, x0, x1, pair);
 }
 
 }  // namespace
@@ -100,13 +119,14 @@ void views_outside_cpu(const FrameView &src, const YuvToRgb &m, PixelRect active
 
 void place_active_pair_cpu(const FrameView &active_pair, PixelRect active, const FrameView &pair,
                            const std::vector<uint8_t> *rows) {
-  const int view_width = pair.width / 2, w = active.width();
+  const size_t view_width = static_cast<size_t>(pair.width / 2), w = static_cast<size_t>(active.width());
+  const size_t px = static_cast<size_t>(packed_pixel_bytes(pair.format)), x0 = static_cast<size_t>(active.x0);
   for (int y = 0; y < active.height(); ++y) {
     if (rows && !(*rows)[y]) continue;
     const uint8_t *from = active_pair.plane[0] + static_cast<size_t>(y) * active_pair.stride[0];
     uint8_t *to = pair.plane[0] + static_cast<size_t>(active.y0 + y) * pair.stride[0];
-    std::memcpy(to + 4 * active.x0, from, 4 * static_cast<size_t>(w));
-    std::memcpy(to + 4 * (view_width + active.x0), from + 4 * static_cast<size_t>(w), 4 * static_cast<size_t>(w));
+    std::memcpy(to + px * x0, from, px * w);
+    std::memcpy(to + px * (view_width + x0), from + px * w, px * w);
   }
 }
 

@@ -41,12 +41,19 @@ constexpr int kBarAlign = 8;
 // Frames a new rect must be measured in a row before it is adopted.
 constexpr int kBarConfirmFrames = 8;
 
-// The Y' value over which a Y'CbCr pixel is brighter than kBarLevel.
+// The Y' code over which a Y'CbCr pixel is brighter than kBarLevel (8-bit
+// levels; a code of the depth m converts: 10 bits for 10-bit parameters).
 inline int bar_luma_threshold(const YuvToRgb &m) {
-  return static_cast<int>(m.y_offset + static_cast<float>(kBarLevel) / m.y_scale);
+  return static_cast<int>(m.y_offset + static_cast<float>(kBarLevel) * (static_cast<float>(m.top) / 255.f) / m.y_scale);
 }
 
 P3D_HD bool bar_pixel_bright(const FrameView &f, int x, int y, int luma_threshold) {
+  if (is_rgba64(f.format)) {
+    const Rgba16 c = load_packed16(f, x, y);
+    const int brightest = c.r > c.g ? (c.r > c.b ? c.r : c.b) : (c.g > c.b ? c.g : c.b);
+    return brightest > kBarLevel * 257;
+  }
+  if (is_deep(f.format)) return load_code(f, 0, y, x) > luma_threshold;
   if (is_packed_rgb(f.format)) {
     const uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0] + 4 * x;
     const int brightest = p[0] > p[1] ? (p[0] > p[2] ? p[0] : p[2]) : (p[1] > p[2] ? p[1] : p[2]);

@@ -168,11 +168,18 @@ ChangeMap FrameHistory::compare(const FrameView &frame, float tolerance) {
               changed = std::memcmp(cur, old, static_cast<size_t>(b.b1 - b.b0)) != 0;
               continue;
             }
+            if (is_deep(format_)) {
+              const int n16 = (b.b1 - b.b0) / 2;
+              for (int i = 0; i < n16; ++i)
+                diff += static_cast<uint64_t>(std::abs(load_u16(cur, i) - load_u16(old, i)));
+              samples += static_cast<uint64_t>(n16);
+              continue;
+            }
             for (int i = 0; i < b.b1 - b.b0; ++i) diff += static_cast<uint64_t>(std::abs(cur[i] - old[i]));
             samples += static_cast<uint64_t>(b.b1 - b.b0);
           }
         }
-        if (tolerance > 0.f) changed = tile_over_tolerance(diff, samples, tolerance);
+        if (tolerance > 0.f) changed = tile_over_tolerance(diff, samples, tolerance * units_per_level(format_));
         if (!changed) continue;
         map.mark(tx, ty);
         for (int p = 0; p < n; ++p) {

@@ -92,14 +92,26 @@ struct PlaneBox {
   int b0, b1, r0, r1;
 };
 P3D_HD PlaneBox plane_box(PixelFormat f, int plane, const PixelRect &r) {
-  if (is_packed_rgb(f)) return PlaneBox{4 * r.x0, 4 * r.x1, r.y0, r.y1};
-  if (plane == 0) return PlaneBox{r.x0, r.x1, r.y0, r.y1};
-  const int c0 = r.x0 / 2, c1 = (r.x1 + 1) / 2, bytes = f == PixelFormat::NV12 ? 2 : 1;
+  if (is_packed_rgb(f)) {
+    const int px = packed_pixel_bytes(f);
+    return PlaneBox{px * r.x0, px * r.x1, r.y0, r.y1};
+  }
+  const int sb = sample_bytes(f);
+  if (plane == 0) return PlaneBox{sb * r.x0, sb * r.x1, r.y0, r.y1};
+  const int c0 = r.x0 / 2, c1 = (r.x1 + 1) / 2, bytes = sb * (is_semi_planar(f) ? 2 : 1);
   return PlaneBox{bytes * c0, bytes * c1, r.y0 / 2, (r.y1 + 1) / 2};
 }
 
+// How many units of a format's stored samples make one 8-bit level: 1 for
+// the 8-bit formats, 256 for 16-bit samples (P010's codes sit in the high
+// bits), 4 for I420_10's 10-bit codes.
+P3D_HD int units_per_level(PixelFormat f) {
+  return !is_deep(f) ? 1 : (f == PixelFormat::I420_10 ? 4 : 256);
+}
+
 // A tile compared with tolerance t > 0 (FrameHistory) counts as changed
-// when the mean |difference| of its `samples` bytes exceeds t.
+// when the mean |difference| of its `samples` samples exceeds t (in the
+// samples' units: t 8-bit levels times units_per_level()).
 P3D_HD bool tile_over_tolerance(unsigned long long diff, unsigned long long samples, float tolerance) {
   return samples > 0 && static_cast<double>(diff) > static_cast<double>(tolerance) * static_cast<double>(samples);
 }

@@ -159,4 +159,12 @@ P3D_HD uint8_t to_u8(float v) {
   return static_cast<uint8_t>(static_cast<int>(v + 0.5f));
 }
 
+// The same to an integer level 0..top (16-bit samples: 65535, 10-bit
+// codes: 1023).
+P3D_HD int to_level(float v, int top) {
+  const float t = static_cast<float>(top);
+  v = v < 0.f ? 0.f : (v > t ? t : v);
+  return static_cast<int>(v + 0.5f);
+}
+
 }  // namespace p3d

@@ -103,7 +103,7 @@ void filter_matrix(const bool *passed, bool as_luma, float *m) {
 
 bool packed_rgb_valid(const FrameView &f) {
   return is_packed_rgb(f.format) && f.plane[0] != nullptr && f.width > 0 && f.height > 0 &&
-         f.stride[0] >= 4 * f.width;
+         f.stride[0] >= packed_pixel_bytes(f.format) * f.width;
 }
 
 // A 4:2:0 frame with every plane present and no stride shorter than its row.
@@ -183,7 +183,10 @@ bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameV
       !enum_valid(kAnaglyphMethodNames, params.method) || !enum_valid(kStereoInputNames, params.input))
     return false;
   if (!packed_rgb_valid(in)) return false;
-  if (!(packed_rgb_valid(out) && in.format == out.format) && !yuv420_valid(out)) return false;
+  // The output keeps the input's depth: RGBA64 in, RGBA64 or 10-bit 4:2:0 out.
+  if (!(packed_rgb_valid(out) && in.format == out.format) &&
+      !(yuv420_valid(out) && is_deep(out.format) == is_deep(in.format) && params_fit(out.format, params.yuv)))
+    return false;
   int vw = 0, vh = 0, w = 0, h = 0;
   if (!input_view_size(params.input, in.width, in.height, &vw, &vh)) return false;
   pack_size(params.layout, vw, vh, &w, &h);
@@ -232,7 +235,8 @@ void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const F
 // The frame for input arrangement I: one loop instantiation per arrangement
 // (the per-pixel function inlines into it, as in the kernel).
 // only: the output rows to write (one flag a row), null: all.
-template <StereoInput I>
+// Px: Rgba, or Rgba16 for deep frames.
+template <StereoInput I, class Px>
 void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
                const std::vector<uint8_t> *only) {
   auto wanted = [only](int y) { return !only || (*only)[y]; };
@@ -241,16 +245,17 @@ void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const Frame
     cv::parallel_for_(cv::Range(0, bh), [&](const cv::Range &rows) {
       for (int by = rows.start; by < rows.end; ++by)
         if (wanted(2 * by) || (2 * by + 1 < out.height && wanted(2 * by + 1)))
-          for (int bx = 0; bx < bw; ++bx) pack_detail::pack_block_yuv<I>(params, am, in, out, bx, by);
+          for (int bx = 0; bx < bw; ++bx) pack_detail::pack_block_yuv<I, Px>(params, am, in, out, bx, by);
     });
     return;
   }
-  if (I == StereoInput::SideBySide && params.layout == PackLayout::Anaglyph && !am.linear_light)
+  if (I == StereoInput::SideBySide && params.layout == PackLayout::Anaglyph && !am.linear_light && !is_deep(in.format))
     return anaglyph_pair_rows(params, am, in, out, only);
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y)
       if (wanted(y))
-        for (int x = 0; x < out.width; ++x) store_rgba(out, x, y, pack_detail::pack_pixel_for<I>(params, am, in, x, y));
+        for (int x = 0; x < out.width; ++x)
+          store_pixel(out, x, y, pack_detail::pack_pixel_for<I, Px>(params, am, in, x, y));
   });
 }
 
@@ -277,6 +282,23 @@ void view_rows_read(StereoInput input, int in_height, int slot, int a, int b, in
       *lo = a;
       *hi = b;
       return;
+  }
+}
+
+// The frame, one instantiation of pack_rows per arrangement.
+template <class Px>
+void pack_frame(const PackParams &params, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
+                const std::vector<uint8_t> *rows) {
+  switch (params.input) {
+    case StereoInput::SideBySideHalf: return pack_rows<StereoInput::SideBySideHalf, Px>(params, am, in, out, rows);
+    case StereoInput::TopBottom: return pack_rows<StereoInput::TopBottom, Px>(params, am, in, out, rows);
+    case StereoInput::TopBottomHalf: return pack_rows<StereoInput::TopBottomHalf, Px>(params, am, in, out, rows);
+    case StereoInput::RowInterleaved: return pack_rows<StereoInput::RowInterleaved, Px>(params, am, in, out, rows);
+    case StereoInput::ColumnInterleaved:
+      return pack_rows<StereoInput::ColumnInterleaved, Px>(params, am, in, out, rows);
+    case StereoInput::Checkerboard: return pack_rows<StereoInput::Checkerboard, Px>(params, am, in, out, rows);
+    case StereoInput::SideBySide:
+    default: return pack_rows<StereoInput::SideBySide, Px>(params, am, in, out, rows);
   }
 }
 
@@ -321,16 +343,10 @@ void pack_cpu(const PackParams &params, const FrameView &in, const FrameView &ou
   if (!pack_args_valid(params, in, out) || (rows && static_cast<int>(rows->size()) != out.height))
     throw std::invalid_argument("pack_cpu: frames do not match the layout (see pack_args_valid)");
   const AnaglyphMatrices am = anaglyph_matrices(params.glasses, params.method);
-  switch (params.input) {
-    case StereoInput::SideBySideHalf: return pack_rows<StereoInput::SideBySideHalf>(params, am, in, out, rows);
-    case StereoInput::TopBottom: return pack_rows<StereoInput::TopBottom>(params, am, in, out, rows);
-    case StereoInput::TopBottomHalf: return pack_rows<StereoInput::TopBottomHalf>(params, am, in, out, rows);
-    case StereoInput::RowInterleaved: return pack_rows<StereoInput::RowInterleaved>(params, am, in, out, rows);
-    case StereoInput::ColumnInterleaved: return pack_rows<StereoInput::ColumnInterleaved>(params, am, in, out, rows);
-    case StereoInput::Checkerboard: return pack_rows<StereoInput::Checkerboard>(params, am, in, out, rows);
-    case StereoInput::SideBySide:
-    default: return pack_rows<StereoInput::SideBySide>(params, am, in, out, rows);
-  }
+  if (is_deep(in.format))
+    pack_frame<Rgba16>(params, am, in, out, rows);
+  else
+    pack_frame<Rgba>(params, am, in, out, rows);
 }
 
 }  // namespace p3d

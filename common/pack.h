@@ -6,7 +6,10 @@
 // input's format, or 4:2:0 Y'CbCr (NV12, I420) converted from the packed
 // pixels by store_yuv420_block() with PackParams::yuv, so that an encoder
 // takes the frame as it is (no CPU conversion, a third of the bytes to
-// download).
+// download). An RGBA64 input is packed with the same rules on its 16-bit
+// samples (Rgba16: the means in 16 bits, the gamma anaglyphs' fixed point
+// in 64 bits; DuboisLinear on the nearest 8-bit codes, widened) into
+// RGBA64 or 10-bit 4:2:0 (P010, I420_10), on the CPU.
 //
 // Input. PackParams::input says how the input frame (Win x Hin) holds the
 // two views, input_right_first whether the right view comes first (left
@@ -245,17 +248,29 @@ std::vector<uint8_t> pack_rows_reading(const PackParams &params, int in_width, i
 
 namespace pack_detail {
 
-P3D_HD Rgba pixel_at(const FrameView &in, int x, int y) {
-  const YuvToRgb unused;  // packed RGB only: the conversion is never applied
-  return load_rgba(in, x, y, unused);
+// Pixel (x, y) of the packed input: Px is Rgba for the 8-bit formats and
+// Rgba16 for RGBA64, whose 16-bit samples every layout keeps.
+template <class Px = Rgba>
+P3D_HD Px pixel_at(const FrameView &in, int x, int y) {
+  Px c;
+  load_pixel(in, x, y, &c);
+  return c;
 }
 
 // Rounded per-channel mean: what the half formats store for a pair of samples.
 P3D_HD uint8_t mean2(uint8_t a, uint8_t b) { return static_cast<uint8_t>((a + b + 1) / 2); }
-P3D_HD Rgba mean2(Rgba a, Rgba b) { return Rgba{mean2(a.r, b.r), mean2(a.g, b.g), mean2(a.b, b.b), mean2(a.a, b.a)}; }
+P3D_HD uint16_t mean2(uint16_t a, uint16_t b) { return static_cast<uint16_t>((a + b + 1) / 2); }
+template <class Px>
+P3D_HD Px mean2(Px a, Px b) {
+  return Px{mean2(a.r, b.r), mean2(a.g, b.g), mean2(a.b, b.b), mean2(a.a, b.a)};
+}
 // (3a + b + 2) / 4: a quarter of the way from sample a towards sample b.
 P3D_HD uint8_t mix31(uint8_t a, uint8_t b) { return static_cast<uint8_t>((3 * a + b + 2) / 4); }
-P3D_HD Rgba mix31(Rgba a, Rgba b) { return Rgba{mix31(a.r, b.r), mix31(a.g, b.g), mix31(a.b, b.b), mix31(a.a, b.a)}; }
+P3D_HD uint16_t mix31(uint16_t a, uint16_t b) { return static_cast<uint16_t>((3 * a + b + 2) / 4); }
+template <class Px>
+P3D_HD Px mix31(Px a, Px b) {
+  return Px{mix31(a.r, b.r), mix31(a.g, b.g), mix31(a.b, b.b), mix31(a.a, b.a)};
+}
 
 P3D_HD int clamp_index(int i, int n) { return i < 0 ? 0 : (i >= n ? n - 1 : i); }
 
@@ -296,23 +311,25 @@ P3D_HD void deinterleave(int X, int n, int slot, int *s0, int *s1) {
 }
 
 // View `slot` of a checkerboard frame at (x, y).
-P3D_HD Rgba checker_pixel(const FrameView &in, int slot, int x, int y) {
-  if (((x + y) & 1) == slot) return pixel_at(in, x, y);
+template <class Px = Rgba>
+P3D_HD Px checker_pixel(const FrameView &in, int slot, int x, int y) {
+  using C = decltype(Px{}.r);
+  if (((x + y) & 1) == slot) return pixel_at<Px>(in, x, y);
   const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
   int n = 0, r = 0, g = 0, b = 0, a = 0;
   for (int k = 0; k < 4; ++k) {
     const int xx = x + dx[k], yy = y + dy[k];
     if (xx < 0 || yy < 0 || xx >= in.width || yy >= in.height) continue;
-    const Rgba c = pixel_at(in, xx, yy);
+    const Px c = pixel_at<Px>(in, xx, yy);
     r += c.r;
     g += c.g;
     b += c.b;
     a += c.a;
     ++n;
   }
-  if (n == 0) return pixel_at(in, x, y);  // a 1x1 frame
-  return Rgba{static_cast<uint8_t>((r + n / 2) / n), static_cast<uint8_t>((g + n / 2) / n),
-              static_cast<uint8_t>((b + n / 2) / n), static_cast<uint8_t>((a + n / 2) / n)};
+  if (n == 0) return pixel_at<Px>(in, x, y);  // a 1x1 frame
+  return Px{static_cast<C>((r + n / 2) / n), static_cast<C>((g + n / 2) / n), static_cast<C>((b + n / 2) / n),
+            static_cast<C>((a + n / 2) / n)};
 }
 
 // Where the output's left (eye 0) or right (eye 1) view lies in the input
@@ -327,27 +344,27 @@ P3D_HD int view_slot(const PackParams &p, int eye) {
 // shows it (swap_eyes exchanges them), read from the input arrangement I
 // (a template argument, so the kernel of the common case, a side-by-side
 // pair, carries no code for the others).
-template <StereoInput I>
-P3D_HD Rgba view_pixel(const PackParams &p, const FrameView &in, int eye, int x, int y) {
+template <StereoInput I, class Px = Rgba>
+P3D_HD Px view_pixel(const PackParams &p, const FrameView &in, int eye, int x, int y) {
   const int slot = view_slot(p, eye);
   int a = 0, b = 0;
   switch (I) {
-    case StereoInput::TopBottom: return pixel_at(in, x, y + slot * (in.height / 2));
+    case StereoInput::TopBottom: return pixel_at<Px>(in, x, y + slot * (in.height / 2));
     case StereoInput::SideBySideHalf:
       unsqueeze(x, in.width, slot, &a, &b);
-      return mix31(pixel_at(in, a, y), pixel_at(in, b, y));
+      return mix31(pixel_at<Px>(in, a, y), pixel_at<Px>(in, b, y));
     case StereoInput::TopBottomHalf:
       unsqueeze(y, in.height, slot, &a, &b);
-      return mix31(pixel_at(in, x, a), pixel_at(in, x, b));
+      return mix31(pixel_at<Px>(in, x, a), pixel_at<Px>(in, x, b));
     case StereoInput::RowInterleaved:
       deinterleave(y, in.height, slot, &a, &b);
-      return mean2(pixel_at(in, x, a), pixel_at(in, x, b));
+      return mean2(pixel_at<Px>(in, x, a), pixel_at<Px>(in, x, b));
     case StereoInput::ColumnInterleaved:
       deinterleave(x, in.width, slot, &a, &b);
-      return mean2(pixel_at(in, a, y), pixel_at(in, b, y));
-    case StereoInput::Checkerboard: return checker_pixel(in, slot, x, y);
+      return mean2(pixel_at<Px>(in, a, y), pixel_at<Px>(in, b, y));
+    case StereoInput::Checkerboard: return checker_pixel<Px>(in, slot, x, y);
     case StereoInput::SideBySide:
-    default: return pixel_at(in, x + slot * (in.width / 2), y);
+    default: return pixel_at<Px>(in, x + slot * (in.width / 2), y);
   }
 }
 
@@ -401,6 +418,36 @@ P3D_HD Rgba anaglyph_gamma(const AnaglyphMatrices &am, Rgba l, Rgba r) {
   return word_rgba(anaglyph_mix_word(am.left_q, am.right_q, rgba_word(l), rgba_word(r)));
 }
 
+// The gamma mix of 16-bit pixels: anaglyph_mix_word()'s sums on 16-bit
+// channels, in 64 bits (6 * 65535 * 2^17 > 2^31), clipped to 0..65535.
+P3D_HD Rgba16 anaglyph_gamma16(const AnaglyphMatrices &am, Rgba16 l, Rgba16 r) {
+  const long long lc[3] = {l.r, l.g, l.b}, rc[3] = {r.r, r.g, r.b};
+  long long v[3];
+  for (int k = 0; k < 3; ++k) {
+    const long long sum = am.left_q[3 * k] * lc[0] + am.left_q[3 * k + 1] * lc[1] + am.left_q[3 * k + 2] * lc[2] +
+                          am.right_q[3 * k] * rc[0] + am.right_q[3 * k + 1] * rc[1] + am.right_q[3 * k + 2] * rc[2] +
+                          32768;
+    const long long q = sum >> 16;
+    v[k] = q < 0 ? 0 : (q > 65535 ? 65535 : q);
+  }
+  return Rgba16{static_cast<uint16_t>(v[0]), static_cast<uint16_t>(v[1]), static_cast<uint16_t>(v[2]), l.a};
+}
+
+// The 8-bit code nearest a 16-bit level (round(v / 257)).
+P3D_HD uint8_t nearest_code8(uint16_t v) { return static_cast<uint8_t>((v * 255u + 32767u) / 65535u); }
+P3D_HD Rgba nearest_codes8(Rgba16 c) {
+  return Rgba{nearest_code8(c.r), nearest_code8(c.g), nearest_code8(c.b), nearest_code8(c.a)};
+}
+
+P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r);
+// 16-bit views: the gamma methods mix the 16-bit values; DuboisLinear,
+// whose tables hold the 256 sRGB codes, mixes the views' nearest 8-bit
+// codes and widens the result.
+P3D_HD Rgba16 anaglyph(const AnaglyphMatrices &am, Rgba16 l, Rgba16 r) {
+  if (am.linear_light) return widen(anaglyph(am, nearest_codes8(l), nearest_codes8(r)));
+  return anaglyph_gamma16(am, l, r);
+}
+
 P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r) {
   if (am.linear_light) {
     Rgba o;
@@ -439,50 +486,50 @@ P3D_HD void view_size(StereoInput input, int in_width, int in_height, int *w, in
 }
 
 // pack_pixel for input arrangement I (p.input must be I).
-template <StereoInput I>
-P3D_HD Rgba pack_pixel_for(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
+template <StereoInput I, class Px = Rgba>
+P3D_HD Px pack_pixel_for(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, int X, int Y) {
   int w = 0, h = 0;
   view_size(I, in.width, in.height, &w, &h);
   switch (p.layout) {
     case PackLayout::SideBySide:
-      return X < w ? view_pixel<I>(p, in, 0, X, Y) : view_pixel<I>(p, in, 1, X - w, Y);
+      return X < w ? view_pixel<I, Px>(p, in, 0, X, Y) : view_pixel<I, Px>(p, in, 1, X - w, Y);
     case PackLayout::TopBottom:
-      return Y < h ? view_pixel<I>(p, in, 0, X, Y) : view_pixel<I>(p, in, 1, X, Y - h);
+      return Y < h ? view_pixel<I, Px>(p, in, 0, X, Y) : view_pixel<I, Px>(p, in, 1, X, Y - h);
     case PackLayout::SideBySideHalf: {
       int x0, x1;
       const int eye = half_source(X, w, &x0, &x1);
-      return mean2(view_pixel<I>(p, in, eye, x0, Y), view_pixel<I>(p, in, eye, x1, Y));
+      return mean2(view_pixel<I, Px>(p, in, eye, x0, Y), view_pixel<I, Px>(p, in, eye, x1, Y));
     }
     case PackLayout::TopBottomHalf: {
       int y0, y1;
       const int eye = half_source(Y, h, &y0, &y1);
-      return mean2(view_pixel<I>(p, in, eye, X, y0), view_pixel<I>(p, in, eye, X, y1));
+      return mean2(view_pixel<I, Px>(p, in, eye, X, y0), view_pixel<I, Px>(p, in, eye, X, y1));
     }
     case PackLayout::RowInterleaved:
-      return view_pixel<I>(p, in, Y & 1, X, Y);
+      return view_pixel<I, Px>(p, in, Y & 1, X, Y);
     case PackLayout::ColumnInterleaved:
-      return view_pixel<I>(p, in, X & 1, X, Y);
+      return view_pixel<I, Px>(p, in, X & 1, X, Y);
     case PackLayout::Checkerboard:
-      return view_pixel<I>(p, in, (X + Y) & 1, X, Y);
+      return view_pixel<I, Px>(p, in, (X + Y) & 1, X, Y);
     case PackLayout::Left:
-      return view_pixel<I>(p, in, 0, X, Y);
+      return view_pixel<I, Px>(p, in, 0, X, Y);
     case PackLayout::Right:
-      return view_pixel<I>(p, in, 1, X, Y);
+      return view_pixel<I, Px>(p, in, 1, X, Y);
     case PackLayout::Anaglyph:
     default:
-      return anaglyph(am, view_pixel<I>(p, in, 0, X, Y), view_pixel<I>(p, in, 1, X, Y));
+      return anaglyph(am, view_pixel<I, Px>(p, in, 0, X, Y), view_pixel<I, Px>(p, in, 1, X, Y));
   }
 }
 
 // The 2x2 block (bx, by) of a 4:2:0 output frame for input arrangement I:
 // its pixels packed as pack_pixel_for gives them, then converted.
-template <StereoInput I>
+template <StereoInput I, class Px = Rgba>
 P3D_HD void pack_block_yuv(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
                            int bx, int by) {
-  Rgba px[4];
+  Px px[4];
   for (int k = 0; k < 4; ++k) {
     const int x = 2 * bx + (k & 1), y = 2 * by + (k >> 1);
-    px[k] = x < out.width && y < out.height ? pack_pixel_for<I>(p, am, in, x, y) : Rgba{0, 0, 0, 0};
+    px[k] = x < out.width && y < out.height ? pack_pixel_for<I, Px>(p, am, in, x, y) : Px{0, 0, 0, 0};
   }
   store_yuv420_block(out, bx, by, px, p.yuv);
 }

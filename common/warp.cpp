@@ -37,12 +37,18 @@ struct Eye {
   int col0;
 };
 
-// The source row y converted once to R'G'B'A (load_rgba), as rgba_word()
-// words, as the GPU holds it in shared memory: both eyes sample it
-// (sample_word), so a pixel is converted once instead of twice per eye.
+// The pixels of the views: Rgba, or Rgba16 for deep frames (RGBA64 out),
+// held as rgba_word() words.
+template <class Px>
+using WordOf = decltype(rgba_word(Px{}));
+
+// The source row y converted once to R'G'B'A (load_rgba, load_rgba16), as
+// rgba_word() words, as the GPU holds it in shared memory: both eyes sample
+// it (sample_word), so a pixel is converted once instead of twice per eye.
 // A pair at a time, as the GPU does: a 4:2:0 pair shares its chroma.
+template <class Px>
 struct SourceRow {
-  std::vector<uint32_t> words;
+  std::vector<WordOf<Px>> words;
   explicit SourceRow(int width) : words(static_cast<size_t>(width)) {}
   void load(const WarpJob &j, int y) {
     for (int x = 0; x < j.width; x += 2) load_rgba_pair_words(j.src, x, y, j.m, words.data() + x);
@@ -51,27 +57,32 @@ struct SourceRow {
 
 // Where one eye's row y goes in the output (packed RGB, warp_frames_fit):
 // store_rgba() of a word, as one 4-byte copy with r and b swapped for the
-// BGR orders. The row pointer and the order are fixed per row, where
+// BGR orders (RGBA64: one 8-byte copy). The row pointer and the order are fixed per row, where
 // store_rgba() would read them again for every pixel (its byte stores may
 // alias the frame description).
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "rgba_word() words are stored in memory order");
+template <class Px>
 struct OutputRow {
+  static constexpr size_t kBytes = sizeof(WordOf<Px>);
   uint8_t *p;
   bool bgr;
   OutputRow(const FrameView &out, int col0, int y)
-      : p(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + 4 * static_cast<size_t>(col0)),
+      : p(out.plane[0] + static_cast<size_t>(y) * out.stride[0] + kBytes * static_cast<size_t>(col0)),
         bgr(is_bgr_order(out.format)) {}
-  void put(int x, uint32_t w) const {
-    if (bgr) w = swap_rb_word(w);
-    std::memcpy(p + 4 * static_cast<size_t>(x), &w, 4);
+  void put(int x, WordOf<Px> w) const {
+    if constexpr (kBytes == 4) {
+      if (bgr) w = swap_rb_word(w);
+    }
+    std::memcpy(p + kBytes * static_cast<size_t>(x), &w, kBytes);
   }
 };
 
 // Per-row scratch of a row task: the converted source row, every pixel's
 // read depth and target for the eye being scattered, the z-buffer keys and
 // the Background fill's nearest-right index.
+template <class Px>
 struct RowScratch {
-  SourceRow src;
+  SourceRow<Px> src;
   std::vector<float> depth, target;
   std::vector<Keys::Word> keys;
   std::vector<int> right, right_clean;  // right_clean: BackgroundSmooth only
@@ -84,7 +95,8 @@ struct RowScratch {
 // Z-buffer of row y: keys[X] = the largest key any source pixel offers X.
 // Each pixel's depth and target are computed once (warp_source would
 // compute them for x and again for x + 1) and linked with warp_link.
-void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
+template <class Px>
+void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
   std::vector<Keys::Word> &keys = r.keys;
   std::fill(keys.begin(), keys.end(), Keys::Word{0});
   const float *drow = j.depth.row(y);
@@ -104,10 +116,11 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r) {
 // Colours of the covered targets, sampled from the converted source row;
 // holes get kHoleColour for fill=None and are left for the fill otherwise.
 // Returns the row's hole count.
-long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &src,
+template <class Px>
+long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow<Px> &src,
                       const std::vector<Keys::Word> &keys) {
-  const OutputRow out(j.out, eye.col0, y);
-  const uint32_t *row = src.words.data();
+  const OutputRow<Px> out(j.out, eye.col0, y);
+  const WordOf<Px> *row = src.words.data();
   const bool paint = j.params.fill == HoleFill::None;
   long long holes = 0;
   for (int X = 0; X < j.width; ++X) {
@@ -115,7 +128,7 @@ long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &
       out.put(X, sample_word(row, j.width, Keys::u(keys[X], X)));
     } else {
       ++holes;
-      if (paint) out.put(X, rgba_word(kHoleColour));
+      if (paint) out.put(X, rgba_word(colour_as<Px>(kHoleColour)));
     }
   }
   return holes;
@@ -123,9 +136,9 @@ long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow &
 
 // Background fill of row y: right[X] = nearest non-hole right of X, then a
 // left-to-right pass that knows the nearest non-hole to the left.
+template <class Px>
 void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vector<Keys::Word> &keys,
                          std::vector<int> &right) {
-  const YuvToRgb packed;
   int next = -1;
   for (int X = j.width - 1; X >= 0; --X) {
     right[X] = next;
@@ -140,7 +153,9 @@ void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vec
     const int xr = right[X];
     const int pick = background_source(X, prev, key_depth_at<Keys>(keys.data(), prev), xr,
                                        key_depth_at<Keys>(keys.data(), xr));
-    store_rgba(j.out, eye.col0 + X, y, pick >= 0 ? load_rgba(j.out, eye.col0 + pick, y, packed) : kFillBlack);
+    Px c = colour_as<Px>(kFillBlack);
+    if (pick >= 0) load_pixel(j.out, eye.col0 + pick, y, &c);
+    store_pixel(j.out, eye.col0 + X, y, c);
   }
 }
 
@@ -149,18 +164,19 @@ void background_fill_row(const WarpJob &j, const Eye &eye, int y, const std::vec
 // hole, kSmoothHole: a hole without an anchor, kSmoothAnchor: a hole with
 // anchor[i]) and the holes' anchors.
 constexpr uint8_t kSmoothHole = 1, kSmoothAnchor = 2;
+template <class Px>
 struct EyeScratch {
   std::vector<uint8_t> mask;
   uint8_t *state = nullptr;  // in WarpCpuScratch
-  Rgba *anchor = nullptr;
+  Px *anchor = nullptr;
 };
 
 // BackgroundSmooth, row part: the state and anchor of every pixel of row y,
 // whose keys are final and whose non-holes are rendered. Clean pixels from
 // the distance to the nearest hole on either side (smooth_is_clean), then
 // each hole's nearest clean / non-hole pixel on either side.
-void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, EyeScratch &s) {
-  const YuvToRgb packed;
+template <class Px>
+void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r, EyeScratch<Px> &s) {
   const int W = j.width;
   const std::vector<Keys::Word> &keys = r.keys;
   uint8_t *clean = r.clean.data();
@@ -184,7 +200,7 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, E
   }
   const size_t base = static_cast<size_t>(y) * W;
   uint8_t *state = s.state + base;
-  Rgba *anchor = s.anchor + base;
+  Px *anchor = s.anchor + base;
   near_clean = -1;
   near_any = -1;
   for (int X = 0; X < W; ++X) {
@@ -200,7 +216,7 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, E
         background_source(X, xl, key_depth_at<Keys>(keys.data(), xl), xr, key_depth_at<Keys>(keys.data(), xr));
     if (pick < 0) continue;
     state[X] = kSmoothAnchor;
-    anchor[X] = load_rgba(j.out, eye.col0 + pick, y, packed);
+    load_pixel(j.out, eye.col0 + pick, y, &anchor[X]);
   }
 }
 
@@ -210,12 +226,13 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch &r, E
 // anchors for that fill (sized W x H by the caller).
 // holes[e]: eye e's hole count.
 // rows: the rows to warp (one flag a row), null: all.
-void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long long holes[2],
+template <class Px>
+void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch<Px> *scratch, long long holes[2],
                const std::vector<uint8_t> *rows_wanted) {
   std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
-    RowScratch row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
-    const SourceRow &src = row.src;
+    RowScratch<Px> row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
+    const SourceRow<Px> &src = row.src;
     const std::vector<Keys::Word> &keys = row.keys;
     long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
@@ -224,15 +241,15 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long lo
       for (int e = 0; e < 2; ++e) {
         const Eye &eye = eyes[e];
         if (eye.shift == 0.f) {
-          const OutputRow out(j.out, eye.col0, y);
+          const OutputRow<Px> out(j.out, eye.col0, y);
           for (int x = 0; x < j.width; ++x) out.put(x, src.words[x]);
           continue;
         }
         scatter_row(j, eye, y, row);
         const long long h = resolve_row(j, eye, y, src, keys);
         local[e] += h;
-        if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row(j, eye, y, keys, row.right);
-        EyeScratch &s = scratch[e];
+        if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row<Px>(j, eye, y, keys, row.right);
+        EyeScratch<Px> &s = scratch[e];
         if (j.params.fill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye, y, row, s);
         if (s.mask.empty()) continue;
         const size_t base = static_cast<size_t>(y) * j.width;
@@ -252,16 +269,21 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch *scratch, long lo
 // holes (rows lo..hi with their anchors' sum s), sliding it as y moves on,
 // so V(X, y) comes in row order and each row is filled as soon as its V
 // row is complete. Integer sums: the same result as any other order.
+template <class Px>
 struct ColumnWindow {
+  using Sum = typename SmoothSumFor<Px>::Type;
   int lo, hi;
-  SmoothSum s;
+  Sum s;
 };
 
-void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, int Rx, int y0, int y1,
-                 std::vector<ColumnWindow> &win, std::vector<SmoothSum> &V, std::vector<SmoothSum> &prefix) {
+template <class Px>
+void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int R, int Rx, int y0, int y1,
+                 std::vector<ColumnWindow<Px>> &win, std::vector<typename ColumnWindow<Px>::Sum> &V,
+                 std::vector<typename ColumnWindow<Px>::Sum> &prefix) {
+  using Sum = typename ColumnWindow<Px>::Sum;
   const int W = j.width, H = j.height;
   const uint8_t *state = es.state;
-  const Rgba *anchor = es.anchor;
+  const Px *anchor = es.anchor;
   auto at = [W](int y, int X) { return static_cast<size_t>(y) * W + X; };
   for (int y = y0; y < y1; ++y) {
     const uint8_t *row = state + at(y, 0);
@@ -269,12 +291,12 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, 
     for (int X = 0; X < W; ++X) {
       if (!row[X]) continue;
       any = true;
-      ColumnWindow &w = win[X];
+      ColumnWindow<Px> &w = win[X];
       if (y == y0 || !state[at(y - 1, X)]) {  // a new run, or the band's first row: lo = the run's start
         w.lo = y;
         while (w.lo > 0 && w.lo > y - R && state[at(w.lo - 1, X)]) --w.lo;
         w.hi = w.lo - 1;
-        w.s = SmoothSum{0, 0, 0, 0, 0};
+        w.s = Sum{0, 0, 0, 0, 0};
       }
       while (w.hi < y + R && w.hi + 1 < H && state[at(w.hi + 1, X)]) {
         ++w.hi;
@@ -282,8 +304,8 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, 
       }
       for (; w.lo < y - R; ++w.lo)
         if (state[at(w.lo, X)] == kSmoothAnchor) {
-          const Rgba c = anchor[at(w.lo, X)];
-          w.s = smooth_window(w.s, SmoothSum{c.r, c.g, c.b, c.a, 1u});
+          const Px c = anchor[at(w.lo, X)];
+          w.s = smooth_window(w.s, Sum{c.r, c.g, c.b, c.a, 1u});
         }
       V[X] = w.s;
     }
@@ -296,22 +318,24 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch &es, int R, 
         continue;
       }
       const int a = X;  // the run is columns a..b
-      prefix[0] = SmoothSum{0, 0, 0, 0, 0};
+      prefix[0] = Sum{0, 0, 0, 0, 0};
       for (; X < W && row[X]; ++X) {
         prefix[X - a + 1] = prefix[X - a];
         smooth_add(prefix[X - a + 1], V[X]);
       }
       const int b = X - 1;
       for (int t = a; t <= b; ++t) {
-        const SmoothSum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
-        store_rgba(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
+        const Sum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
+        store_pixel(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
       }
     }
   }
 }
 
 // rows: the rows to fill (one flag a row), null: all.
-void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &s, const std::vector<uint8_t> *rows) {
+template <class Px>
+void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &s,
+                            const std::vector<uint8_t> *rows) {
   const int R = smooth_fill_radius(eye.shift, j.D), Rx = smooth_fill_radius_x(R);
   // Bands of at least 2R rows, so that finding a run's start at a band's
   // first row (up to R rows up, holes only) stays a small share of the
@@ -331,8 +355,8 @@ void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &
     y = end;
   }
   cv::parallel_for_(cv::Range(0, static_cast<int>(bands.size())), [&](const cv::Range &r) {
-    std::vector<ColumnWindow> win(j.width);
-    std::vector<SmoothSum> V(j.width), prefix(static_cast<size_t>(j.width) + 1);
+    std::vector<ColumnWindow<Px>> win(j.width);
+    std::vector<typename ColumnWindow<Px>::Sum> V(j.width), prefix(static_cast<size_t>(j.width) + 1);
     for (int b = r.start; b < r.end; ++b) smooth_band(j, eye, s, R, Rx, bands[b].first, bands[b].second, win, V, prefix);
   });
 }
@@ -340,6 +364,7 @@ void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch &
 // NeighborAverage: Jacobi steps ping-ponging between two hole masks (reads
 // from `cur` only, so rows can run in parallel), until no hole is left or a
 // step fills nothing; what is left becomes kFillBlack.
+template <class Px>
 void neighbour_average_fill(const WarpJob &j, const Eye &eye, std::vector<uint8_t> &mask, long long holes) {
   std::vector<uint8_t> next(mask.size());
   std::vector<uint8_t> *cur = &mask, *nxt = &next;
@@ -352,10 +377,10 @@ void neighbour_average_fill(const WarpJob &j, const Eye &eye, std::vector<uint8_
         for (int X = 0; X < j.width; ++X) {
           const size_t i = y * W + X;
           uint8_t still = 0;
-          Rgba c;
+          Px c;
           if ((*cur)[i]) {
             if (neighbour_average(j.out, eye.col0, cur->data(), W, j.width, j.height, X, y, &c)) {
-              store_rgba(j.out, eye.col0 + X, y, c);
+              store_pixel(j.out, eye.col0 + X, y, c);
               ++local;
             } else {
               still = 1;
@@ -372,7 +397,7 @@ void neighbour_average_fill(const WarpJob &j, const Eye &eye, std::vector<uint8_
   if (holes <= 0) return;
   for (int y = 0; y < j.height; ++y)
     for (int X = 0; X < j.width; ++X)
-      if ((*cur)[y * W + X]) store_rgba(j.out, eye.col0 + X, y, kFillBlack);
+      if ((*cur)[y * W + X]) store_pixel(j.out, eye.col0 + X, y, colour_as<Px>(kFillBlack));
 }
 
 }  // namespace
@@ -408,42 +433,57 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   return warp_render_cpu(params, src, m, depth, out, planes, nullptr);
 }
 
-long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
-                          ImageView<const float> depth, const FrameView &out, WarpCpuScratch &planes,
-                          const std::vector<uint8_t> *rows) {
-  if (!warp_frames_fit(src, depth, out)) return -1;
-  if (rows && static_cast<int>(rows->size()) != src.height) return -1;
-  WarpJob j{warp_sanitize(params), src, m, depth, out, 0.f, src.width, src.height};
-  j.D = disparity_scale(j.params, j.width);
+namespace {
+
+// The anchor plane of eye e for the views' pixel type.
+std::vector<Rgba> &anchor_plane(WarpCpuScratch &planes, int e, const Rgba *) { return planes.smooth_anchor[e]; }
+std::vector<Rgba16> &anchor_plane(WarpCpuScratch &planes, int e, const Rgba16 *) { return planes.smooth_anchor16[e]; }
+
+template <class Px>
+long long render(WarpJob &j, WarpCpuScratch &planes, const std::vector<uint8_t> *rows) {
   const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
   const bool average = j.params.fill == HoleFill::NeighborAverage;
   const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
   // Every smooth state is written each frame and anchors are read only where
   // a state names one, so reused planes need no clearing.
-  EyeScratch scratch[2];
+  EyeScratch<Px> scratch[2];
   const size_t n = static_cast<size_t>(j.width) * j.height;
   for (int e = 0; e < 2; ++e) {
     if (eyes[e].shift == 0.f) continue;
     if (average) scratch[e].mask.resize(n);
     if (smooth) {
+      std::vector<Px> &anchors = anchor_plane(planes, e, static_cast<const Px *>(nullptr));
       planes.smooth_state[e].resize(n);
-      planes.smooth_anchor[e].resize(n);
+      anchors.resize(n);
       scratch[e].state = planes.smooth_state[e].data();
-      scratch[e].anchor = planes.smooth_anchor[e].data();
+      scratch[e].anchor = anchors.data();
     }
   }
   // NeighborAverage reaches across the picture: a changed row warps all.
   if (rows && average && std::find(rows->begin(), rows->end(), 1) != rows->end()) rows = nullptr;
   long long holes[2] = {0, 0};
-  warp_eyes(j, eyes, scratch, holes, rows);
+  warp_eyes<Px>(j, eyes, scratch, holes, rows);
   // The smooth fill of a row reads the rows within R: it runs on the rows
   // the changed ones reach, whatever their own hole counts.
   const std::vector<uint8_t> fill_rows = rows ? warp_rows_written(j.params, j.width, *rows) : std::vector<uint8_t>();
   for (int e = 0; e < 2; ++e) {
-    if (average && holes[e] > 0) neighbour_average_fill(j, eyes[e], scratch[e].mask, holes[e]);
-    if (smooth && eyes[e].shift != 0.f && (holes[e] > 0 || rows)) background_smooth_fill(j, eyes[e], scratch[e], rows ? &fill_rows : nullptr);
+    if (average && holes[e] > 0) neighbour_average_fill<Px>(j, eyes[e], scratch[e].mask, holes[e]);
+    if (smooth && eyes[e].shift != 0.f && (holes[e] > 0 || rows))
+      background_smooth_fill<Px>(j, eyes[e], scratch[e], rows ? &fill_rows : nullptr);
   }
   return holes[0] + holes[1];
+}
+
+}  // namespace
+
+long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
+                          ImageView<const float> depth, const FrameView &out, WarpCpuScratch &planes,
+                          const std::vector<uint8_t> *rows) {
+  if (!warp_frames_fit(src, depth, out) || !params_fit(src.format, m)) return -1;
+  if (rows && static_cast<int>(rows->size()) != src.height) return -1;
+  WarpJob j{warp_sanitize(params), src, m, depth, out, 0.f, src.width, src.height};
+  j.D = disparity_scale(j.params, j.width);
+  return is_deep(out.format) ? render<Rgba16>(j, planes, rows) : render<Rgba>(j, planes, rows);
 }
 
 }  // namespace p3d

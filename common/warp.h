@@ -33,6 +33,9 @@
 //    exact integer arithmetic).
 // All float maths is written once in the P3D_HD helpers below; cuda/ is
 // compiled with -fmad=false so the host and the device round identically.
+// A deep source (P010, I420_10, RGBA64) renders 16-bit views into RGBA64
+// with the same rules on 16-bit channels (Rgba16; the smooth fill's sums
+// in 64 bits), on the CPU.
 //
 // Precise reading of the rules above (warp_source / warp_span / warp_hit_at):
 //  * "X >= t(x) on a connected span" means t(x) <= X < t(x+1): a footprint
@@ -224,17 +227,21 @@ P3D_HD unsigned int key_depth_at(const typename Keys::Word *keys, int X) {
 // computes (tests/common/test_warp.cpp checks every a, b and k against the
 // float formula).
 P3D_HD int sample_channel(int a, int b, int k) { return (256 * a + (b - a) * k + 128) >> 8; }
-P3D_HD Rgba sample_row(const Rgba *row, int width, unsigned int u_code) {
+// Px: Rgba, or Rgba16 for the deep formats (16-bit channels: the same
+// integers, at most 65535 * 256 + 128 < 2^31).
+template <class Px>
+P3D_HD Px sample_row(const Px *row, int width, unsigned int u_code) {
+  using C = decltype(row->r);
   const unsigned int q = u_code - 1u;
   const int x0 = static_cast<int>(q >> 8);
   if (x0 >= width - 1) return row[width - 1];  // u = width - 1 exactly: k is 0
   const int k = static_cast<int>(q & 255u);
-  const Rgba a = row[x0], b = row[x0 + 1];
-  Rgba o;
-  o.r = static_cast<uint8_t>(sample_channel(a.r, b.r, k));
-  o.g = static_cast<uint8_t>(sample_channel(a.g, b.g, k));
-  o.b = static_cast<uint8_t>(sample_channel(a.b, b.b, k));
-  o.a = static_cast<uint8_t>(sample_channel(a.a, b.a, k));
+  const Px a = row[x0], b = row[x0 + 1];
+  Px o;
+  o.r = static_cast<C>(sample_channel(a.r, b.r, k));
+  o.g = static_cast<C>(sample_channel(a.g, b.g, k));
+  o.b = static_cast<C>(sample_channel(a.b, b.b, k));
+  o.a = static_cast<C>(sample_channel(a.a, b.a, k));
   return o;
 }
 
@@ -252,6 +259,15 @@ P3D_HD uint32_t sample_word(const uint32_t *row, int width, unsigned int u_code)
   const uint32_t rb = (((a & 0xff00ffu) * k0 + (b & 0xff00ffu) * k + 0x800080u) >> 8) & 0xff00ffu;
   const uint32_t ga = (((a >> 8) & 0xff00ffu) * k0 + ((b >> 8) & 0xff00ffu) * k + 0x800080u) & 0xff00ff00u;
   return rb | ga;
+}
+// The same on the 16-bit channels' words (rgba_word of Rgba16): channel by
+// channel, as sample_row().
+P3D_HD uint64_t sample_word(const uint64_t *row, int width, unsigned int u_code) {
+  const unsigned q = u_code - 1u;
+  const int x0 = static_cast<int>(q >> 8);
+  if (x0 >= width - 1) return row[width - 1];
+  const Rgba16 pair[2] = {word_rgba(row[x0]), word_rgba(row[x0 + 1])};
+  return rgba_word(sample_row(pair, 2, (q & 255u) + 1u));
 }
 
 // ---- Helpers shared by warp_render_cpu and WarpRendererGpu -------------
@@ -390,10 +406,11 @@ P3D_HD int background_source(int X, int xl, unsigned int depth_l, int xr, unsign
 // mask_pitch bytes) is the hole mask before this step (non-zero = hole).
 // Returns false when no neighbour is filled yet; else *c is the rounded mean.
 // Neighbours are visited dy outer, dx inner (integer sums: order free).
+template <class Px>
 P3D_HD bool neighbour_average(const FrameView &out, int col0, const uint8_t *mask, size_t mask_pitch, int width,
-                              int height, int X, int y, Rgba *c) {
-  const YuvToRgb packed;  // unused for the packed output formats
-  int n = 0, r = 0, g = 0, b = 0, a = 0;
+                              int height, int X, int y, Px *c) {
+  using C = decltype(c->r);
+  unsigned int n = 0, r = 0, g = 0, b = 0, a = 0;
   for (int dy = -1; dy <= 1; ++dy) {
     const int yy = y + dy;
     if (yy < 0 || yy >= height) continue;
@@ -401,7 +418,8 @@ P3D_HD bool neighbour_average(const FrameView &out, int col0, const uint8_t *mas
     for (int dx = -1; dx <= 1; ++dx) {
       const int xx = X + dx;
       if ((dx == 0 && dy == 0) || xx < 0 || xx >= width || mrow[xx]) continue;
-      const Rgba p = load_rgba(out, col0 + xx, yy, packed);
+      Px p;
+      load_pixel(out, col0 + xx, yy, &p);
       r += p.r;
       g += p.g;
       b += p.b;
@@ -410,10 +428,10 @@ P3D_HD bool neighbour_average(const FrameView &out, int col0, const uint8_t *mas
     }
   }
   if (n == 0) return false;
-  c->r = static_cast<uint8_t>((r + n / 2) / n);
-  c->g = static_cast<uint8_t>((g + n / 2) / n);
-  c->b = static_cast<uint8_t>((b + n / 2) / n);
-  c->a = static_cast<uint8_t>((a + n / 2) / n);
+  c->r = static_cast<C>((r + n / 2) / n);
+  c->g = static_cast<C>((g + n / 2) / n);
+  c->b = static_cast<C>((b + n / 2) / n);
+  c->a = static_cast<C>((a + n / 2) / n);
   return true;
 }
 
@@ -444,18 +462,26 @@ P3D_HD bool smooth_is_clean(const uint8_t *row, int X, int width) {
 P3D_HD int smooth_side(int clean, int any) { return clean >= 0 ? clean : any; }
 
 // Integer sums of anchors (per channel) and their count. At most
-// (2 Rx + 1)(2 R + 1) < 2^21 anchors of 255 each: no uint32 overflows.
-struct SmoothSum {
-  unsigned int r, g, b, a, n;
+// (2 Rx + 1)(2 R + 1) < 2^21 anchors of 255 each: no uint32 overflows; the
+// 16-bit channels of Rgba16 anchors sum in 64 bits (SmoothSum16).
+template <class Acc>
+struct SmoothSumOf {
+  Acc r, g, b, a;
+  unsigned int n;
 };
-P3D_HD void smooth_add(SmoothSum &s, Rgba c) {
+using SmoothSum = SmoothSumOf<unsigned int>;
+using SmoothSum16 = SmoothSumOf<unsigned long long>;
+// One anchor (Rgba into SmoothSum, Rgba16 into SmoothSum16).
+template <class Acc, class Px>
+P3D_HD void smooth_add(SmoothSumOf<Acc> &s, Px c) {
   s.r += c.r;
   s.g += c.g;
   s.b += c.b;
   s.a += c.a;
   s.n += 1u;
 }
-P3D_HD void smooth_add(SmoothSum &s, const SmoothSum &o) {
+template <class Acc>
+P3D_HD void smooth_add(SmoothSumOf<Acc> &s, const SmoothSumOf<Acc> &o) {
   s.r += o.r;
   s.g += o.g;
   s.b += o.b;
@@ -463,28 +489,43 @@ P3D_HD void smooth_add(SmoothSum &s, const SmoothSum &o) {
   s.n += o.n;
 }
 // The sums of prefix[hi] minus prefix[lo] (a window of prefix sums).
-P3D_HD SmoothSum smooth_window(const SmoothSum &hi, const SmoothSum &lo) {
-  return SmoothSum{hi.r - lo.r, hi.g - lo.g, hi.b - lo.b, hi.a - lo.a, hi.n - lo.n};
+template <class Acc>
+P3D_HD SmoothSumOf<Acc> smooth_window(const SmoothSumOf<Acc> &hi, const SmoothSumOf<Acc> &lo) {
+  return SmoothSumOf<Acc>{hi.r - lo.r, hi.g - lo.g, hi.b - lo.b, hi.a - lo.a, hi.n - lo.n};
 }
 // The rounded mean of a sum; kFillBlack for an empty one.
-P3D_HD Rgba smooth_mean(const SmoothSum &s) {
-  if (s.n == 0u) return kFillBlack;
-  const unsigned int h = s.n / 2u;
-  Rgba c;
-  c.r = static_cast<uint8_t>((s.r + h) / s.n);
-  c.g = static_cast<uint8_t>((s.g + h) / s.n);
-  c.b = static_cast<uint8_t>((s.b + h) / s.n);
-  c.a = static_cast<uint8_t>((s.a + h) / s.n);
+template <class Px, class Acc>
+P3D_HD Px smooth_mean_of(const SmoothSumOf<Acc> &s) {
+  using C = decltype(Px{}.r);
+  if (s.n == 0u) return colour_as<Px>(kFillBlack);
+  const Acc h = s.n / 2u;
+  Px c;
+  c.r = static_cast<C>((s.r + h) / s.n);
+  c.g = static_cast<C>((s.g + h) / s.n);
+  c.b = static_cast<C>((s.b + h) / s.n);
+  c.a = static_cast<C>((s.a + h) / s.n);
   return c;
 }
+P3D_HD Rgba smooth_mean(const SmoothSum &s) { return smooth_mean_of<Rgba>(s); }
+P3D_HD Rgba16 smooth_mean(const SmoothSum16 &s) { return smooth_mean_of<Rgba16>(s); }
+// The sum type of a pixel type's anchors.
+template <class Px>
+struct SmoothSumFor {
+  using Type = SmoothSum;
+};
+template <>
+struct SmoothSumFor<Rgba16> {
+  using Type = SmoothSum16;
+};
 
 // Whether the frames fit together: src W x H (W, H > 0), depth W x H (a
 // DepthGrid, the GPU's input, of that picture with cells that fit it), out
-// packed RGB 2W x H.
+// packed RGB 2W x H. A deep source renders 16-bit views (Rgba16) into an
+// RGBA64 output; the 8-bit formats render Rgba into 8-bit packed RGB.
 inline bool warp_frames_fit(const FrameView &src, const DepthGrid<const float> &depth, const FrameView &out) {
   return src.width > 0 && src.height > 0 && src.plane[0] && depth.cells.data && depth.width == src.width &&
          depth.height == src.height && grid_fits(depth) && out.plane[0] && is_packed_rgb(out.format) &&
-         out.width == 2 * src.width && out.height == src.height;
+         out.width == 2 * src.width && out.height == src.height && is_deep(src.format) == is_deep(out.format);
 }
 inline bool warp_frames_fit(const FrameView &src, ImageView<const float> depth, const FrameView &out) {
   return warp_frames_fit(src, full_grid(depth), out);
@@ -507,6 +548,7 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
 struct WarpCpuScratch {
   std::vector<uint8_t> smooth_state[2];
   std::vector<Rgba> smooth_anchor[2];
+  std::vector<Rgba16> smooth_anchor16[2];  // deep frames' anchors
 };
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch);

@@ -14,7 +14,9 @@
  * layout whose views are squeezed, the pixel-aspect-ratio of the input kept,
  * right-view-first exactly when swap-eyes puts the right view first.
  *
- * The output is in the input's packed RGB format, or NV12/I420 when
+ * The output is in the input's packed RGB format (RGBA64_LE pairs keep
+ * their 16 bits a sample), or 4:2:0 of the input's depth (NV12/I420,
+ * P010_10LE/I420_10LE) when
  * downstream asks for it (an encoder's caps): the pair is packed and
  * converted in one pass (BT.709/BT.601/BT.2020 and the range from the
  * output caps' colorimetry, chroma the mean of each 2x2 block), on the GPU
@@ -108,6 +110,7 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   const bool declared = p3d::gst::declared_input(g, &input);
   // Towards the sink, 4:2:0 output comes from any packed RGB input.
   const bool from_yuv = p3d::gst::names_yuv420(in);
+  const char *packed = p3d::gst::formats_for(p3d::gst::FormatKind::Packed, p3d::gst::format_depths(in));
 
   // Towards the sink: the input sizes that give this output. A declared
   // layout says nothing about the input's caps. From-caps lists first a
@@ -121,13 +124,13 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   for (const auto way : {p3d::gst::SizeWay::BackExact, p3d::gst::SizeWay::BackRounded}) {
     GstStructure *open = packing->through(in, way, g.layout, declared ? input : p3d::StereoInput::SideBySide);
     gst_structure_remove_fields(open, "multiview-mode", "multiview-flags", "views", NULL);
-    if (from_yuv) gst_pseudo3d_set_formats(open, P3D_PACKED_FORMATS);
+    if (from_yuv) gst_pseudo3d_set_formats(open, packed);
     caps = gst_caps_merge_structure(caps, open);
     if (declared) continue;
     for (const auto &name : p3d::kStereoInputNames) {
       const p3d::StereoInput arrangement = name.value;
       GstStructure *s = packing->through(in, way, g.layout, arrangement);
-      if (from_yuv) gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);
+      if (from_yuv) gst_pseudo3d_set_formats(s, packed);
       p3d::gst::set_multiview_fields(s, p3d::gst::arrangement_signal(arrangement, false),
                                      GST_VIDEO_MULTIVIEW_FLAGS_HALF_ASPECT);
       caps = gst_caps_merge_structure(caps, s);
@@ -166,6 +169,9 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
                                          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
                                          GST_VIDEO_INFO_HEIGHT(out), why ? why : "the output size does not fit the layout");
   }
+  if (p3d::gst::is_deep_info(in) != p3d::gst::is_deep_info(out))
+    return gst_pseudo3d_base_refuse_caps(base, p3d::gst::kDepthMismatchText, "input %s, output %s",
+                                         GST_VIDEO_INFO_NAME(in), GST_VIDEO_INFO_NAME(out));
   self->packing->set_negotiated(f.params, out);
   gst_base_transform_set_passthrough(GST_BASE_TRANSFORM(self), passes_through(f.params, in, out));
   return TRUE;
@@ -313,8 +319,9 @@ static void gst_pseudo3d_pack_class_init(GstPseudo3DPackClass *klass) {
                                         "Converts a stereo pair into anaglyph, side-by-side, top-bottom, "
                                         "interleaved or single-view output",
                                         "pseudo3d developers");
-  // Packed RGB in; out the same format, or NV12/I420 for encoders.
-  GstCaps *sink = p3d::gst::caps_all_domains(P3D_PACKED_FORMATS, 2 * p3d::kMaxFrameSide);
+  // Packed RGB in; out the same format, or 4:2:0 of its depth for encoders.
+  GstCaps *sink = p3d::gst::caps_all_domains(
+      p3d::gst::formats_for(p3d::gst::FormatKind::Packed, p3d::gst::kAnyDepth), 2 * p3d::kMaxFrameSide);
   GstCaps *src = p3d::gst::caps_all_domains(P3D_ALL_FORMATS, 2 * p3d::kMaxFrameSide);
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("sink", GST_PAD_SINK, GST_PAD_ALWAYS, sink));
   gst_element_class_add_pad_template(element_class, gst_pad_template_new("src", GST_PAD_SRC, GST_PAD_ALWAYS, src));

@@ -20,6 +20,10 @@
  * input's transfer and primaries; 4:2:0 as pseudo3dpack writes it), and
  * an anaglyph of PQ or HLG input is refused, as pseudo3dpack refuses it.
  *
+ * 10-bit input (P010_10LE, I420_10LE, system memory) and RGBA64_LE are
+ * rendered with 16 bits a sample, into RGBA64_LE, or P010_10LE/I420_10LE
+ * for encoders: the output keeps the input's depth.
+ *
  * Parallax of a pixel is max-disparity% x width x (depth - convergence):
  * depth above the convergence plane comes out of the screen.
  *
@@ -107,8 +111,9 @@ GST_ELEMENT_REGISTER_DEFINE(pseudo3dwarp, "pseudo3dwarp", GST_RANK_NONE, GST_TYP
 
 // Output: the layout's frame of the two views (the pair side by side, 2W x
 // H, by default), signalled as pseudo3dpack signals it, in a packed RGB
-// format or, for encoders, NV12/I420; the pixel aspect ratio is the
-// input's. Towards the sink: the input sizes that give it, in any format.
+// format or, for encoders, 4:2:0, of the input's sample depth; the pixel
+// aspect ratio is the input's. Towards the sink: the input sizes that give
+// it, in any format of the output's depth.
 static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, const GstStructure *in) {
   p3d::gst::StereoPacking *packing = GST_PSEUDO3D_WARP(base)->packing;
   const p3d::gst::PackingGeometry g = packing->negotiating();
@@ -118,7 +123,7 @@ static GstCaps *transform_geometry(GstPseudo3DBase *base, GstPadDirection from, 
   for (const auto way : {p3d::gst::SizeWay::BackExact, p3d::gst::SizeWay::BackRounded}) {
     GstStructure *s = packing->through(in, way, g.layout);
     gst_structure_remove_fields(s, "multiview-mode", "multiview-flags", "views", NULL);
-    gst_pseudo3d_set_formats(s, P3D_ALL_FORMATS);
+    gst_pseudo3d_set_formats(s, p3d::gst::formats_for(p3d::gst::FormatKind::All, p3d::gst::format_depths(in)));
     caps = gst_caps_merge_structure(caps, s);
   }
   return caps;
@@ -137,6 +142,9 @@ static gboolean set_info(GstPseudo3DBase *base, GstCaps *, GstVideoInfo *in, Gst
                                          GST_VIDEO_INFO_HEIGHT(in), GST_VIDEO_INFO_WIDTH(out),
                                          GST_VIDEO_INFO_HEIGHT(out), f.width, f.height);
   }
+  if (p3d::gst::is_deep_info(in) != p3d::gst::is_deep_info(out))
+    return gst_pseudo3d_base_refuse_caps(base, p3d::gst::kDepthMismatchText, "input %s, output %s",
+                                         GST_VIDEO_INFO_NAME(in), GST_VIDEO_INFO_NAME(out));
   packing->set_negotiated(f.params, out);
   return TRUE;
 }
@@ -177,7 +185,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   p3d::ActiveArea active{rect, pair};
   active.pair.width = 2 * rect.width();
   active.pair.height = rect.height();
-  active.pair.stride[0] = 4 * active.pair.width;
+  active.pair.stride[0] = p3d::packed_pixel_bytes(pair.format) * active.pair.width;
   if (rect.x0 != 0 || rect.x1 != src.width) {  // a pillarbox: the views are placed from their own buffer
     state->active_pair.resize(static_cast<size_t>(active.pair.stride[0]) * active.pair.height);
     active.pair.plane[0] = state->active_pair.data();

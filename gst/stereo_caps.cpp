@@ -94,7 +94,7 @@ void set_multiview_fields(GstStructure *s, const MultiviewSignal &sig, guint mas
 
 GstCaps *packed_output_caps(GstStructure *s) {
   GstStructure *yuv = gst_structure_copy(s);
-  gst_pseudo3d_set_formats(yuv, P3D_YUV420_FORMATS);
+  gst_pseudo3d_set_formats(yuv, formats_for(FormatKind::Yuv420, format_depths(s)));  // s's depth
   offer_yuv_colorimetry(s, yuv);
   gst_structure_set(yuv, "chroma-site", G_TYPE_STRING, "jpeg", NULL);
   return gst_caps_merge_structure(gst_pseudo3d_caps_of(s), yuv);
@@ -105,7 +105,8 @@ bool names_yuv420(const GstStructure *s) {
   if (!v) return false;
   auto is_yuv = [](const GValue *f) {
     const char *name = G_VALUE_HOLDS_STRING(f) ? g_value_get_string(f) : nullptr;
-    return name && (g_str_equal(name, "NV12") || g_str_equal(name, "I420"));
+    return name && (g_str_equal(name, "NV12") || g_str_equal(name, "I420") || g_str_equal(name, "P010_10LE") ||
+                    g_str_equal(name, "I420_10LE"));
   };
   if (!GST_VALUE_HOLDS_LIST(v)) return is_yuv(v);
   for (guint i = 0; i < gst_value_list_get_size(v); ++i)

@@ -8,6 +8,9 @@
 namespace p3d::gst {
 
 const char kNeedsSdrText[] = "An anaglyph needs SDR video: choose another layout for HDR (PQ or HLG) video";
+const char kDepthMismatchText[] =
+    "The output must keep the input's sample depth: 8-bit formats give 8-bit output, 10- and 16-bit formats "
+    "(P010_10LE, I420_10LE, RGBA64_LE) give P010_10LE, I420_10LE or RGBA64_LE";
 const char kNeedsSdrHint[] =
     "%s: choose another layout, which keeps the HDR signal, or convert the video to SDR first";
 
@@ -155,7 +158,7 @@ GstCaps *StereoPacking::output_caps(const GstStructure *in, const PackingGeometr
   }
   GstStructure *s = through(in, SizeWay::ToSrc, g.layout, arrangement);
   if (source_ == PairSource::Rendered) {
-    gst_pseudo3d_set_formats(s, P3D_PACKED_FORMATS);  // the rendered pair's
+    gst_pseudo3d_set_formats(s, formats_for(FormatKind::Packed, format_depths(in)));  // the rendered pair's, in's depth
     carry_colour_to_rgb(in, s);
   }
   set_multiview_fields(s, layout_signal(g.layout, g.swap_eyes), GST_FLAG_SET_MASK_EXACT);
@@ -236,10 +239,10 @@ PackParams StereoPacking::frame_params() {
 FrameView StereoPacking::pair_target(const PackParams &p, int view_width, int view_height, const FrameView &dst) {
   if (pack_is_identity(p) && is_packed_rgb(dst.format)) return dst;
   FrameView pair;
-  pair.format = is_packed_rgb(dst.format) ? dst.format : PixelFormat::RGBA;
+  pair.format = is_packed_rgb(dst.format) ? dst.format : (is_deep(dst.format) ? PixelFormat::RGBA64 : PixelFormat::RGBA);
   pair.width = 2 * view_width;
   pair.height = view_height;
-  pair.stride[0] = 4 * pair.width;  // enough for every packed RGB format
+  pair.stride[0] = packed_pixel_bytes(pair.format) * pair.width;
   pair_.resize(static_cast<size_t>(pair.stride[0]) * pair.height);
   pair.plane[0] = pair_.data();
   return pair;

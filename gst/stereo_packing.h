@@ -96,6 +96,8 @@ enum class InputFit {
 // with a %s for frame_for()'s *why.
 extern const char kNeedsSdrText[];
 extern const char kNeedsSdrHint[];
+// The refusal of output caps of another sample depth than the input's.
+extern const char kDepthMismatchText[];
 
 class StereoPacking {
  public:

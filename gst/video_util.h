@@ -6,11 +6,27 @@
 
 #include "frame.h"
 
-#define P3D_ALL_FORMATS "{ NV12, I420, RGBA, BGRA, RGBx, BGRx }"
-#define P3D_PACKED_FORMATS "{ RGBA, BGRA, RGBx, BGRx }"
-#define P3D_YUV420_FORMATS "{ NV12, I420 }"
+// Every format the stages take in system memory; CUDA memory carries the
+// 8-bit ones (caps_all_domains, keep_formats).
+#define P3D_ALL_FORMATS "{ NV12, I420, RGBA, BGRA, RGBx, BGRx, P010_10LE, I420_10LE, RGBA64_LE }"
 
 namespace p3d::gst {
+
+// Sample depths of formats: the 8-bit ones, and the deep ones (16-bit
+// samples: P010_10LE, I420_10LE, RGBA64_LE), as bits of a mask.
+enum FormatDepth : unsigned { kDepth8 = 1u, kDepth16 = 2u, kAnyDepth = 3u };
+// Kinds of the formats a stage writes: packed RGB (a rendered pair, the
+// pack's own input format), 4:2:0 Y'CbCr, or both.
+enum class FormatKind { Packed, Yuv420, All };
+// The formats of a kind at the depths of a mask, as a caps value string.
+const char *formats_for(FormatKind kind, unsigned depths);
+// The depths the format field of s names (kAnyDepth without one).
+unsigned format_depths(const GstStructure *s);
+// Leaves in the format field of s only the formats of the depths of a
+// mask; false when none is left (s is then unusable).
+bool keep_formats(GstStructure *s, unsigned depths);
+// Whether a negotiated format has deep samples.
+inline bool is_deep_info(const GstVideoInfo *info) { return GST_VIDEO_INFO_COMP_DEPTH(info, 0) > 8; }
 
 // FALSE for formats the plugin does not handle.
 bool pixel_format_from_gst(GstVideoFormat f, PixelFormat *out);
@@ -22,7 +38,8 @@ YuvToRgb yuv_params(const GstVideoInfo *info);
 RgbToYuv rgb_to_yuv(const GstVideoInfo *info);
 
 // Raw video of `formats` up to max_side pixels wide and high, in both memory
-// domains: CUDA memory first (preferred), then system memory.
+// domains: CUDA memory first (preferred; its 8-bit formats only), then
+// system memory.
 GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_fields = nullptr);
 
 }  // namespace p3d::gst

@@ -171,7 +171,9 @@ TEST(BilateralCpu, KeepsExactlyTheMapsItReturnsUnchanged) {
     BilateralParams p = default_filter_params();
     const cv::Mat out = filter(p, guide, depth);
     const bool same = std::memcmp(out.data, depth.data, depth.total() * sizeof(float)) == 0;
-    if (value == value) EXPECT_EQ(same, keeps) << value;
+    if (value == value) {
+      EXPECT_EQ(same, keeps) << value;
+    }
   }
   cv::Mat depth(h, w, CV_32FC1, cv::Scalar(0.25f));
   depth.at<float>(h - 1, w - 1) = 0.25000003f;

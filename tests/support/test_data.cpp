@@ -1,6 +1,8 @@
 #include "test_data.h"
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <cstdlib>
 
 #include <cstdio>
@@ -81,6 +83,23 @@ FloatDiff compare_f32(const cv::Mat &a, const cv::Mat &b) {
   return s;
 }
 
+cv::Mat deep_picture(int w, int h, uint32_t seed) {
+  std::mt19937 rng(seed);
+  cv::Mat m(h, w, CV_16UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      m.at<cv::Vec3w>(y, x) = cv::Vec3w(static_cast<uint16_t>((x * 65535) / w ^ (rng() & 0x3f)),
+                                        static_cast<uint16_t>((y * 65535) / h ^ (rng() & 0x3f)),
+                                        static_cast<uint16_t>(rng() & 0xffff));
+  for (int k = 0; k < 4; ++k) {
+    const int x0 = static_cast<int>(rng() % static_cast<uint32_t>(std::max(1, w / 2)));
+    const int y0 = static_cast<int>(rng() % static_cast<uint32_t>(std::max(1, h / 2)));
+    m(cv::Rect(x0, y0, std::max(1, w / 4), std::max(1, h / 4))) =
+        cv::Scalar(rng() & 0xffff, rng() & 0xffff, rng() & 0xffff);
+  }
+  return m;
+}
+
 const char *format_name(PixelFormat f) {
   switch (f) {
     case PixelFormat::NV12: return "NV12";
@@ -89,6 +108,9 @@ const char *format_name(PixelFormat f) {
     case PixelFormat::BGRA: return "BGRA";
     case PixelFormat::RGBx: return "RGBx";
     case PixelFormat::BGRx: return "BGRx";
+    case PixelFormat::P010: return "P010_10LE";
+    case PixelFormat::I420_10: return "I420_10LE";
+    case PixelFormat::RGBA64: return "RGBA64_LE";
   }
   return "?";
 }

@@ -46,9 +46,16 @@ struct FloatDiff {
 };
 FloatDiff compare_f32(const cv::Mat &a, const cv::Mat &b);
 
-// All six input formats, for parameterised tests.
+// A 16-bit BGR picture (CV_16UC3) whose samples use their low bits: ramps
+// with noise in the low bits and four flat boxes (depth edges, holes), for
+// the deep formats (HostFrame::from_bgr16).
+cv::Mat deep_picture(int w, int h, uint32_t seed);
+
+// The six 8-bit input formats, for parameterised tests (the CPU and the
+// GPU take them); the deep ones (16-bit samples) the CPU path takes.
 inline constexpr PixelFormat kAllFormats[] = {PixelFormat::NV12, PixelFormat::I420, PixelFormat::RGBA,
                                               PixelFormat::BGRA, PixelFormat::RGBx, PixelFormat::BGRx};
+inline constexpr PixelFormat kDeepFormats[] = {PixelFormat::P010, PixelFormat::I420_10, PixelFormat::RGBA64};
 inline constexpr PixelFormat kPackedFormats[] = {PixelFormat::RGBA, PixelFormat::BGRA, PixelFormat::RGBx,
                                                  PixelFormat::BGRx};
 const char *format_name(PixelFormat f);

@@ -1,5 +1,7 @@
 #include "host_frame.h"
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <opencv2/imgproc.hpp>
@@ -45,6 +47,11 @@ HostFrame HostFrame::from_bgr(const cv::Mat &bgr_in, PixelFormat format, int row
     cv::cvtColor(bgr_in, bgr, cv::COLOR_BGRA2BGR);
   else
     bgr = bgr_in;
+  if (is_deep(format)) {
+    cv::Mat wide;
+    bgr.convertTo(wide, CV_16UC3, 257.0);
+    return from_bgr16(wide, format, row_padding);
+  }
   HostFrame h(format, bgr.cols, bgr.rows, row_padding);
   const FrameView v = h.view();
   if (is_packed_rgb(format)) {
@@ -73,6 +80,50 @@ HostFrame HostFrame::from_bgr(const cv::Mat &bgr_in, PixelFormat format, int row
       } else {
         v.plane[1][y * v.stride[1] + x] = u;
         v.plane[2][y * v.stride[2] + x] = vv;
+      }
+    }
+  return h;
+}
+
+HostFrame HostFrame::from_bgr16(const cv::Mat &bgr, PixelFormat format, int row_padding) {
+  HostFrame h(format, bgr.cols, bgr.rows, row_padding);
+  const FrameView v = h.view();
+  auto rgb = [&](int x, int y, double c[3]) {
+    const cv::Vec3w p = bgr.at<cv::Vec3w>(std::min(y, bgr.rows - 1), std::min(x, bgr.cols - 1));
+    for (int k = 0; k < 3; ++k) c[k] = p[2 - k] / 65535.0;  // R, G, B in 0..1
+  };
+  auto code = [](double v) { return static_cast<int>(std::lround(std::clamp(v, 0.0, 1023.0))); };
+  if (is_packed_rgb(format)) {
+    for (int y = 0; y < bgr.rows; ++y)
+      for (int x = 0; x < bgr.cols; ++x) {
+        const cv::Vec3w p = bgr.at<cv::Vec3w>(y, x);
+        store_rgba16(v, x, y, Rgba16{p[2], p[1], p[0], 65535});
+      }
+    return h;
+  }
+  auto luma = [](const double c[3]) { return 0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2]; };
+  for (int y = 0; y < bgr.rows; ++y)
+    for (int x = 0; x < bgr.cols; ++x) {
+      double c[3];
+      rgb(x, y, c);
+      store_code(v, 0, y, x, code(64.0 + 876.0 * luma(c)));
+    }
+  for (int by = 0; by < (bgr.rows + 1) / 2; ++by)
+    for (int bx = 0; bx < (bgr.cols + 1) / 2; ++bx) {
+      double m[3] = {0, 0, 0};
+      for (int k = 0; k < 4; ++k) {
+        double c[3];
+        rgb(2 * bx + (k & 1), 2 * by + (k >> 1), c);
+        for (int i = 0; i < 3; ++i) m[i] += c[i] / 4.0;
+      }
+      const double yl = luma(m);
+      const int u = code(512.0 + 896.0 * (m[2] - yl) / 1.772), vv = code(512.0 + 896.0 * (m[0] - yl) / 1.402);
+      if (is_semi_planar(format)) {
+        store_code(v, 1, by, 2 * bx, u);
+        store_code(v, 1, by, 2 * bx + 1, vv);
+      } else {
+        store_code(v, 1, by, bx, u);
+        store_code(v, 2, by, bx, vv);
       }
     }
   return h;

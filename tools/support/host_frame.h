@@ -35,7 +35,13 @@ class HostFrame {
   // From an 8-bit BGR (CV_8UC3) or BGRA image: R'G'B' formats take the
   // pixels as they are; YUV formats get BT.601 limited-range Y'CbCr
   // (OpenCV's conversion), which the default YuvToRgb reads back.
+  // The deep formats take the 8-bit image widened (v * 257), as from_bgr16.
   static HostFrame from_bgr(const cv::Mat &bgr, PixelFormat format, int row_padding = 0);
+  // From a 16-bit BGR image (CV_16UC3) into a deep format: RGBA64 takes the
+  // pixels as they are; P010/I420_10 get BT.601 limited-range 10-bit
+  // Y'CbCr (each 2 x 2 block's chroma from its mean R'G'B'), which
+  // yuv_to_rgb_params(0.299, 0.114, false, 10) reads back.
+  static HostFrame from_bgr16(const cv::Mat &bgr16, PixelFormat format, int row_padding = 0);
 
   // The frame as 8-bit BGRA through load_rgba() (for metrics and PNG output).
   cv::Mat to_bgra(const YuvToRgb &m = YuvToRgb()) const;

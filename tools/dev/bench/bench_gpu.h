@@ -40,7 +40,9 @@ inline const std::vector<std::string> &stage_names() {
 
 // The format the warp renders into (and pack reads and writes): the input's
 // own packed RGB format, or RGBA for YUV input.
-inline PixelFormat stereo_format(PixelFormat input) { return is_packed_rgb(input) ? input : PixelFormat::RGBA; }
+inline PixelFormat stereo_format(PixelFormat input) {
+  return is_packed_rgb(input) ? input : (is_deep(input) ? PixelFormat::RGBA64 : PixelFormat::RGBA);
+}
 
 // Per-iteration times of one stage in milliseconds, in run order.
 struct StageTimes {

@@ -78,7 +78,8 @@ struct Options {
 
 const std::map<std::string, PixelFormat> kFormats = {
     {"NV12", PixelFormat::NV12}, {"I420", PixelFormat::I420}, {"RGBA", PixelFormat::RGBA},
-    {"BGRA", PixelFormat::BGRA}, {"RGBx", PixelFormat::RGBx}, {"BGRx", PixelFormat::BGRx}};
+    {"BGRA", PixelFormat::BGRA}, {"RGBx", PixelFormat::RGBx}, {"BGRx", PixelFormat::BGRx},
+    {"P010_10LE", PixelFormat::P010}, {"I420_10LE", PixelFormat::I420_10}, {"RGBA64_LE", PixelFormat::RGBA64}};
 
 template <typename T>
 std::string name_of(const std::map<std::string, T> &table, T value) {
@@ -108,7 +109,8 @@ void print_usage(std::ostream &os) {
         "  --device cpu|gpu        time only one device (default: both; GPU skipped if absent)\n"
         "  --size WxH              one frame size (repeatable or comma separated; default\n"
         "                          1280x720,1920x1080,3840x2160,7680x4320)\n"
-        "  --format F              input format: NV12 (default), I420, RGBA, BGRA, RGBx, BGRx\n"
+        "  --format F              input format: NV12 (default), I420, RGBA, BGRA, RGBx, BGRx; the CPU\n"
+        "                          also P010_10LE, I420_10LE, RGBA64_LE (16-bit views)\n"
         "  --layout L              pack layout (default anaglyph): "
      << p3d::enum_nicks(kPackLayoutNames) << "\n"
      << "  --radius N              bilateral radius (default 5)\n"
@@ -420,7 +422,12 @@ class Reporter {
 void convert_cpu(const FrameView &in, const YuvToRgb &m, const FrameView &out) {
   cv::parallel_for_(cv::Range(0, in.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y)
-      for (int x = 0; x < in.width; ++x) store_rgba(out, x, y, load_rgba(in, x, y, m));
+      for (int x = 0; x < in.width; ++x) {
+        if (is_deep(in.format))
+          store_rgba16(out, x, y, load_rgba16(in, x, y, m));
+        else
+          store_rgba(out, x, y, load_rgba(in, x, y, m));
+      }
   });
 }
 
@@ -442,7 +449,7 @@ struct CpuSizeBench {
     out_filtered.create(h, w, CV_32FC1);
     out_stereo = HostFrame(sf, 2 * w, h);
     out_packed = HostFrame(sf, pw, ph);
-    out_rgba = HostFrame(PixelFormat::RGBA, w, h);
+    out_rgba = HostFrame(is_deep(sf) ? PixelFormat::RGBA64 : PixelFormat::RGBA, w, h);
     for (const HostFrame &f : frames) {
       depth.emplace_back(h, w, CV_32FC1);
       filtered.emplace_back(h, w, CV_32FC1);
@@ -606,6 +613,16 @@ int run(int argc, char **argv) {
   // Scene mode runs one device: the CPU unless --device gpu.
   if (scene_mode) o.scene.gpu = o.device_given && o.want_gpu;
   if (scene_mode && !o.scene.gpu) o.want_gpu = false;
+  if (is_deep(o.format)) {
+    // The GPU stages and the scene chains take 8-bit formats.
+    if ((o.device_given && o.want_gpu) || scene_mode) {
+      std::cerr << "pseudo3d-bench: --format " << name_of(kFormats, o.format)
+                << " is timed on the CPU only, outside scene mode (the GPU stages take 8-bit formats)\n";
+      return kExitUsage;
+    }
+    o.want_gpu = false;
+    o.params.yuv = yuv_to_rgb_params(0.299, 0.114, false, 10);  // HostFrame's 10-bit Y'CbCr
+  }
   const int early = resolve_devices(o);
   if (early >= 0) return early;
   if (o.cpu_threads > 0) cv::setNumThreads(o.cpu_threads);
