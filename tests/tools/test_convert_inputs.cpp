@@ -1,10 +1,11 @@
 // pseudo3d-convert on the inputs of real films, clips made by GStreamer's
 // encoders, converted and read back with ffprobe:
 //  * HDR and 10-bit: HDR10 (PQ, mastering display, content light level),
-//    HLG and 10-bit SDR. The output states the input's transfer, primaries
-//    and matrix, and with H.265 the same mastering-display and light-level
-//    values; H.264 with HDR10 input says what it leaves out; an anaglyph
-//    of HDR input is refused with a message.
+//    HLG and 10-bit SDR. With H.265 the output is 10-bit Main10 and states
+//    the input's transfer, primaries and matrix and the same
+//    mastering-display and light-level values; 8-bit input stays 8-bit;
+//    H.264 with HDR10 input is 8-bit and says what it leaves out; an
+//    anaglyph of HDR input is refused with a message.
 //  * Interlaced: 576i (SAR 64:45) and 1080i come out progressive, a frame
 //    for each field, with the input's duration and SAR.
 #include <gtest/gtest.h>
@@ -95,7 +96,11 @@ TEST_F(ConvertInputs, H265KeepsTheInputsColourSignal) {
                                      "--force"});
       ASSERT_EQ(r.status, 0) << c.name << ext << ": " << r.err;
       const std::string what = std::string(c.name) + ext;
-      const std::string s = ffprobe_stream(out, "v:0", "color_transfer,color_primaries,color_space,color_range");
+      const std::string s =
+          ffprobe_stream(out, "v:0", "color_transfer,color_primaries,color_space,color_range,pix_fmt,profile");
+      EXPECT_EQ(ffprobe_value(s, "pix_fmt"), "yuv420p10le") << what;
+      EXPECT_EQ(ffprobe_value(s, "profile"), "Main 10") << what;
+      EXPECT_EQ(r.err.find("bits a sample"), std::string::npos) << what << ": no note of lost bits expected: " << r.err;
       EXPECT_EQ(ffprobe_value(s, "color_transfer"), c.transfer) << what;
       EXPECT_EQ(ffprobe_value(s, "color_primaries"), c.primaries) << what;
       EXPECT_EQ(ffprobe_value(s, "color_space"), c.space) << what;
@@ -113,6 +118,28 @@ TEST_F(ConvertInputs, H265KeepsTheInputsColourSignal) {
   }
 }
 
+// 8-bit SDR input stays 8-bit with either codec: H.265 Main, H.264 by default.
+TEST_F(ConvertInputs, EightBitInputStaysEightBit) {
+  const std::string in = dir_ + "/sdr8.mp4";
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=25 pattern=ball ! video/x-raw,format=I420,width=160,height=96,"
+                      "framerate=25/1 ! x265enc speed-preset=ultrafast ! h265parse ! mp4mux ! filesink location=" +
+                      in),
+            "");
+  for (const bool h265 : {true, false}) {
+    const std::string out = dir_ + (h265 ? "/sdr8-h265.mp4" : "/sdr8-h264.mp4");
+    std::vector<std::string> args = {in, out, "--preset", "ultrafast", "--processing", "cpu", "--force"};
+    if (h265) args.insert(args.end(), {"--codec", "h265"});
+    const ToolRun r = run_convert(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string s = ffprobe_stream(out, "v:0", "codec_name,pix_fmt,profile");
+    EXPECT_EQ(ffprobe_value(s, "codec_name"), h265 ? "hevc" : "h264");
+    EXPECT_EQ(ffprobe_value(s, "pix_fmt"), "yuv420p");
+    if (h265) {
+      EXPECT_EQ(ffprobe_value(s, "profile"), "Main");
+    }
+  }
+}
+
 // H.264 of HDR10: the colours are stated, and the converter says that the
 // mastering-display and light-level metadata is left out and how to keep it.
 TEST_F(ConvertInputs, H264OfHdr10SaysWhatItLeavesOut) {
@@ -124,7 +151,10 @@ TEST_F(ConvertInputs, H264OfHdr10SaysWhatItLeavesOut) {
   EXPECT_NE(r.err.find("mastering-display and light-level metadata is not written by x264enc"), std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("--codec h265 keeps it"), std::string::npos) << r.err;
-  const std::string s = ffprobe_stream(out, "v:0", "color_transfer,color_primaries");
+  EXPECT_NE(r.err.find("the input has 10 bits a sample; the output has 8 (--codec h265 keeps 10)"), std::string::npos)
+      << r.err;
+  const std::string s = ffprobe_stream(out, "v:0", "color_transfer,color_primaries,pix_fmt");
+  EXPECT_EQ(ffprobe_value(s, "pix_fmt"), "yuv420p");
   EXPECT_EQ(ffprobe_value(s, "color_transfer"), "smpte2084");
   EXPECT_EQ(ffprobe_value(s, "color_primaries"), "bt2020");
 }

@@ -56,15 +56,27 @@ const char *nvenc_preset(const std::string &p) {
 
 }  // namespace
 
+namespace {
+
+// Bits a sample of decoded caps (0: unknown).
+int sample_bits(const GstCaps *decoded) {
+  if (!decoded || gst_caps_is_empty(decoded)) return 0;
+  const gchar *format = gst_structure_get_string(gst_caps_get_structure(decoded, 0), "format");
+  const GstVideoFormatInfo *finfo = format ? gst_video_format_get_info(gst_video_format_from_string(format)) : nullptr;
+  return finfo ? static_cast<int>(GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0)) : 0;
+}
+
+}  // namespace
+
+bool has_deep_samples(const GstCaps *decoded) { return sample_bits(decoded) > 8; }
+
 std::string colour_loss(const GstCaps *decoded, const EncoderChoice &c) {
   if (!decoded || gst_caps_is_empty(decoded)) return "";
   const GstStructure *s = gst_caps_get_structure(decoded, 0);
   std::string loss;
-  const gchar *format = gst_structure_get_string(s, "format");
-  const GstVideoFormatInfo *finfo = format ? gst_video_format_get_info(gst_video_format_from_string(format)) : nullptr;
-  if (finfo && GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0) > 8)
-    loss = "the input has " + std::to_string(GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0)) +
-           " bits a sample; the 3D conversion and the output have 8";
+  const int bits = sample_bits(decoded);
+  if (bits > 8 && c.deep_format.empty())
+    loss = "the input has " + std::to_string(bits) + " bits a sample; the output has 8 (" + c.deep_hint + ")";
   const bool static_hdr = gst_structure_has_field(s, "mastering-display-info") ||
                           gst_structure_has_field(s, "content-light-level");
   if (static_hdr && c.factory != "x265enc" && c.factory != "nvh265enc") {
@@ -110,6 +122,16 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
   // Anaglyph colours sit in the chroma: 4:4:4 keeps them from bleeding
   // (x264 High 4:4:4, x265 Main 4:4:4). Packed stereo stays 4:2:0 for players.
   c->raw_format = layout == "anaglyph" && sink_accepts_format(c->factory.c_str(), "Y444") ? "Y444" : "I420";
+  // 10-bit input keeps 10 bits through the CPU stages into x265's Main10
+  // (Main 4:4:4 10 for anaglyphs).
+  const std::string deep = c->raw_format + "_10LE";
+  if (c->factory == "x265enc" && processing == Processing::Cpu && sink_accepts_format("x265enc", deep.c_str()))
+    c->deep_format = deep;
+  else if (processing == Processing::Gpu)
+    c->deep_hint = std::string("the GPU stages work in 8 bits: --processing cpu") + (h264 ? " --codec h265" : "") +
+                   " keeps 10";
+  else
+    c->deep_hint = h264 ? "--codec h265 keeps 10" : "x265enc here takes no 10-bit input";
   return true;
 }
 

@@ -15,6 +15,13 @@ struct EncoderChoice {
   std::string factory;     // x264enc, x265enc, nvh264enc, nvh265enc
   std::string parser;      // h264parse, h265parse
   std::string raw_format;  // what the encoder is fed: I420, or Y444 for anaglyphs
+  // What it is fed for input of more than 8 bits a sample, where the
+  // output keeps them: I420_10LE (Y444_10LE for anaglyphs) for x265enc's
+  // Main10 on the CPU path; empty where the output has 8 bits (H.264, and
+  // the GPU path, whose stages work in 8 bits).
+  std::string deep_format;
+  // Where deep_format is empty: what keeps 10 bits instead (for the note).
+  std::string deep_hint;
   // Whether the encoder writes the frame-packing SEI that carries the stereo
   // layout in the stream (only x264 does; pseudo3dsignal sets its eye order).
   bool writes_stereo_sei = false;
@@ -30,12 +37,16 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
 GstElement *make_encoder(const EncoderChoice &choice, const Options &o);
 
 // What the output loses of the decoded video's colour signal with this
-// encoder, as a note for the user; empty when nothing is lost. The 3D
-// stages work in 8 bits a sample, so deeper input loses its low bits;
-// only x265enc and nvh265enc write the mastering-display and light-level
+// encoder, as a note for the user; empty when nothing is lost. Deeper
+// input than 8 bits keeps its depth where the choice has a deep_format
+// and loses its low bits elsewhere; only x265enc and nvh265enc write the
+// mastering-display and light-level
 // metadata of HDR10 (the transfer, primaries and matrix every encoder
 // writes from the caps).
 std::string colour_loss(const GstCaps *decoded, const EncoderChoice &choice);
+
+// Whether decoded caps have more than 8 bits a sample.
+bool has_deep_samples(const GstCaps *decoded);
 
 // Default constant quality per codec: about the same visual quality.
 int default_crf(Codec codec);

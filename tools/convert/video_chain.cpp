@@ -104,21 +104,9 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
     apply_to_bin(o, convert_);
     gst_util_set_object_arg(G_OBJECT(convert_), "processing", processing_nick(processing));
   }
-  // The bin's warp packs into I420/NV12 itself, as pseudo3dpack would (on
-  // the GPU when the frames are there): a third of the bytes to download
-  // and no CPU conversion; the videoconvert after it then passes frames
-  // through. Other encoder formats (Y444 for anaglyphs) still go through
-  // videoconvert.
-  const bool packed_yuv = raw_format == "I420" || raw_format == "NV12";
-  subsampled_ = packed_yuv;
-  GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL)
-                            : gst_caps_from_string("video/x-raw");
-  g_object_set(to_system, "caps", sys, NULL);
-  gst_caps_unref(sys);
+  to_system_ = to_system;
+  use_format(raw_format);
   g_object_set(vconv, "n-threads", 0u, NULL);  // 0 = one per core
-  GstCaps *fmt = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL);
-  g_object_set(tail_, "caps", fmt, NULL);
-  gst_caps_unref(fmt);
   for (GstElement *e : all) gst_bin_add(GST_BIN(bin), e);
   if (!gst_element_link_many(convert_, to_system, q2, vconv, tail_, NULL)) {
     *error = "could not link the 3D conversion to the encoder's format";
@@ -126,6 +114,23 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   }
   head_sink_ = gst_element_get_static_pad(head_, "sink");
   return true;
+}
+
+void VideoChain::use_format(const std::string &raw_format) {
+  // The bin's warp packs into 4:2:0 itself (8 or 10 bits), as pseudo3dpack
+  // would (on the GPU when the frames are there): a third of the bytes to
+  // download and no CPU conversion; the videoconvert after it then passes
+  // frames through. Other encoder formats (Y444 for anaglyphs) still go
+  // through videoconvert.
+  const bool packed_yuv = raw_format == "I420" || raw_format == "NV12" || raw_format == "I420_10LE";
+  subsampled_ = packed_yuv;
+  GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL)
+                            : gst_caps_from_string("video/x-raw");
+  g_object_set(to_system_, "caps", sys, NULL);
+  gst_caps_unref(sys);
+  GstCaps *fmt = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL);
+  g_object_set(tail_, "caps", fmt, NULL);
+  gst_caps_unref(fmt);
 }
 
 GstCaps *video_caps_for(Processing processing) {

@@ -34,6 +34,9 @@ class VideoChain {
   // with refusal() saying why when the chain refused the stream.
   bool attach(GstPad *decoded, const GstCaps *caps);
   const std::string &refusal() const { return refusal_; }
+  // Feeds the encoder `raw_format` instead of build()'s: before attach(),
+  // while no caps have passed the chain (10-bit input for a Main10 encoder).
+  void use_format(const std::string &raw_format);
   // What the chain takes, for decoders' caps queries (new ref).
   GstCaps *accepted_caps() const;
   // Counts frames reaching the encoder into `progress`, with their position
@@ -55,7 +58,7 @@ class VideoChain {
   ~VideoChain();
 
  private:
-  GstElement *bin_ = nullptr, *head_ = nullptr, *convert_ = nullptr, *tail_ = nullptr;
+  GstElement *bin_ = nullptr, *head_ = nullptr, *convert_ = nullptr, *tail_ = nullptr, *to_system_ = nullptr;
   GstPad *head_sink_ = nullptr;
   GstPad *counted_ = nullptr;  // where count_frames() counts, and its probe
   gulong count_probe_ = 0;
