@@ -6,8 +6,9 @@
 
 namespace p3d {
 
-// The formats every element accepts. Packed RGB formats are 4 bytes a pixel
-// in memory order given by the name (RGBx: R,G,B,unused). NV12/I420 are
+// The formats the stages accept (CUDA memory: the 8-bit ones). The 8-bit
+// packed RGB formats are 4 bytes a pixel in memory order given by the name
+// (RGBx: R,G,B,unused). NV12/I420 are
 // 4:2:0 with chroma sited at the top-left of each 2x2 block (nearest chroma
 // is used; no interpolation), 8 bits. The deep formats hold 16-bit
 // little-endian samples: P010 (GStreamer's P010_10LE) is NV12's layout with
@@ -37,6 +38,9 @@ P3D_HD bool is_yuv420(PixelFormat f) {
 P3D_HD bool is_packed_rgb(PixelFormat f) { return !is_yuv420(f); }
 // 4:2:0 formats whose second plane interleaves Cb and Cr (NV12, P010).
 P3D_HD bool is_semi_planar(PixelFormat f) { return f == PixelFormat::NV12 || (is_deep(f) && f == PixelFormat::P010); }
+// Whether the kernels take a format (host code, before a launch): the
+// 8-bit formats; the deep ones are the CPU path's.
+inline bool kernels_take(PixelFormat f) { return !is_deep(f); }
 // Bytes of one sample (one channel of a pixel, one Y', Cb or Cr).
 P3D_HD int sample_bytes(PixelFormat f) { return is_deep(f) ? 2 : 1; }
 // Bytes of one packed RGB pixel.

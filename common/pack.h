@@ -442,9 +442,13 @@ P3D_HD Rgba nearest_codes8(Rgba16 c) {
 P3D_HD Rgba anaglyph(const AnaglyphMatrices &am, Rgba l, Rgba r);
 // 16-bit views: the gamma methods mix the 16-bit values; DuboisLinear,
 // whose tables hold the 256 sRGB codes, mixes the views' nearest 8-bit
-// codes and widens the result.
+// codes and widens the result (alpha: L's 16 bits).
 P3D_HD Rgba16 anaglyph(const AnaglyphMatrices &am, Rgba16 l, Rgba16 r) {
-  if (am.linear_light) return widen(anaglyph(am, nearest_codes8(l), nearest_codes8(r)));
+  if (am.linear_light) {
+    Rgba16 o = widen(anaglyph(am, nearest_codes8(l), nearest_codes8(r)));
+    o.a = l.a;  // alpha from L, as every method keeps it
+    return o;
+  }
   return anaglyph_gamma16(am, l, r);
 }
 

@@ -47,6 +47,8 @@ __global__ void views_outside_kernel(const FrameView src, const YuvToRgb m, cons
 }  // namespace
 
 CudaStatus BarCountsGpu::count(const FrameView &frame, int luma_threshold, cudaStream_t stream) {
+  if (!kernels_take(frame.format))
+    return CudaStatus{cudaErrorInvalidValue, "BarCountsGpu::count: the kernels take 8-bit frames", __FILE__, __LINE__};
   const size_t values = static_cast<size_t>(frame.width) + frame.height;
   P3D_CUDA_TRY_STATUS(counts_.ensure(values * sizeof(uint32_t)));
   if (host_values_ < values) {

@@ -556,6 +556,8 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
   if (static_cast<const void *>(depth_in.cells.data) == static_cast<const void *>(depth_out.cells.data))
     return invalid("BilateralFilterGpu::run: depth_in aliases depth_out", __LINE__);
   if (guide.plane[0] == nullptr) return invalid("BilateralFilterGpu::run: guide has no plane 0", __LINE__);
+  if (!kernels_take(guide.format))
+    return invalid("BilateralFilterGpu::run: the kernels take 8-bit guides", __LINE__);
   if (dirty.flags && (kept.width != depth_out.width || kept.height != depth_out.height ||
                       kept.shift != depth_out.shift || kept.cells.width != depth_out.cells.width ||
                       kept.cells.height != depth_out.cells.height))

@@ -586,6 +586,9 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
 CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth,
                                        cudaStream_t stream, const TileFlags *changes) {
   const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
+  if (!kernels_take(frame.format))
+    return CudaStatus{cudaErrorInvalidValue, "DepthEstimatorGpu::estimate: the kernels take 8-bit frames", __FILE__,
+                      __LINE__};
   if (W <= 0 || H <= 0) {
     reset();
     return {};

@@ -168,8 +168,9 @@ CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t s
 
 CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream,
                     StageGate gate) {
-  if (!pack_args_valid(params, in, out))
-    return CudaStatus{cudaErrorInvalidValue, "pack_gpu: pack_args_valid(params, in, out)", __FILE__, __LINE__};
+  if (!pack_args_valid(params, in, out) || !kernels_take(in.format) || !kernels_take(out.format))
+    return CudaStatus{cudaErrorInvalidValue, "pack_gpu: pack_args_valid(params, in, out), 8-bit formats", __FILE__,
+                      __LINE__};
   const PackKernelParams kp{params, anaglyph_matrices(params.glasses, params.method), in, out, gate};
   const bool vec = use_vector_stores(params, out);
   switch (params.input) {

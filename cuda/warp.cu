@@ -56,7 +56,7 @@ CudaStatus allow_shared_memory(const void *kernel, int smem_optin, std::vector<c
 }
 
 CudaStatus invalid_frames() {
-  return CudaStatus{cudaErrorInvalidValue, "warp_frames_fit(src, depth, out)", __FILE__, __LINE__};
+  return CudaStatus{cudaErrorInvalidValue, "warp_frames_fit(src, depth, out), 8-bit formats", __FILE__, __LINE__};
 }
 
 }  // namespace warp_detail
@@ -79,7 +79,7 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
                                         DepthGrid<const float> depth, const FrameView &out,
                                         const FusedAnaglyph *fused_request, cudaStream_t stream, long long *holes_out,
                                         bool *fused_used, StageGate gate) {
-  if (!warp_frames_fit(src, depth, out)) return invalid_frames();
+  if (!warp_frames_fit(src, depth, out) || !kernels_take(src.format)) return invalid_frames();
   const WarpParams p = warp_sanitize(params);
   const int W = src.width, H = src.height;
   const float D = disparity_scale(p, W);

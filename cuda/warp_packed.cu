@@ -131,7 +131,7 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
   pair.height = H;
   pair.plane[0] = pair_.as<uint8_t>();
   pair.stride[0] = 8 * W;
-  if (!pack_args_valid(pp, pair, out))
+  if (!pack_args_valid(pp, pair, out) || !kernels_take(src.format) || !kernels_take(out.format))
     return CudaStatus{cudaErrorInvalidValue, "render_packed: pack_args_valid(pack, pair, out)", __FILE__, __LINE__};
   // The gamma mixes fuse (dubois-linear mixes in linear light, in float).
   FusedAnaglyph fused{};

@@ -130,7 +130,8 @@ GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_f
   g_free(sys);
 #if HAVE_CUDA
   GstCaps *cuda = gst_caps_copy(caps);
-  for (guint i = 0; i < gst_caps_get_size(cuda); ++i) keep_formats(gst_caps_get_structure(cuda, i), kDepth8);
+  for (guint i = gst_caps_get_size(cuda); i > 0; --i)
+    if (!keep_formats(gst_caps_get_structure(cuda, i - 1), kDepth8)) gst_caps_remove_structure(cuda, i - 1);
   gst_caps_set_features_simple(cuda, gst_caps_features_new(GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY, NULL));
   caps = gst_caps_merge(cuda, caps);
 #endif

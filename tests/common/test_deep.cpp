@@ -72,6 +72,7 @@ TEST(DeepFormats, EightBitReadersTakeTheHighBits) {
         if (f == PixelFormat::RGBA64) {
           const Rgba16 c = load_packed16(v, x, y);
           EXPECT_EQ(native[0], c.r >> 8);
+          EXPECT_EQ(native[1], c.g >> 8);
           EXPECT_EQ(native[2], c.b >> 8);
           continue;
         }
@@ -184,6 +185,11 @@ TEST(DeepWarp, ParametersOfAnotherDepthAreRefused) {
                             depth_view_of(depth), out8.view()),
             -1)
       << "deep frames render 16-bit views";
+  const HostFrame nv12 = HostFrame::from_bgr(cv::Mat(8, 16, CV_8UC3, cv::Scalar(90, 120, 30)), PixelFormat::NV12);
+  EXPECT_EQ(warp_render_cpu(WarpParams{}, nv12.view(), yuv_to_rgb_params(0.299, 0.114, false, 10),
+                            depth_view_of(depth), out8.view()),
+            -1)
+      << "10-bit parameters, 8-bit frame";
 }
 
 HostFrame pair16(int w, int h, uint32_t seed) {
@@ -305,8 +311,6 @@ TEST(DeepPack, TenBitYuvOutputAgreesWithEightBit) {
   }
 }
 
-// A change in a sample's low bits alone is a change (exact comparison),
-// and a tolerance counts 8-bit levels at every depth.
 // Letterbox bars of a deep frame: their rows count no bright pixel, the
 // picture's rows do (the threshold at the frame's depth).
 TEST(DeepFormats, BarsAreFoundAtEveryDepth) {
@@ -330,6 +334,26 @@ int changed_tiles(const ChangeMap &m) {
   return n;
 }
 
+// Every stored sample of tile (1, 1) moved by `units` (down where up
+// would leave the 16 bits).
+void shift_tile(HostFrame &frame, int units) {
+  const FrameView v = frame.view();
+  const PixelRect tile = tile_pixels(1, 1, v.width, v.height);
+  for (int p = 0; p < frame_plane_count(v.format); ++p) {
+    const PlaneBox box = plane_box(v.format, p, tile);
+    for (int y = box.r0; y < box.r1; ++y) {
+      uint8_t *row = v.plane[p] + static_cast<size_t>(y) * v.stride[p];
+      for (int i = box.b0 / 2; i < box.b1 / 2; ++i) {
+        const int s = load_u16(row, i);
+        store_u16(row, i, s + units <= 65535 - 63 ? s + units : s - units);
+      }
+    }
+  }
+}
+
+// A change in a sample's low bits alone is a change (exact comparison),
+// and a tolerance counts 8-bit levels at every depth: a tile moved by 3/4
+// of a level is over a tolerance of 1/2, one moved by 1/4 under it.
 TEST(DeepFormats, ChangeMapSeesTheLowBits) {
   for (PixelFormat f : test::kDeepFormats) {
     const HostFrame a = HostFrame::from_bgr16(test::deep_picture(64, 64, 13), f);
@@ -337,14 +361,19 @@ TEST(DeepFormats, ChangeMapSeesTheLowBits) {
     // The lowest bit of the code of one sample of tile (1, 1).
     const int low = f == PixelFormat::P010 ? 1 << 6 : 1;
     uint8_t *p = b.view().plane[0] + 40 * b.view().stride[0] + 2 * (f == PixelFormat::RGBA64 ? 4 * 40 : 40);
-    const int v = load_u16(p, 0);
-    store_u16(p, 0, v ^ low);
+    store_u16(p, 0, load_u16(p, 0) ^ low);
     FrameHistory history;
     history.compare(a.view(), 0.f);
     EXPECT_EQ(changed_tiles(history.compare(b.view(), 0.f)), 1) << test::format_name(f);
-    FrameHistory tolerant;
-    tolerant.compare(a.view(), 0.5f);
-    EXPECT_EQ(changed_tiles(tolerant.compare(b.view(), 0.5f)), 0) << test::format_name(f);
+    const int level = units_per_level(f);
+    for (const int quarters : {3, 1}) {
+      HostFrame c = a;
+      shift_tile(c, quarters * level / 4);
+      FrameHistory tolerant;
+      tolerant.compare(a.view(), 0.5f);
+      EXPECT_EQ(changed_tiles(tolerant.compare(c.view(), 0.5f)), quarters == 3 ? 1 : 0)
+          << test::format_name(f) << ", " << quarters << "/4 of a level";
+    }
   }
 }
 

@@ -85,9 +85,17 @@ cv::Mat buffer_to_bgra(GstBuffer *buf, GstCaps *caps) {
   if (!gst_video_frame_map(&vf, &info, buf, GST_MAP_READ)) return cv::Mat();
   FrameView v;
   const char *name = gst_video_format_to_string(GST_VIDEO_INFO_FORMAT(&info));
+  bool known = false;
   for (PixelFormat f : {PixelFormat::NV12, PixelFormat::I420, PixelFormat::RGBA, PixelFormat::BGRA, PixelFormat::RGBx,
                         PixelFormat::BGRx})
-    if (!strcmp(name, gst_format_name(f))) v.format = f;
+    if (!strcmp(name, gst_format_name(f))) {
+      v.format = f;
+      known = true;
+    }
+  if (!known) {  // the 8-bit formats only (load_rgba with 8-bit parameters)
+    gst_video_frame_unmap(&vf);
+    return cv::Mat();
+  }
   v.width = info.width;
   v.height = info.height;
   for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(&vf); ++p) {

@@ -148,7 +148,7 @@ TEST(DeepElements, AdaptiveChangesNoByte) {
 }
 
 // The output keeps the input's sample depth: an 8-bit output for 10-bit
-// input (or the reverse) does not negotiate, and says why.
+// input (or the reverse) does not negotiate (the caps offer none).
 TEST(DeepElements, OutputKeepsTheInputsDepth) {
   const std::string ok = run_to_eos(
       "videotestsrc num-buffers=2 ! video/x-raw,format=P010_10LE,width=64,height=48 ! pseudo3dconvert "
@@ -163,7 +163,8 @@ TEST(DeepElements, OutputKeepsTheInputsDepth) {
 }
 
 // CUDA memory carries 8-bit formats only: no template of a stage offers a
-// deep format there (the GPU stages work in 8 bits).
+// deep format there (the GPU stages work in 8 bits). Without CUDA the
+// templates have no CUDA structure, and this checks the system-memory side.
 TEST(DeepElements, CudaMemoryTemplatesAreEightBit) {
   for (const char *name : {"pseudo3ddepth", "pseudo3dfilter", "pseudo3dwarp", "pseudo3dpack"}) {
     GstElementFactory *factory = gst_element_factory_find(name);

@@ -29,6 +29,7 @@ struct Measure {
   int width = 0, height = 0;
   std::string decoder;
   bool cuda_memory = false;
+  std::string encoder_format;  // what the chain fed the encoder's stand-in
   double fps() const { return seconds > 0 ? frames / seconds : 0; }
 };
 
@@ -40,7 +41,7 @@ GstPadProbeReturn read_frame(GstPad *, GstPadProbeInfo *info, gpointer) {
 }
 
 // One timed run; `convert` selects the full video chain.
-bool measure(const Options &o, Processing processing, const std::string &raw_format, bool convert, Measure *m,
+bool measure(const Options &o, Processing processing, const EncoderChoice &encoder, bool convert, Measure *m,
              std::string *error) {
   GstElement *pipeline = gst_pipeline_new("pseudo3d-benchmark");
   MediaSource source;
@@ -52,8 +53,9 @@ bool measure(const Options &o, Processing processing, const std::string &raw_for
   GstPad *head = nullptr;  // where decodebin's video pad links
   GstElement *queue = nullptr;
   bool ok = true;
+  m->encoder_format = encoder.raw_format;
   if (convert) {
-    ok = chain.build(pipeline, o, processing, raw_format, error) && gst_element_link(chain.tail(), vsink);
+    ok = chain.build(pipeline, o, processing, encoder.raw_format, error) && gst_element_link(chain.tail(), vsink);
     if (ok) chain.count_frames(&counter, source.piece_start());
     // The encoder's stand-in reads every frame, as an encoder would: a
     // frame still in device memory is downloaded here, inside the timing.
@@ -89,6 +91,10 @@ bool measure(const Options &o, Processing processing, const std::string &raw_for
     GstCapsFeatures *f = gst_caps_get_features(caps, 0);
     m->cuda_memory = f && gst_caps_features_contains(f, "memory:CUDAMemory");
     source.gate_pad(pad, false);
+    if (convert && has_deep_samples(caps) && !encoder.deep_format.empty()) {  // as convert_video.cpp feeds it
+      chain.use_format(encoder.deep_format);
+      m->encoder_format = encoder.deep_format;
+    }
     const bool attached = convert ? chain.attach(pad, caps) : gst_pad_link(pad, head) == GST_PAD_LINK_OK;
     if (!attached) post_error(pipeline, "could not link the decoded video");
   };
@@ -149,7 +155,7 @@ bool run_benchmark(const Options &o, std::string *error) {
   for (int run = 1; run <= o.benchmark_runs && ok; ++run) {
     for (int convert = 0; convert < 2 && ok; ++convert) {
       Measure m;
-      ok = measure(conv, processing, encoder.raw_format, convert != 0, &m, error);
+      ok = measure(conv, processing, encoder, convert != 0, &m, error);
       if (!ok) break;
       best[convert] = std::max(best[convert], m.fps());
       std::printf("run %d  %-17s %6llu frames  %8.3f s  %8.1f frames/s  (wall %.3f s; %dx%d, %s%s)\n", run,
@@ -169,7 +175,7 @@ bool run_benchmark(const Options &o, std::string *error) {
                          .raw("cuda_memory", m.cuda_memory ? "true" : "false")
                          .str("processing", processing_nick(processing))
                          .str("layout", layout)
-                         .str("encoder_format", encoder.raw_format)
+                         .str("encoder_format", m.encoder_format)
                          .integer("frames", static_cast<long long>(m.frames))
                          .num("seconds", m.seconds)
                          .num("fps", m.fps())

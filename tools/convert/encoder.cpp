@@ -77,6 +77,8 @@ std::string colour_loss(const GstCaps *decoded, const EncoderChoice &c) {
   const int bits = sample_bits(decoded);
   if (bits > 8 && c.deep_format.empty())
     loss = "the input has " + std::to_string(bits) + " bits a sample; the output has 8 (" + c.deep_hint + ")";
+  else if (bits > 10)
+    loss = "the input has " + std::to_string(bits) + " bits a sample; the output has 10";
   const bool static_hdr = gst_structure_has_field(s, "mastering-display-info") ||
                           gst_structure_has_field(s, "content-light-level");
   if (static_hdr && c.factory != "x265enc" && c.factory != "nvh265enc") {

@@ -315,18 +315,19 @@ double stage_bytes(const std::string &stage, PixelFormat f, Size s, const StageP
   const PackParams &pack = p.pack;
   const double wh = static_cast<double>(s.width) * s.height;
   const double frame = frame_bytes(f, s.width, s.height);
-  const double luma = is_packed_rgb(f) ? 4 * wh : wh;
+  const double px = packed_pixel_bytes(stereo_format(f));  // a pixel of the views (8 bytes for deep input)
+  const double luma = is_packed_rgb(f) ? packed_pixel_bytes(f) * wh : sample_bytes(f) * wh;
   int pw = 0, ph = 0;
   pack_size(pack.layout, s.width, s.height, &pw, &ph);
-  const double packed = 4.0 * pw * ph;
-  if (stage == "convert") return frame + 4 * wh;
+  const double packed = px * pw * ph;
+  if (stage == "convert") return frame + px * wh;
   if (stage == "depth") return frame + depth_map;
   if (stage == "filter") {  // one depth a cell, from the block grid where it is coarser
     const int step = filter_step(p.filter, s);
     return std::min(4 * wh / (step * step), depth_map) + luma + filtered_map;
   }
-  if (stage == "warp") return frame + filtered_map + 8 * wh;
-  if (stage == "pack") return 8 * wh + packed;
+  if (stage == "warp") return frame + filtered_map + 2 * px * wh;
+  if (stage == "pack") return 2 * px * wh + packed;
   if (stage == "warp-pack") return frame + filtered_map + packed;  // no pair between them
   if (stage == "chain") {
     double sum = 0;
