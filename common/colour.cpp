@@ -80,4 +80,16 @@ void frame_plane_size(PixelFormat f, int width, int height, int plane, int *byte
   *rows = plane == 0 ? height : ch;
 }
 
+void high_byte_copy_cpu(const FrameView &src, const FrameView &out) {
+  for (int p = 0; p < frame_plane_count(src.format); ++p) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(src.format, src.width, src.height, p, &row_bytes, &rows);
+    for (int y = 0; y < rows; ++y) {
+      const uint8_t *in = src.plane[p] + static_cast<size_t>(y) * src.stride[p];
+      uint8_t *to = out.plane[p] + static_cast<size_t>(y) * out.stride[p];
+      for (int i = 0; i < row_bytes / 2; ++i) to[i] = high_byte(src.format, load_u16(in, i));
+    }
+  }
+}
+
 }  // namespace p3d

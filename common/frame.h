@@ -6,7 +6,7 @@
 
 namespace p3d {
 
-// The formats the stages accept (CUDA memory: the 8-bit ones). The 8-bit
+// The formats the stages accept (CUDA memory: all but RGBA64). The 8-bit
 // packed RGB formats are 4 bytes a pixel in memory order given by the name
 // (RGBx: R,G,B,unused). NV12/I420 are
 // 4:2:0 with chroma sited at the top-left of each 2x2 block (nearest chroma
@@ -17,12 +17,14 @@ namespace p3d {
 // 16 bits each.
 enum class PixelFormat : int { NV12 = 0, I420, RGBA, BGRA, RGBx, BGRx, P010, I420_10, RGBA64 };
 
-// Formats of 16-bit samples. The kernels take the 8-bit formats only (CUDA
-// memory carries no other: gst/video_util.h), so in device code no format
-// is deep and the deep branches of the shared code below compile away,
-// leaving the kernels the 8-bit code alone.
+// Formats of 16-bit samples. Kernels are built for one depth: a
+// translation unit of 8-bit kernels sees no format as deep in device code,
+// so the deep branches of the shared code below compile away and those
+// kernels carry the 8-bit code alone; the unit of deep kernels
+// (cuda/kernels_deep.cu) defines P3D_DEVICE_DEEP before any include, so its
+// device code reads every format. Host code always sees every format.
 P3D_HD bool is_deep(PixelFormat f) {
-#ifdef __CUDA_ARCH__
+#if defined(__CUDA_ARCH__) && !defined(P3D_DEVICE_DEEP)
   (void)f;
   return false;
 #else
@@ -38,9 +40,6 @@ P3D_HD bool is_yuv420(PixelFormat f) {
 P3D_HD bool is_packed_rgb(PixelFormat f) { return !is_yuv420(f); }
 // 4:2:0 formats whose second plane interleaves Cb and Cr (NV12, P010).
 P3D_HD bool is_semi_planar(PixelFormat f) { return f == PixelFormat::NV12 || (is_deep(f) && f == PixelFormat::P010); }
-// Whether the kernels take a format (host code, before a launch): the
-// 8-bit formats; the deep ones are the CPU path's.
-inline bool kernels_take(PixelFormat f) { return !is_deep(f); }
 // Bytes of one sample (one channel of a pixel, one Y', Cb or Cr).
 P3D_HD int sample_bytes(PixelFormat f) { return is_deep(f) ? 2 : 1; }
 // Bytes of one packed RGB pixel.
@@ -454,8 +453,29 @@ P3D_HD void load_native3(const FrameView &f, int x, int y, int out[3]) {
   out[2] >>= shift;
 }
 
+// The 8-bit format whose samples are a deep format's high 8 bits: NV12 for
+// P010, I420 for I420_10, RGBA for RGBA64; an 8-bit format is its own.
+P3D_HD PixelFormat high_byte_format(PixelFormat f) {
+  if (!is_deep(f)) return f;
+  return is_rgba64(f) ? PixelFormat::RGBA : is_semi_planar(f) ? PixelFormat::NV12 : PixelFormat::I420;
+}
+
+// The high 8 bits of a deep format's 16-bit sample v: a 10-bit code >> 2
+// (P010 keeps its code in the high bits, I420_10 in the low ones), an
+// RGBA64 sample >> 8. A deep frame's samples narrowed so, plane by plane,
+// make the frame of high_byte_format() that load_luma() and
+// load_native3() read as they read the deep frame, so the 8-bit depth
+// estimate and the filter's guide of that copy are those of the deep frame
+// (high_byte_copy_cpu, cuda/high_bytes_gpu.h).
+P3D_HD uint8_t high_byte(PixelFormat f, int v) {
+  return static_cast<uint8_t>(f == PixelFormat::I420_10 ? (v & 0x3ff) >> 2 : v >> 8);
+}
+
 // Helpers for host code: number of planes and the size of plane i.
 int frame_plane_count(PixelFormat f);
 void frame_plane_size(PixelFormat f, int width, int height, int plane, int *bytes_per_row, int *rows);
+// high_byte() of every sample of every plane of deep frame src into out
+// (high_byte_format(src.format), src's size).
+void high_byte_copy_cpu(const FrameView &src, const FrameView &out);
 
 }  // namespace p3d

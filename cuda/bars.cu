@@ -3,52 +3,12 @@
 #include <cstring>
 
 #include "bars_gpu.h"
+#include "bars_kernels.cuh"
 #include "pack_gpu.h"
 
 namespace p3d {
 
-namespace {
-
-constexpr int kCountColumns = 128;  // threads a block: one column each
-constexpr int kCountRows = 64;      // rows a block walks
-
-// A block counts kCountRows rows of kCountColumns columns: each warp adds
-// the bright pixels of its 32 columns of a row to the row's count (one
-// atomic a warp and row), each thread its column's to the column's count.
-// A plain launch: a memset comes before it.
-__global__ void bar_counts_kernel(const FrameView f, int luma_threshold, uint32_t *rows, uint32_t *cols) {
-  const int x = blockIdx.x * kCountColumns + threadIdx.x;
-  const int y0 = blockIdx.y * kCountRows;
-  const int y1 = min(y0 + kCountRows, f.height);
-  uint32_t column = 0;
-  for (int y = y0; y < y1; ++y) {
-    const bool bright = x < f.width && bar_pixel_bright(f, x, y, luma_threshold);
-    column += bright;
-    const unsigned in_warp = __popc(__ballot_sync(0xffffffffu, bright));
-    if ((threadIdx.x & 31) == 0 && in_warp) atomicAdd(rows + y, in_warp);
-  }
-  if (x < f.width && column) atomicAdd(cols + x, column);
-}
-
-// Both views of a pixel outside the rect: the source converted.
-// A plain launch (after the warp's kernels and copies).
-__global__ void views_outside_kernel(const FrameView src, const YuvToRgb m, const PixelRect active,
-                                     const FrameView pair, StageGate gate) {
-  if (gate.closed()) return;
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= src.width || y >= src.height) return;
-  if (x >= active.x0 && x < active.x1 && y >= active.y0 && y < active.y1) return;
-  const Rgba c = load_rgba(src, x, y, m);
-  store_rgba(pair, x, y, c);
-  store_rgba(pair, src.width + x, y, c);
-}
-
-}  // namespace
-
 CudaStatus BarCountsGpu::count(const FrameView &frame, int luma_threshold, cudaStream_t stream) {
-  if (!kernels_take(frame.format))
-    return CudaStatus{cudaErrorInvalidValue, "BarCountsGpu::count: the kernels take 8-bit frames", __FILE__, __LINE__};
   const size_t values = static_cast<size_t>(frame.width) + frame.height;
   P3D_CUDA_TRY_STATUS(counts_.ensure(values * sizeof(uint32_t)));
   if (host_values_ < values) {
@@ -61,9 +21,9 @@ CudaStatus BarCountsGpu::count(const FrameView &frame, int luma_threshold, cudaS
   if (!done_) P3D_CUDA_TRY(cudaEventCreateWithFlags(&done_, cudaEventDisableTiming));
   uint32_t *rows = counts_.as<uint32_t>(), *cols = rows + frame.height;
   P3D_CUDA_TRY(cudaMemsetAsync(rows, 0, values * sizeof(uint32_t), stream));
-  const dim3 grid((frame.width + kCountColumns - 1) / kCountColumns, (frame.height + kCountRows - 1) / kCountRows);
-  bar_counts_kernel<<<grid, kCountColumns, 0, stream>>>(frame, luma_threshold, rows, cols);
-  P3D_CUDA_TRY_LAUNCH(bar_counts_kernel);
+  P3D_CUDA_TRY_STATUS(is_deep(frame.format)
+                          ? bars_detail::launch_bar_counts_deep(frame, luma_threshold, rows, cols, stream)
+                          : bars_detail::launch_bar_counts_of(frame, luma_threshold, rows, cols, stream));
   P3D_CUDA_TRY(cudaMemcpyAsync(host_, rows, values * sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
   P3D_CUDA_TRY(cudaEventRecord(done_, stream));
   pending_ = true;
@@ -101,10 +61,8 @@ void BarCountsGpu::reset() {
 
 CudaStatus views_outside_gpu(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
                              cudaStream_t stream, StageGate gate) {
-  const dim3 block(32, 8), grid((src.width + 31) / 32, (src.height + 7) / 8);
-  views_outside_kernel<<<grid, block, 0, stream>>>(src, m, active, pair, gate);
-  P3D_CUDA_TRY_LAUNCH(views_outside_kernel);
-  return {};
+  if (is_deep(src.format)) return bars_detail::launch_views_outside_deep(src, m, active, pair, stream, gate);
+  return bars_detail::launch_views_outside_of<Rgba>(src, m, active, pair, stream, gate);
 }
 
 namespace {
@@ -114,7 +72,7 @@ CudaStatus buffer_frame(DeviceBuffer &buf, PixelFormat format, int width, int he
   f->format = format;
   f->width = width;
   f->height = height;
-  f->stride[0] = 4 * width;
+  f->stride[0] = packed_pixel_bytes(format) * width;
   P3D_CUDA_TRY_STATUS(buf.ensure(static_cast<size_t>(f->stride[0]) * height));
   f->plane[0] = buf.as<uint8_t>();
   return {};
@@ -134,7 +92,9 @@ CudaStatus ActiveWarpGpu::render(WarpRendererGpu &warp, const WarpParams &params
   FrameView pair = dst;
   const bool pair_is_dst = pack_is_identity(pack) && is_packed_rgb(dst.format);
   if (!pair_is_dst)
-    P3D_CUDA_TRY_STATUS(buffer_frame(pair_, is_packed_rgb(dst.format) ? dst.format : PixelFormat::RGBA,
+    P3D_CUDA_TRY_STATUS(buffer_frame(pair_, is_packed_rgb(dst.format) ? dst.format
+                                            : is_deep(dst.format)     ? PixelFormat::RGBA64
+                                                                      : PixelFormat::RGBA,
                                      2 * src.width, src.height, &pair));
   const WarpParams active_params = active_warp_params(params, src.width, rect.width());
   const FrameView sub_src = sub_frame(src, rect);
@@ -147,11 +107,11 @@ CudaStatus ActiveWarpGpu::render(WarpRendererGpu &warp, const WarpParams &params
     FrameView active_pair;
     P3D_CUDA_TRY_STATUS(buffer_frame(active_pair_, pair.format, 2 * rect.width(), rect.height(), &active_pair));
     P3D_CUDA_TRY_STATUS(warp.render(active_params, sub_src, m, sub_depth, active_pair, stream, nullptr, gate));
-    const size_t view_bytes = 4 * static_cast<size_t>(rect.width());
+    const size_t px = static_cast<size_t>(packed_pixel_bytes(pair.format)), view_bytes = px * rect.width();
     uint8_t *to = pair.plane[0] + static_cast<size_t>(rect.y0) * pair.stride[0];
-    P3D_CUDA_TRY_STATUS(copy_rows_gated(to + 4 * static_cast<size_t>(rect.x0), pair.stride[0], active_pair.plane[0],
+    P3D_CUDA_TRY_STATUS(copy_rows_gated(to + px * rect.x0, pair.stride[0], active_pair.plane[0],
                                         active_pair.stride[0], view_bytes, rect.height(), gate, stream));
-    P3D_CUDA_TRY_STATUS(copy_rows_gated(to + 4 * static_cast<size_t>(src.width + rect.x0), pair.stride[0],
+    P3D_CUDA_TRY_STATUS(copy_rows_gated(to + px * (src.width + rect.x0), pair.stride[0],
                                         active_pair.plane[0] + view_bytes, active_pair.stride[0], view_bytes,
                                         rect.height(), gate, stream));
   }

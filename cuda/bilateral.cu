@@ -543,10 +543,10 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
   return run(params, guide, full_grid(depth_in), full_grid(depth_out), stream);
 }
 
-CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameView &guide,
+CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameView &guide_in,
                                    DepthGrid<const float> depth_in, DepthGrid<float> depth_out, cudaStream_t stream,
                                    const TileFlags &dirty, DepthGrid<const float> kept) {
-  if (guide.width != depth_in.width || guide.height != depth_in.height)
+  if (guide_in.width != depth_in.width || guide_in.height != depth_in.height)
     return invalid("BilateralFilterGpu::run: guide and depth sizes differ", __LINE__);
   if (depth_out.width != depth_in.width || depth_out.height != depth_in.height)
     return invalid("BilateralFilterGpu::run: depth_in and depth_out sizes differ", __LINE__);
@@ -555,9 +555,9 @@ CudaStatus BilateralFilterGpu::run(const BilateralParams &params, const FrameVie
     return invalid("BilateralFilterGpu::run: a depth grid's cells do not fit its picture and shift", __LINE__);
   if (static_cast<const void *>(depth_in.cells.data) == static_cast<const void *>(depth_out.cells.data))
     return invalid("BilateralFilterGpu::run: depth_in aliases depth_out", __LINE__);
-  if (guide.plane[0] == nullptr) return invalid("BilateralFilterGpu::run: guide has no plane 0", __LINE__);
-  if (!kernels_take(guide.format))
-    return invalid("BilateralFilterGpu::run: the kernels take 8-bit guides", __LINE__);
+  if (guide_in.plane[0] == nullptr) return invalid("BilateralFilterGpu::run: guide has no plane 0", __LINE__);
+  FrameView guide;  // the guide, or its high bytes (a deep frame)
+  P3D_CUDA_TRY_STATUS(high_bytes_.of(guide_in, stream, &guide, true));  // the guide is load_luma() alone
   if (dirty.flags && (kept.width != depth_out.width || kept.height != depth_out.height ||
                       kept.shift != depth_out.shift || kept.cells.width != depth_out.cells.width ||
                       kept.cells.height != depth_out.cells.height))

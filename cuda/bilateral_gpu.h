@@ -14,6 +14,7 @@
 #include "change_gpu.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
+#include "high_bytes_gpu.h"
 
 namespace p3d {
 
@@ -45,6 +46,7 @@ class BilateralFilterGpu {
  private:
   CudaStatus upload_tables(const BilateralParams &sanitised, cudaStream_t stream);
 
+  HighByteFrame high_bytes_;  // a deep input's 8-bit copy (cuda/high_bytes_gpu.h)
   DeviceBuffer tables_;  // range (511, symmetric) then space ((2r+1)^2) weights, uploaded when params change
   std::vector<float> host_tables_;  // source of the last upload; outlives the async copy
   BilateralParams uploaded_{-1, 0.f, 0.f};

@@ -1,5 +1,6 @@
 #include "chained_launch.cuh"
 #include "depth_estimate_gpu.h"
+#include "depth_grey.cuh"
 #include "warp_reduce.cuh"
 
 namespace p3d {
@@ -567,13 +568,6 @@ __global__ void expand_kernel(const float *__restrict__ block_depth, int bx, int
     if (x0 + k < width) dst[k] = v[k];
 }
 
-__global__ void depth_from_grey_kernel(FrameView grey, YuvToRgb m, int width, int height, ImageView<float> depth) {
-  chained_kernel_start();
-  const int x = blockIdx.x * kExpandX + threadIdx.x, y = blockIdx.y * kExpandY + threadIdx.y;
-  if (x >= width || y >= height) return;
-  depth.at(x, y) = depth_from_grey(grey, x, y, m);
-}
-
 }  // namespace
 
 void DepthEstimatorGpu::reset() { have_state_ = false; }
@@ -583,16 +577,15 @@ CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameVie
   return estimate(params, frame, full_grid(depth), stream);
 }
 
-CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &frame, DepthGrid<float> depth,
+CudaStatus DepthEstimatorGpu::estimate(const DepthParams &params, const FrameView &input, DepthGrid<float> depth,
                                        cudaStream_t stream, const TileFlags *changes) {
-  const int W = frame.width, H = frame.height, B = effective_block_size(params, W, H);
-  if (!kernels_take(frame.format))
-    return CudaStatus{cudaErrorInvalidValue, "DepthEstimatorGpu::estimate: the kernels take 8-bit frames", __FILE__,
-                      __LINE__};
+  const int W = input.width, H = input.height, B = effective_block_size(params, W, H);
   if (W <= 0 || H <= 0) {
     reset();
     return {};
   }
+  FrameView frame;  // the input, or its high bytes (a deep frame)
+  P3D_CUDA_TRY_STATUS(high_bytes_.of(input, stream, &frame));
   const bool block_grid = depth.shift > 0;  // the blocks' own cells: no expansion
   // A full-size map is expanded within its own size (as an ImageView is);
   // a grid must have the cells of its picture, and a block grid the
@@ -752,12 +745,8 @@ CudaStatus DepthEstimatorGpu::last_diff(float *diff, cudaStream_t stream) const 
 }
 
 CudaStatus depth_from_grey_gpu(const FrameView &grey, const YuvToRgb &m, ImageView<float> depth, cudaStream_t stream) {
-  const int w = depth.width < grey.width ? depth.width : grey.width;
-  const int h = depth.height < grey.height ? depth.height : grey.height;
-  if (depth.empty() || w <= 0 || h <= 0) return {};
-  P3D_CUDA_TRY(launch_chained(depth_from_grey_kernel, dim3(grid_for(w, kExpandX), grid_for(h, kExpandY)),
-                              dim3(kExpandX, kExpandY), 0, stream, grey, m, w, h, depth));
-  return {};
+  if (is_deep(grey.format)) return depth_grey_detail::launch_depth_from_grey_deep(grey, m, depth, stream);
+  return depth_grey_detail::launch_depth_from_grey_of(grey, m, depth, stream);
 }
 
 }  // namespace p3d

@@ -34,6 +34,7 @@
 #include "change_gpu.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
+#include "high_bytes_gpu.h"
 
 namespace p3d {
 
@@ -73,6 +74,7 @@ class DepthEstimatorGpu {
   // union-find forest, then the labels); region_sums_: uint64 a block;
   // region_counts_, region_max_: uint32 a block; block_depth_: float a block, the output
   // of the last frame; state_: two DepthDeviceStates (depth_estimate.cu).
+  HighByteFrame high_bytes_;  // a deep input's 8-bit copy (cuda/high_bytes_gpu.h)
   DeviceBuffer features_, ref_features_, smoothed_features_, labels_, region_sums_, region_counts_, region_max_, block_depth_, state_;
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   bool have_state_ = false;

@@ -1,38 +1,18 @@
-#include "chained_launch.cuh"
-#include "pack_gpu.h"
-
+// GPU stereo packing (cuda/pack_gpu.h): the 8-bit pictures' kernels, with
+// the vectorised paths, and the dispatch of 16-bit ones to
+// cuda/kernels_deep.cu.
 #include <cstdint>
 
-namespace p3d {
+#include "pack_gpu.h"
+#include "pack_kernels.cuh"
 
+namespace p3d {
+namespace pack_detail {
 namespace {
 
-// Everything a launch needs, by value: no device state shared between
-// elements, nothing to upload per frame.
-struct PackKernelParams {
-  PackParams p;
-  AnaglyphMatrices am;
-  FrameView in;
-  FrameView out;
-  StageGate gate;  // closed: the adaptive stage keeps this frame (cuda/change_gpu.h)
-};
-
-constexpr int kBlockX = 32, kBlockY = 8;
 // Pixels per thread on the vectorised path: four 4-byte pixels make one
 // 16-byte store.
 constexpr int kVec = 4;
-
-// One instantiation per input arrangement: the common side-by-side input
-// runs without the code of the others.
-template <StereoInput I>
-__global__ void pack_kernel(const PackKernelParams kp) {
-  chained_kernel_start();
-  if (kp.gate.closed()) return;
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;  // bottom up, as pack_anaglyph_pair_vec
-  if (x >= kp.out.width || y >= kp.out.height) return;
-  store_rgba(kp.out, x, y, pack_detail::pack_pixel_for<I>(kp.p, kp.am, kp.in, x, y));
-}
 
 // kVec pixels per thread. The pixels are laid out in memory order by
 // store_rgba itself (into registers), then written with one 16-byte store;
@@ -47,7 +27,7 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
   if (x0 >= kp.out.width || y >= kp.out.height) return;
   if (x0 + kVec > kp.out.width) {
     for (int x = x0; x < kp.out.width; ++x)
-      store_rgba(kp.out, x, y, pack_detail::pack_pixel_for<I>(kp.p, kp.am, kp.in, x, y));
+      store_rgba(kp.out, x, y, pack_pixel_for<I>(kp.p, kp.am, kp.in, x, y));
     return;
   }
   uint4 packed;
@@ -55,7 +35,7 @@ __global__ void pack_kernel_vec(const PackKernelParams kp) {
   reg.plane[0] = reinterpret_cast<uint8_t *>(&packed);
   reg.stride[0] = 4 * kVec;
 #pragma unroll
-  for (int i = 0; i < kVec; ++i) store_rgba(reg, i, 0, pack_detail::pack_pixel_for<I>(kp.p, kp.am, kp.in, x0 + i, y));
+  for (int i = 0; i < kVec; ++i) store_rgba(reg, i, 0, pack_pixel_for<I>(kp.p, kp.am, kp.in, x0 + i, y));
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) = packed;
 }
 
@@ -96,16 +76,16 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   const uint8_t *row = kp.in.plane[0] + static_cast<size_t>(y) * kp.in.stride[0];
   uint4 eye[2];
   for (int e = 0; e < 2; ++e)
-    eye[e] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + pack_detail::view_slot(kp.p, e) * w));
+    eye[e] = *reinterpret_cast<const uint4 *>(row + 4 * static_cast<size_t>(x0 + view_slot(kp.p, e) * w));
   uint32_t out[kVec];
 #pragma unroll
   for (int i = 0; i < kVec; ++i) {
     uint32_t c;
     if (kp.am.linear_light) {
-      c = rgba_word(pack_detail::anaglyph(kp.am, view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i)),
+      c = rgba_word(anaglyph(kp.am, view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i)),
                                           view_word_rgba<kBgr, kAlpha>(word_at(eye[1], i))));
     } else {  // anaglyph()'s gamma mix on the words as load_rgba() reads them
-      c = pack_detail::anaglyph_mix_word(kp.am.left_q, kp.am.right_q,
+      c = anaglyph_mix_word(kp.am.left_q, kp.am.right_q,
                                          rgba_word(view_word_rgba<kBgr, kAlpha>(word_at(eye[0], i))),
                                          rgba_word(view_word_rgba<kBgr, kAlpha>(word_at(eye[1], i))));
     }
@@ -113,17 +93,6 @@ __global__ void pack_anaglyph_pair_vec(const PackKernelParams kp) {
   }
   *reinterpret_cast<uint4 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] + 4 * x0) =
       make_uint4(out[0], out[1], out[2], out[3]);
-}
-
-// 4:2:0 output: one thread per 2x2 block (its four pixels, one chroma pair).
-template <StereoInput I>
-__global__ void pack_kernel_yuv(const PackKernelParams kp) {
-  chained_kernel_start();
-  if (kp.gate.closed()) return;
-  const int bx = blockIdx.x * blockDim.x + threadIdx.x;
-  const int by = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;  // bottom up, as pack_anaglyph_pair_vec
-  if (2 * bx >= kp.out.width || 2 * by >= kp.out.height) return;
-  pack_detail::pack_block_yuv<I>(kp.p, kp.am, kp.in, kp.out, bx, by);
 }
 
 // Vectorised (16-byte) stores into packed RGB with 16-byte aligned rows,
@@ -149,40 +118,28 @@ CudaStatus launch(const PackKernelParams &kp, bool vector_stores, cudaStream_t s
     const auto kernel = bgr ? (alpha ? pack_anaglyph_pair_vec<true, true> : pack_anaglyph_pair_vec<true, false>)
                             : (alpha ? pack_anaglyph_pair_vec<false, true> : pack_anaglyph_pair_vec<false, false>);
     P3D_CUDA_TRY(launch_chained(kernel, grid, block, 0, stream, kp));
-  } else if (!is_packed_rgb(kp.out.format)) {
-    const int bw = (kp.out.width + 1) / 2, bh = (kp.out.height + 1) / 2;
-    const dim3 grid((bw + kBlockX - 1) / kBlockX, (bh + kBlockY - 1) / kBlockY);
-    P3D_CUDA_TRY(launch_chained(pack_kernel_yuv<I>, grid, block, 0, stream, kp));
   } else if (vector_stores) {
     const int threads_x = (kp.out.width + kVec - 1) / kVec;
     const dim3 grid((threads_x + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
     P3D_CUDA_TRY(launch_chained(pack_kernel_vec<I>, grid, block, 0, stream, kp));
   } else {
-    const dim3 grid((kp.out.width + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
-    P3D_CUDA_TRY(launch_chained(pack_kernel<I>, grid, block, 0, stream, kp));
+    return launch_plain<I, Rgba>(kp, stream);
   }
   return {};
 }
 
 }  // namespace
+}  // namespace pack_detail
 
 CudaStatus pack_gpu(const PackParams &params, const FrameView &in, const FrameView &out, cudaStream_t stream,
                     StageGate gate) {
-  if (!pack_args_valid(params, in, out) || !kernels_take(in.format) || !kernels_take(out.format))
-    return CudaStatus{cudaErrorInvalidValue, "pack_gpu: pack_args_valid(params, in, out), 8-bit formats", __FILE__,
-                      __LINE__};
+  using namespace pack_detail;
+  if (!pack_args_valid(params, in, out))
+    return CudaStatus{cudaErrorInvalidValue, "pack_gpu: pack_args_valid(params, in, out)", __FILE__, __LINE__};
   const PackKernelParams kp{params, anaglyph_matrices(params.glasses, params.method), in, out, gate};
+  if (is_deep(in.format)) return launch_pack_deep(kp, stream);
   const bool vec = use_vector_stores(params, out);
-  switch (params.input) {
-    case StereoInput::SideBySideHalf: return launch<StereoInput::SideBySideHalf>(kp, vec, stream);
-    case StereoInput::TopBottom: return launch<StereoInput::TopBottom>(kp, vec, stream);
-    case StereoInput::TopBottomHalf: return launch<StereoInput::TopBottomHalf>(kp, vec, stream);
-    case StereoInput::RowInterleaved: return launch<StereoInput::RowInterleaved>(kp, vec, stream);
-    case StereoInput::ColumnInterleaved: return launch<StereoInput::ColumnInterleaved>(kp, vec, stream);
-    case StereoInput::Checkerboard: return launch<StereoInput::Checkerboard>(kp, vec, stream);
-    case StereoInput::SideBySide:
-    default: return launch<StereoInput::SideBySide>(kp, vec, stream);
-  }
+  return with_input(params.input, [&](auto input) { return launch<decltype(input)::value>(kp, vec, stream); });
 }
 
 }  // namespace p3d

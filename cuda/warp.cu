@@ -56,7 +56,7 @@ CudaStatus allow_shared_memory(const void *kernel, int smem_optin, std::vector<c
 }
 
 CudaStatus invalid_frames() {
-  return CudaStatus{cudaErrorInvalidValue, "warp_frames_fit(src, depth, out), 8-bit formats", __FILE__, __LINE__};
+  return CudaStatus{cudaErrorInvalidValue, "warp_frames_fit(src, depth, out)", __FILE__, __LINE__};
 }
 
 }  // namespace warp_detail
@@ -79,11 +79,14 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
                                         DepthGrid<const float> depth, const FrameView &out,
                                         const FusedAnaglyph *fused_request, cudaStream_t stream, long long *holes_out,
                                         bool *fused_used, StageGate gate) {
-  if (!warp_frames_fit(src, depth, out) || !kernels_take(src.format)) return invalid_frames();
+  if (!warp_frames_fit(src, depth, out)) return invalid_frames();
   const WarpParams p = warp_sanitize(params);
   const int W = src.width, H = src.height;
   const float D = disparity_scale(p, W);
   const EyeShifts eyes{{warp_eye_shift(p, D, 0), warp_eye_shift(p, D, 1)}};
+  // 16-bit pictures take the Rgba16 kernels (cuda/kernels_deep.cu).
+  const bool deep = is_deep(src.format);
+  const size_t pixel_bytes = deep ? sizeof(Rgba16) : sizeof(Rgba);
   const bool average = p.fill == HoleFill::NeighborAverage;
   const bool smooth = p.fill == HoleFill::BackgroundSmooth;
   if (average && gate.state)
@@ -96,20 +99,22 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
     P3D_CUDA_TRY(cudaDeviceGetAttribute(&smem_optin_, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
   }
   const RowFrame frame{W, H, warp_narrow_keys_fit(eyes.shift[0], eyes.shift[1], D, p.convergence),
-                       eyes.shift[0] != 0.f && eyes.shift[1] != 0.f, depth.shift, smem_optin_};
-  if (!row_fits(W, 0, smem_optin_))  // rows wider than ~50000 pixels on Hopper
+                       eyes.shift[0] != 0.f && eyes.shift[1] != 0.f, depth.shift, smem_optin_, pixel_bytes};
+  if (!row_fits(W, 0, smem_optin_, pixel_bytes))  // rows wider than ~50000 pixels on Hopper (half that of 16-bit ones)
     return CudaStatus{cudaErrorInvalidValue, "row_smem_bytes(W) <= cudaDevAttrMaxSharedMemoryPerBlockOptin", __FILE__,
                       __LINE__};
-  if (row_kernels_apply(frame) && (rows_.width != W || rows_.fill != p.fill))
-    P3D_CUDA_TRY_STATUS(query_row_kernels(p.fill, W, smem_optin_, &attributes_set_, &rows_));
+  if (row_kernels_apply(frame) && (rows_.width != W || rows_.fill != p.fill || rows_.pixel_bytes != pixel_bytes))
+    P3D_CUDA_TRY_STATUS(deep ? query_row_kernels<Rgba16>(p.fill, W, smem_optin_, &attributes_set_, &rows_)
+                             : query_row_kernels<Rgba>(p.fill, W, smem_optin_, &attributes_set_, &rows_));
   const RowPlan rows = plan_rows(frame, rows_);
   if (rows.keys == KeyPlace::WideGlobal)
     P3D_CUDA_TRY_STATUS(keys_.ensure(static_cast<size_t>(W) * H * sizeof(WideKeys::Word)));
   if (average) P3D_CUDA_TRY_STATUS(scratch_.ensure(2 * 2 * static_cast<size_t>(W) * H));  // two masks, both eyes
   const size_t plane = 2 * static_cast<size_t>(W) * H;                                      // both eyes
   const size_t chunk_flags = 2 * static_cast<size_t>(H) * row_chunks(W);  // both eyes
-  const SmoothPlan plan = smooth ? plan_smooth(eyes, D, W, H, smem_optin_) : SmoothPlan{};
-  const size_t list_offset = align16(plane * kSmoothBytesPerPixel + chunk_flags);  // the tile list's words
+  const SmoothPlan plan = smooth ? plan_smooth(eyes, D, W, H, smem_optin_, pixel_bytes) : SmoothPlan{};
+  // The tile list's words, after the anchors, states and chunk flags.
+  const size_t list_offset = align16(plane * smooth_bytes_per_pixel(pixel_bytes) + chunk_flags);
   if (smooth) {
     const size_t had = smooth_.size();
     P3D_CUDA_TRY_STATUS(smooth_.ensure(list_offset + sizeof(unsigned) * plan.tiles()));
@@ -130,8 +135,8 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
   // then the tile list; the tile marks and counts are in counters_.
   SmoothScratch sc{};
   if (smooth) {
-    sc.anchor = smooth_.as<Rgba>();
-    sc.state = reinterpret_cast<uint8_t *>(sc.anchor + plane);
+    sc.anchor = smooth_.get();
+    sc.state = smooth_.as<uint8_t>() + plane * pixel_bytes;
     sc.chunk_holes = sc.state + plane;
     sc.tile_list = reinterpret_cast<unsigned *>(smooth_.as<uint8_t>() + list_offset);
     sc.tile_mark = reinterpret_cast<unsigned *>(counters + kTileMarksOffset);
@@ -140,7 +145,7 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
     sc.tiles_x = plan.tiles_x;
     sc.tiles_y = plan.tiles_y;
   }
-  const bool words = rows_aligned(out, 0, 4);
+  const bool words = rows_aligned(out, 0, static_cast<int>(pixel_bytes));
   // The pack fused where the rows are resolved together (both eyes of a
   // target at hand) and the sums kernel fills the holes.
   const bool fuse = fused_request && rows.rows_together && smooth && words;
@@ -148,10 +153,13 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
                          rows.keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, rows.smem, stream, smem_optin_,
                          &attributes_set_, rows.group_rows, rows.tail_y0, rows.wide_groups, rows.rows_together,
                          rows.wide_group_threads, fuse ? *fused_request : FusedAnaglyph{}, gate};
-  P3D_CUDA_TRY_STATUS(launch_row_kernel(launch));
+  P3D_CUDA_TRY_STATUS(deep ? launch_row_kernel<Rgba16>(launch) : launch_row_kernel<Rgba>(launch));
   if (average) P3D_CUDA_TRY_STATUS(neighbour_average(out, W, H, stream));
   if (smooth)
-    P3D_CUDA_TRY_STATUS(launch_smooth(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_, &sums_launch_));
+    P3D_CUDA_TRY_STATUS(deep ? launch_smooth<Rgba16>(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_,
+                                                     &sums_launch_)
+                             : launch_smooth<Rgba>(plan, sc, out, W, H, stream, smem_optin_, &attributes_set_,
+                                                   &sums_launch_));
   if (fuse)
     P3D_CUDA_TRY_STATUS(
         launch_fused_patch(out, *fused_request, sc, plan, rows.tail_y0, stream, &resident_patch_blocks_, gate));

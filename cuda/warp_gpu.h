@@ -69,7 +69,7 @@ class WarpRendererGpu {
   // count and marks (zeroed every frame). scratch_: the two NeighborAverage
   // hole masks (2 eyes x H x W bytes each). smooth_: the BackgroundSmooth
   // planes (anchors, states, chunk flags; 2 eyes) and its tile list.
-  // pair_: render_packed's stereo pair (2W x H, 4 bytes a pixel).
+  // pair_: render_packed's stereo pair (2W x H, 4 or 8 bytes a pixel).
   DeviceBuffer keys_, counters_, scratch_, smooth_, pair_;
   int smem_optin_ = -1;  // the device's opt-in shared memory per block, read once
   int resident_patch_blocks_ = -1;  // the fused anaglyph's patch kernel: one wave of its blocks, read once

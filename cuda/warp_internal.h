@@ -6,6 +6,9 @@
 //   warp_packed.cu   render_packed and the fused anaglyph's patch kernel:
 //                    launch_fused_patch
 //   warp_neighbour.cu  NeighborAverage's steps (WarpRendererGpu::neighbour_average)
+// The launchers that take a pixel type are built for Rgba in those files
+// and for Rgba16 (16-bit pictures) in kernels_deep.cu, from the kernel
+// templates of warp_rows.cuh, warp_smooth.cuh and warp_neighbour.cuh.
 // The host-side choices they launch with are cuda/warp_plan.h's.
 #pragma once
 
@@ -55,7 +58,7 @@ constexpr size_t kTileMarksOffset = kTileCountOffset + sizeof(unsigned);
 // tile_rows) * tiles_x + chunk.
 struct SmoothScratch {
   uint8_t *state;        // kState* flags of every pixel of the chunks with holes
-  Rgba *anchor;          // every hole's anchor
+  void *anchor;          // every hole's anchor: the pictures' pixel type (Rgba, Rgba16)
   uint8_t *chunk_holes;  // whether each 32-pixel chunk of a row has a hole (2 eyes x H x chunks)
   unsigned *tile_mark;   // per tile: listed yet (zeroed every frame)
   unsigned *tile_list;   // the listed tiles, in no particular order
@@ -99,20 +102,62 @@ CudaStatus allow_shared_memory(const void *kernel, int smem_optin, std::vector<c
 CudaStatus invalid_frames();
 
 // cuda/warp_rows.cu.
-// choose_row_kernels for rows of W pixels and `fill`, from what the device
-// holds of each candidate kernel. *choice is replaced only once every
-// query succeeded.
+// choose_row_kernels for rows of W pixels of type Px and `fill`, from what
+// the device holds of each candidate kernel. *choice is replaced only
+// once every query succeeded.
+template <class Px>
 CudaStatus query_row_kernels(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                              RowKernelChoice *choice);
-// The row kernel for the run's key place, row groups and fill.
+template <>
+CudaStatus query_row_kernels<Rgba>(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
+                                   RowKernelChoice *choice);
+template <>
+CudaStatus query_row_kernels<Rgba16>(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
+                                     RowKernelChoice *choice);
+// The row kernel for the run's key place, row groups and fill, on pixels
+// of type Px (Rgba16: the Row and Group blocks alone; warp_plan.h).
+template <class Px>
 CudaStatus launch_row_kernel(const RowLaunch &l);
+template <>
+CudaStatus launch_row_kernel<Rgba>(const RowLaunch &l);
+template <>
+CudaStatus launch_row_kernel<Rgba16>(const RowLaunch &l);
 
 // cuda/warp_smooth.cu.
 // BackgroundSmooth sums, after the row kernel wrote the states and anchors
 // and listed the tiles with holes. No host sync.
+template <class Px>
 CudaStatus launch_smooth(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
                          cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
                          SmoothSumsLaunch *threads_cache);
+template <>
+CudaStatus launch_smooth<Rgba>(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
+                               cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
+                               SmoothSumsLaunch *threads_cache);
+template <>
+CudaStatus launch_smooth<Rgba16>(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
+                                 cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
+                                 SmoothSumsLaunch *threads_cache);
+
+// cuda/warp_neighbour.cu.
+// One NeighborAverage Jacobi step over both eyes of `out` (mask_in: the
+// holes before it, mask_out: after; *filled: the pixels it filled), and the
+// paint of the holes left in `mask` (kFillBlack).
+template <class Px>
+CudaStatus launch_neighbour_step(const FrameView &out, int W, int H, const uint8_t *mask_in, uint8_t *mask_out,
+                                 unsigned *filled, cudaStream_t stream);
+template <class Px>
+CudaStatus launch_paint_holes(const FrameView &out, int W, int H, const uint8_t *mask, cudaStream_t stream);
+template <>
+CudaStatus launch_neighbour_step<Rgba>(const FrameView &out, int W, int H, const uint8_t *mask_in, uint8_t *mask_out,
+                                       unsigned *filled, cudaStream_t stream);
+template <>
+CudaStatus launch_neighbour_step<Rgba16>(const FrameView &out, int W, int H, const uint8_t *mask_in,
+                                         uint8_t *mask_out, unsigned *filled, cudaStream_t stream);
+template <>
+CudaStatus launch_paint_holes<Rgba>(const FrameView &out, int W, int H, const uint8_t *mask, cudaStream_t stream);
+template <>
+CudaStatus launch_paint_holes<Rgba16>(const FrameView &out, int W, int H, const uint8_t *mask, cudaStream_t stream);
 
 // cuda/warp_packed.cu.
 // The fused anaglyph's patch kernel after the sums kernel: the pixels the

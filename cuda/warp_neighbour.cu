@@ -5,59 +5,22 @@
 // left or a step filled nothing (what is left is then painted kFillBlack).
 #include <utility>
 
-#include "chained_launch.cuh"
-#include "warp_device.cuh"
 #include "warp_gpu.h"
-#include "warp_internal.h"
+#include "warp_neighbour.cuh"
 
 namespace p3d {
 namespace warp_detail {
-namespace {
 
-constexpr int kBlockX = 32;  // NeighborAverage kernels: one warp = one row segment
-constexpr int kBlockY = 8;
-
-// One Jacobi step of NeighborAverage over both eyes: reads mask_in and the
-// colours of pixels that mask_in says are filled (never written in this
-// step), writes the new mask for every pixel.
-__global__ void neighbour_average_kernel(FrameView out, int W, int H, const uint8_t *mask_in, uint8_t *mask_out,
-                                         unsigned *filled) {
-  chained_kernel_start();
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  const int eye = blockIdx.z;
-  bool done = false;
-  if (x < W && y < H) {
-    const size_t plane = static_cast<size_t>(W) * H;
-    const size_t i = eye * plane + static_cast<size_t>(y) * W + x;
-    uint8_t still = 0;
-    if (mask_in[i]) {
-      Rgba c;
-      if (neighbour_average(out, eye * W, mask_in + eye * plane, W, W, H, x, y, &c)) {
-        store_rgba(out, eye * W + x, y, c);
-        done = true;
-      } else {
-        still = 1;
-      }
-    }
-    mask_out[i] = still;
-  }
-  const unsigned ballot = __ballot_sync(kFullMask, done);  // every lane gets here
-  if ((threadIdx.x & 31) == 0 && ballot != 0) atomicAdd(filled, static_cast<unsigned>(__popc(ballot)));
+template <>
+CudaStatus launch_neighbour_step<Rgba>(const FrameView &out, int W, int H, const uint8_t *mask_in, uint8_t *mask_out,
+                                       unsigned *filled, cudaStream_t stream) {
+  return launch_neighbour_step_of<Rgba>(out, W, H, mask_in, mask_out, filled, stream);
+}
+template <>
+CudaStatus launch_paint_holes<Rgba>(const FrameView &out, int W, int H, const uint8_t *mask, cudaStream_t stream) {
+  return launch_paint_holes_of<Rgba>(out, W, H, mask, stream);
 }
 
-__global__ void paint_holes_kernel(FrameView out, int W, int H, const uint8_t *mask) {
-  chained_kernel_start();
-  const int x = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  const int eye = blockIdx.z;
-  if (x >= W || y >= H) return;
-  if (mask[(static_cast<size_t>(eye) * H + y) * W + x]) store_rgba(out, eye * W + x, y, kFillBlack);
-}
-
-dim3 pixel_grid(int W, int H) { return dim3((W + kBlockX - 1) / kBlockX, (H + kBlockY - 1) / kBlockY, 2); }
-
-}  // namespace
 }  // namespace warp_detail
 
 using namespace warp_detail;
@@ -67,6 +30,7 @@ using namespace warp_detail;
 // stops once no hole is left or a step filled nothing. Steps after such a
 // step are no-ops (masks copied), so running the rest of a batch is harmless.
 CudaStatus WarpRendererGpu::neighbour_average(const FrameView &out, int W, int H, cudaStream_t stream) {
+  const bool deep = is_deep(out.format);
   uint8_t *counters = counters_.as<uint8_t>();
   auto *filled = reinterpret_cast<unsigned *>(counters + kFilledOffset);
   unsigned long long total = 0;
@@ -80,8 +44,8 @@ CudaStatus WarpRendererGpu::neighbour_average(const FrameView &out, int W, int H
   while (remaining > 0 && !stuck) {
     P3D_CUDA_TRY(cudaMemsetAsync(filled, 0, sizeof(unsigned) * kWarpFillBatch, stream));
     for (int i = 0; i < kWarpFillBatch; ++i) {
-      P3D_CUDA_TRY(launch_chained(neighbour_average_kernel, pixel_grid(W, H), dim3(kBlockX, kBlockY), 0, stream, out, W,
-                                  H, cur, next, filled + i));
+      P3D_CUDA_TRY_STATUS(deep ? launch_neighbour_step<Rgba16>(out, W, H, cur, next, filled + i, stream)
+                               : launch_neighbour_step<Rgba>(out, W, H, cur, next, filled + i, stream));
       std::swap(cur, next);
     }
     unsigned counts[kWarpFillBatch] = {};
@@ -92,10 +56,9 @@ CudaStatus WarpRendererGpu::neighbour_average(const FrameView &out, int W, int H
       stuck = counts[i] == 0;
     }
   }
-  if (remaining > 0) {
-    P3D_CUDA_TRY(
-        launch_chained(paint_holes_kernel, pixel_grid(W, H), dim3(kBlockX, kBlockY), 0, stream, out, W, H, cur));
-  }
+  if (remaining > 0)
+    P3D_CUDA_TRY_STATUS(deep ? launch_paint_holes<Rgba16>(out, W, H, cur, stream)
+                             : launch_paint_holes<Rgba>(out, W, H, cur, stream));
   return {};
 }
 

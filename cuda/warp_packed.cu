@@ -117,25 +117,30 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
   pp.input = StereoInput::SideBySide;
   pp.input_right_first = false;
   // The pair in the output's packed format (pack's input and output share
-  // one), or RGBA for a 4:2:0 output.
-  const PixelFormat pair_format = is_packed_rgb(out.format) ? out.format : PixelFormat::RGBA;
+  // one), or RGBA (RGBA64 for 16-bit samples) for a 4:2:0 output.
+  const PixelFormat pair_format = is_packed_rgb(out.format) ? out.format
+                                  : is_deep(out.format)     ? PixelFormat::RGBA64
+                                                            : PixelFormat::RGBA;
   if (pack_is_identity(pp) && out.format == pair_format)
     return render_pair(params, src, m, depth, out, nullptr, stream, nullptr, nullptr, gate);
   if (src.width <= 0 || src.height <= 0 || src.width > kMaxFrameSide || src.height > kMaxFrameSide)
     return invalid_frames();
   const int W = src.width, H = src.height;
-  P3D_CUDA_TRY_STATUS(pair_.ensure(8 * static_cast<size_t>(W) * H));
+  const int pair_stride = 2 * W * packed_pixel_bytes(pair_format);
+  P3D_CUDA_TRY_STATUS(pair_.ensure(static_cast<size_t>(pair_stride) * H));
   FrameView pair{};
   pair.format = pair_format;
   pair.width = 2 * W;
   pair.height = H;
   pair.plane[0] = pair_.as<uint8_t>();
-  pair.stride[0] = 8 * W;
-  if (!pack_args_valid(pp, pair, out) || !kernels_take(src.format) || !kernels_take(out.format))
+  pair.stride[0] = pair_stride;
+  if (!pack_args_valid(pp, pair, out))
     return CudaStatus{cudaErrorInvalidValue, "render_packed: pack_args_valid(pack, pair, out)", __FILE__, __LINE__};
-  // The gamma mixes fuse (dubois-linear mixes in linear light, in float).
+  // The gamma mixes of 8-bit pictures fuse (dubois-linear mixes in linear
+  // light, in float; the fused kernels move 32-bit pixels).
   FusedAnaglyph fused{};
-  const bool fusable = pp.layout == PackLayout::Anaglyph && pp.method != AnaglyphMethod::DuboisLinear &&
+  const bool fusable = !is_deep(out.format) && pp.layout == PackLayout::Anaglyph &&
+                       pp.method != AnaglyphMethod::DuboisLinear &&
                        out.format == pair_format && rows_aligned(out, 0, 4);
   if (fusable) {
     const AnaglyphMatrices am = anaglyph_matrices(pp.glasses, pp.method);

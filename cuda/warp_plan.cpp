@@ -7,35 +7,39 @@
 namespace p3d {
 namespace warp_detail {
 
-size_t row_smem_bytes(int W, size_t key_bytes, int eyes) {
-  return eyes * key_bytes * W + 4 * static_cast<size_t>(W) +
+size_t row_smem_bytes(int W, size_t key_bytes, int eyes, size_t pixel_bytes) {
+  const size_t keys = eyes * key_bytes * W;
+  return (keys + pixel_bytes - 1) / pixel_bytes * pixel_bytes + pixel_bytes * static_cast<size_t>(W) +
          eyes * 2 * sizeof(unsigned) * static_cast<size_t>(row_chunks(W));
 }
 
-bool row_fits(int W, size_t key_bytes, int smem_optin) {
-  return row_smem_bytes(W, key_bytes, 1) + 64 <= static_cast<size_t>(smem_optin);
+bool row_fits(int W, size_t key_bytes, int smem_optin, size_t pixel_bytes) {
+  return row_smem_bytes(W, key_bytes, 1, pixel_bytes) + 64 <= static_cast<size_t>(smem_optin);
 }
 
 int row_threads(int W) { return W > 1024 ? kRowThreadsMax : 256; }
 
-size_t together_smem_bytes(int W, int rows) {
-  return row_smem_bytes(W, sizeof(NarrowKeys::Word), 2) + 4 * static_cast<size_t>(W) * (rows - 1);
+size_t together_smem_bytes(int W, int rows, size_t pixel_bytes) {
+  return row_smem_bytes(W, sizeof(NarrowKeys::Word), 2, pixel_bytes) +
+         pixel_bytes * static_cast<size_t>(W) * (rows - 1);
 }
 
-bool both_eyes_fit(int W, int smem_optin) {
-  return row_smem_bytes(W, sizeof(NarrowKeys::Word), 2) + 64 <= static_cast<size_t>(smem_optin);
+bool both_eyes_fit(int W, int smem_optin, size_t pixel_bytes) {
+  return row_smem_bytes(W, sizeof(NarrowKeys::Word), 2, pixel_bytes) + 64 <= static_cast<size_t>(smem_optin);
 }
 
-bool rows_together_fit(int W, int smem_optin) {
-  return together_smem_bytes(W, 1 << kGroupShiftMax) + 64 <= static_cast<size_t>(smem_optin);
+bool rows_together_fit(int W, int smem_optin, size_t pixel_bytes) {
+  return together_smem_bytes(W, 1 << kGroupShiftMax, pixel_bytes) + 64 <= static_cast<size_t>(smem_optin);
 }
 
-RowKernelChoice choose_row_kernels(HoleFill fill, int W, int smem_optin, const RowKernelResidency &resident) {
+RowKernelChoice choose_row_kernels(HoleFill fill, int W, int smem_optin, const RowKernelResidency &resident,
+                                   size_t pixel_bytes) {
   RowKernelChoice c;
   c.width = W;
   c.fill = fill;
-  if (!both_eyes_fit(W, smem_optin)) return c;
-  const int together_threads = rows_together_fit(W, smem_optin) ? resident.together : 0;
+  c.pixel_bytes = pixel_bytes;
+  if (!both_eyes_fit(W, smem_optin, pixel_bytes)) return c;
+  const int together_threads = rows_together_fit(W, smem_optin, pixel_bytes) ? resident.together : 0;
   c.both_eyes = resident.both >= resident.in_turn;
   const int row_best = c.both_eyes ? resident.both : resident.in_turn;
   if (together_threads > 0 && together_threads >= row_best) {
@@ -54,12 +58,12 @@ RowKernelChoice choose_row_kernels(HoleFill fill, int W, int smem_optin, const R
 }
 
 bool row_kernels_apply(const RowFrame &f) {
-  return f.narrow_keys && row_fits(f.W, sizeof(NarrowKeys::Word), f.smem_optin) && f.both_warped;
+  return f.narrow_keys && row_fits(f.W, sizeof(NarrowKeys::Word), f.smem_optin, f.pixel_bytes) && f.both_warped;
 }
 
 RowPlan plan_rows(const RowFrame &f, const RowKernelChoice &rows) {
-  const bool narrow = f.narrow_keys && row_fits(f.W, sizeof(NarrowKeys::Word), f.smem_optin);
-  const bool wide_shared = !narrow && row_fits(f.W, sizeof(WideKeys::Word), f.smem_optin);
+  const bool narrow = f.narrow_keys && row_fits(f.W, sizeof(NarrowKeys::Word), f.smem_optin, f.pixel_bytes);
+  const bool wide_shared = !narrow && row_fits(f.W, sizeof(WideKeys::Word), f.smem_optin, f.pixel_bytes);
   const bool apply = row_kernels_apply(f);
   const RowKernelChoice none;
   const RowKernelChoice &k = apply ? rows : none;
@@ -77,10 +81,10 @@ RowPlan plan_rows(const RowFrame &f, const RowKernelChoice &rows) {
   p.rows_together = p.group_rows > 1 && k.rows_together;
   p.wide_groups = k.wide_groups;
   p.wide_group_threads = k.wide_group_threads;
-  p.smem = p.rows_together ? together_smem_bytes(f.W, p.group_rows)
+  p.smem = p.rows_together ? together_smem_bytes(f.W, p.group_rows, f.pixel_bytes)
                            : row_smem_bytes(f.W, narrow ? sizeof(NarrowKeys::Word)
                                                         : wide_shared ? sizeof(WideKeys::Word) : 0,
-                                            per_eye ? 2 : 1);
+                                            per_eye ? 2 : 1, f.pixel_bytes);
   p.tail_y0 = group_tail_y0(f.H, p.group_rows, k.group_slots);
   return p;
 }
@@ -91,14 +95,14 @@ int group_tail_y0(int H, int group_rows, int slots) {
   return (groups / slots) * slots * group_rows;
 }
 
-SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_optin) {
+SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_optin, size_t pixel_bytes) {
   SmoothPlan p;
   const int R0 = smooth_fill_radius(eyes.shift[0], D), R1 = smooth_fill_radius(eyes.shift[1], D);
   const int Rmax = std::max(eyes.shift[0] == 0.f ? 0 : R0, eyes.shift[1] == 0.f ? 0 : R1),
             Rx = smooth_fill_radius_x(Rmax);
   p.radius[0] = R0;
   p.radius[1] = R1;
-  p.narrow = Rmax <= kSmoothNarrowRMax;
+  p.narrow = Rmax <= kSmoothNarrowRMax && pixel_bytes == sizeof(Rgba);
   // Tile rows: 16 for windows of up to kSmoothShortR rows, else
   // kSmoothTileRowsMax; fewer when V would pass 64 KB (wide Rx). A listed
   // tile sums all its rows and copies 2R more, and holes are sparse: short
@@ -106,15 +110,16 @@ SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_op
   // fewer times: 16 rows win at R = 15 and 29 (1080p, 4K), 32 at R = 58
   // (8K) (measured: docs/benchmarks.md, Design measurements, "Warp: the
   // smooth fill's sums").
-  const size_t v_pixel = p.narrow ? kSmoothNarrowPixelBytes : kSmoothWidePixelBytes;
+  const size_t v_pixel = p.narrow ? kSmoothNarrowPixelBytes : smooth_wide_sum_bytes(pixel_bytes);
   const int rows = Rmax <= kSmoothShortR ? 16 : kSmoothTileRowsMax;
   const int S = std::max(1, std::min(rows, static_cast<int>(65536 / (smooth_tile_columns(Rx) * v_pixel))));
   p.tile_rows = S;
   p.tiles_x = (W + kSmoothTileW - 1) / kSmoothTileW;
   p.tiles_y = (H + S - 1) / S;
-  p.smem = smooth_tile_v_bytes(p.narrow, Rx, S);
-  p.staged = p.smem + smooth_tile_copy_bytes(Rmax, Rx, S) + 64 <= static_cast<size_t>(smem_optin);
-  if (p.staged) p.smem += smooth_tile_copy_bytes(Rmax, Rx, S);
+  p.smem = smooth_tile_v_bytes(p.narrow, Rx, S, pixel_bytes);
+  const size_t copy = smooth_tile_copy_bytes(Rmax, Rx, S, pixel_bytes);
+  p.staged = p.smem + copy + 64 <= static_cast<size_t>(smem_optin);
+  if (p.staged) p.smem += copy;
   return p;
 }
 

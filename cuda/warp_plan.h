@@ -29,18 +29,21 @@ struct EyeShifts {
 // ---- The row kernel ---------------------------------------------------------
 
 // Dynamic shared memory of the row kernel: [keys: W key words an eye when
-// in shared memory] [the source row, W x RGBA] [per 32-pixel chunk and eye:
-// its hole bits (bit i: pixel 32 c + i is a hole)] [the same for its clean
-// bits (BackgroundSmooth)]. key_bytes: a key word's size, 0 for keys in
-// global memory; eyes: the eyes that have arrays of their own (2 when the
-// kernel renders them together, else 1).
+// in shared memory] [the source row, W converted pixels, aligned to them]
+// [per 32-pixel chunk and eye: its hole bits (bit i: pixel 32 c + i is a
+// hole)] [the same for its clean bits (BackgroundSmooth)]. key_bytes: a
+// key word's size, 0 for keys in global memory; eyes: the eyes that have
+// arrays of their own (2 when the kernel renders them together, else 1);
+// pixel_bytes: a converted pixel's size, sizeof(Rgba) for 8-bit pictures,
+// sizeof(Rgba16) for 16-bit ones (the source row and the smooth fill's
+// anchors).
 P3D_HD int row_chunks(int W) { return (W + 31) / 32; }
-size_t row_smem_bytes(int W, size_t key_bytes, int eyes);
+size_t row_smem_bytes(int W, size_t key_bytes, int eyes, size_t pixel_bytes = sizeof(Rgba));
 
 // Whether a row of W pixels with key words of key_bytes (0: keys in global
 // memory) fits one block's shared memory of smem_optin bytes. 64 bytes:
 // room for the kernel's static __shared__ counter.
-bool row_fits(int W, size_t key_bytes, int smem_optin);
+bool row_fits(int W, size_t key_bytes, int smem_optin, size_t pixel_bytes = sizeof(Rgba));
 
 // The row kernel's blocks. One row a block (Row), or the rows of a group
 // in a block of a row's size and launch bounds (Group) or in one of half
@@ -84,7 +87,7 @@ int row_threads(int W);
 
 // Shared memory of a RowsTogether block of `rows` rows: a row's with both
 // z-buffers, and a source row more for each further row.
-size_t together_smem_bytes(int W, int rows);
+size_t together_smem_bytes(int W, int rows, size_t pixel_bytes = sizeof(Rgba));
 
 // The row kernels chosen for rows of `width` pixels and `fill` with both
 // eyes warped and 32-bit keys (choose_row_kernels): both eyes at once, and
@@ -94,6 +97,7 @@ size_t together_smem_bytes(int W, int rows);
 struct RowKernelChoice {
   int width = -1;
   HoleFill fill = HoleFill::None;
+  size_t pixel_bytes = sizeof(Rgba);  // the converted source pixel the kernels take
   bool both_eyes = false;
   bool groups = false;
   bool wide_groups = false;
@@ -118,9 +122,9 @@ struct RowKernelResidency {
 
 // Whether a row of W pixels with both z-buffers fits a block (else only
 // the eyes in turn run, and nothing is asked of the device).
-bool both_eyes_fit(int W, int smem_optin);
+bool both_eyes_fit(int W, int smem_optin, size_t pixel_bytes = sizeof(Rgba));
 // Whether a RowsTogether block of the longest group fits.
-bool rows_together_fit(int W, int smem_optin);
+bool rows_together_fit(int W, int smem_optin, size_t pixel_bytes = sizeof(Rgba));
 
 // Which row kernels serve rows of W pixels with both eyes warped and
 // NarrowKeys, by the threads each keeps resident on an SM (this kernel is
@@ -138,9 +142,11 @@ bool rows_together_fit(int W, int smem_optin);
 //    RowsTogether blocks are the fastest, then Group, then WideGroup
 //    (measured: docs/benchmarks.md, Design measurements, "Warp: row
 //    groups").
-// Where both z-buffers do not fit (both_eyes_fit), only width and fill
-// are set.
-RowKernelChoice choose_row_kernels(HoleFill fill, int W, int smem_optin, const RowKernelResidency &resident);
+// Where both z-buffers do not fit (both_eyes_fit), only width, fill and
+// pixel size are set. 16-bit pictures (pixel_bytes 8) have no WideGroup
+// or RowsTogether kernels: their residency is 0.
+RowKernelChoice choose_row_kernels(HoleFill fill, int W, int smem_optin, const RowKernelResidency &resident,
+                                   size_t pixel_bytes = sizeof(Rgba));
 
 // A frame as the row plan sees it.
 struct RowFrame {
@@ -149,6 +155,7 @@ struct RowFrame {
   bool both_warped = false;  // both eyes' shift factors are not 0
   int depth_shift = 0;       // the depth grid's cells: 1 << depth_shift pixels a side
   int smem_optin = 0;        // the device's opt-in shared memory a block
+  size_t pixel_bytes = sizeof(Rgba);  // the converted source pixel (row_smem_bytes)
 };
 
 // Whether the frame's rows take choose_row_kernels' kernels (NarrowKeys
@@ -188,9 +195,13 @@ int group_tail_y0(int H, int group_rows, int slots);
 
 // ---- BackgroundSmooth's sums ------------------------------------------------
 
-// Scratch per pixel and eye: anchor (Rgba), state; and a byte per 32-pixel
-// chunk of a row and eye (has it a hole).
-constexpr size_t kSmoothBytesPerPixel = sizeof(Rgba) + 1;
+// Scratch per pixel and eye: anchor (a converted pixel of pixel_bytes),
+// state; and a byte per 32-pixel chunk of a row and eye (has it a hole).
+P3D_HD size_t smooth_bytes_per_pixel(size_t pixel_bytes) { return pixel_bytes + 1; }
+// A wide sum of anchors of pixel_bytes: SmoothSum, or SmoothSum16 for Rgba16.
+P3D_HD size_t smooth_wide_sum_bytes(size_t pixel_bytes) {
+  return pixel_bytes == sizeof(Rgba16) ? sizeof(SmoothSum16) : sizeof(SmoothSum);
+}
 
 // A tile of the sums kernel (cuda/warp_smooth.cu) is kSmoothTileW columns
 // x up to kSmoothTileRowsMax rows of one eye, in a block of
@@ -207,32 +218,33 @@ static_assert(kSmoothTileThreads % 32 == 0 && kSmoothTileThreadsMax % 32 == 0,
 P3D_HD size_t align16(size_t n) { return (n + 15) & ~static_cast<size_t>(15); }
 P3D_HD int smooth_tile_columns(int Rx) { return kSmoothTileW + 2 * Rx; }
 
-// V in shared memory (TileSums, cuda/warp_smooth.cu). Wide: SmoothSum (20
-// bytes). Narrow, when a column window holds at most 257 anchors (R <=
-// kSmoothNarrowRMax): each channel sum fits 16 bits (255 * 257 = 65535),
-// so V takes 10 bytes, (r | g << 16, b | a << 16) and the count, which lets
-// more tiles share an SM.
+// V in shared memory (TileSums, cuda/warp_smooth.cuh). Wide: SmoothSum (20
+// bytes; SmoothSum16, 40, for 16-bit anchors). Narrow, for 8-bit anchors
+// when a column window holds at most 257 anchors (R <= kSmoothNarrowRMax):
+// each channel sum fits 16 bits (255 * 257 = 65535), so V takes 10 bytes,
+// (r | g << 16, b | a << 16) and the count, which lets more tiles share an
+// SM.
 constexpr int kSmoothNarrowRMax = 128;
 static_assert(255 * (2 * kSmoothNarrowRMax + 1) <= 65535, "a narrow V channel fits 16 bits");
 constexpr size_t kSmoothWidePixelBytes = sizeof(SmoothSum);
 constexpr size_t kSmoothNarrowPixelBytes = 2 * sizeof(uint32_t) + sizeof(uint16_t);
-// V of `count` pixels: wide, one SmoothSum each; narrow, the channel words
+// V of `count` pixels: wide, one wide sum each; narrow, the channel words
 // (two 32-bit words a pixel) then the counts, each 16-byte aligned.
-P3D_HD size_t smooth_v_bytes(bool narrow, size_t count) {
+P3D_HD size_t smooth_v_bytes(bool narrow, size_t count, size_t pixel_bytes = sizeof(Rgba)) {
   return narrow ? align16(count * 2 * sizeof(uint32_t)) + align16(count * sizeof(uint16_t))
-                : align16(count * sizeof(SmoothSum));
+                : align16(count * smooth_wide_sum_bytes(pixel_bytes));
 }
-P3D_HD size_t smooth_tile_v_bytes(bool narrow, int Rx, int S) {
-  return smooth_v_bytes(narrow, static_cast<size_t>(smooth_tile_columns(Rx)) * S);
+P3D_HD size_t smooth_tile_v_bytes(bool narrow, int Rx, int S, size_t pixel_bytes = sizeof(Rgba)) {
+  return smooth_v_bytes(narrow, static_cast<size_t>(smooth_tile_columns(Rx)) * S, pixel_bytes);
 }
-// The staged copy: anchors (Rgba), states (bytes), then the chunk flags of
-// its rows (at most 2 + (columns - 1) / 32 chunks a row).
+// The staged copy: anchors (pixel_bytes each), states (bytes), then the
+// chunk flags of its rows (at most 2 + (columns - 1) / 32 chunks a row).
 P3D_HD size_t smooth_tile_copy_pixels(int R, int Rx, int S) {
   return static_cast<size_t>(smooth_tile_columns(Rx)) * (S + 2 * R);
 }
-P3D_HD size_t smooth_tile_copy_bytes(int R, int Rx, int S) {
+P3D_HD size_t smooth_tile_copy_bytes(int R, int Rx, int S, size_t pixel_bytes = sizeof(Rgba)) {
   const size_t flag_columns = 2 + (smooth_tile_columns(Rx) - 1) / 32;
-  return smooth_tile_copy_pixels(R, Rx, S) * (sizeof(Rgba) + 1) + flag_columns * (S + 2 * R);
+  return smooth_tile_copy_pixels(R, Rx, S) * smooth_bytes_per_pixel(pixel_bytes) + flag_columns * (S + 2 * R);
 }
 
 // BackgroundSmooth's sums for a frame: the eyes' radii, the tile rows, and
@@ -245,10 +257,12 @@ struct SmoothPlan {
   size_t tiles() const { return 2 * static_cast<size_t>(tiles_x) * tiles_y; }
 };
 
-// narrow: V's narrow sums (R <= kSmoothNarrowRMax over the warped eyes);
-// staged: the tile's states and anchors copied into shared memory, where
-// that fits smem_optin beside V.
-SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_optin);
+// narrow: V's narrow sums (8-bit anchors, R <= kSmoothNarrowRMax over the
+// warped eyes); staged: the tile's states and anchors copied into shared
+// memory, where that fits smem_optin beside V. pixel_bytes: the anchors'
+// size (row_smem_bytes).
+SmoothPlan plan_smooth(const EyeShifts &eyes, float D, int W, int H, int smem_optin,
+                       size_t pixel_bytes = sizeof(Rgba));
 
 // The sums kernel's block size, from the blocks an SM holds resident of
 // the plan's kernel (no register bound) with kSmoothTileThreads and with

@@ -119,9 +119,8 @@ static GstCaps *gst_pseudo3d_base_transform_caps(GstBaseTransform *trans, GstPad
     for (guint k = 0; k < gst_caps_get_size(variants); ++k) {
       GstStructure *s = gst_structure_copy(gst_caps_get_structure(variants, k));
       if (formats) gst_pseudo3d_set_formats(s, formats);
-      // CUDA memory carries the 8-bit formats only (caps_all_domains).
-      if (f && gst_caps_features_contains(f, "memory:CUDAMemory") &&
-          !p3d::gst::keep_formats(s, p3d::gst::kDepth8)) {
+      // CUDA memory holds what its allocator takes (keep_cuda_formats).
+      if (f && gst_caps_features_contains(f, "memory:CUDAMemory") && !p3d::gst::keep_cuda_formats(s)) {
         gst_structure_free(s);
         continue;
       }

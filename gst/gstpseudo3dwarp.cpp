@@ -20,9 +20,10 @@
  * input's transfer and primaries; 4:2:0 as pseudo3dpack writes it), and
  * an anaglyph of PQ or HLG input is refused, as pseudo3dpack refuses it.
  *
- * 10-bit input (P010_10LE, I420_10LE, system memory) and RGBA64_LE are
- * rendered with 16 bits a sample, into RGBA64_LE, or P010_10LE/I420_10LE
- * for encoders: the output keeps the input's depth.
+ * 10-bit input (P010_10LE, I420_10LE) and RGBA64_LE are rendered with 16
+ * bits a sample, into RGBA64_LE, or P010_10LE/I420_10LE for encoders: the
+ * output keeps the input's depth. On CUDA memory (which holds no
+ * RGBA64_LE) 10-bit input is packed into P010_10LE or I420_10LE.
  *
  * Parallax of a pixel is max-disparity% x width x (depth - convergence):
  * depth above the convergence plane comes out of the screen.

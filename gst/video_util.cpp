@@ -1,5 +1,7 @@
 #include "video_util.h"
 
+#include <cstring>
+
 #include "config.h"
 
 #if HAVE_CUDA
@@ -81,6 +83,16 @@ unsigned name_depth(const GValue *v) {
   return GST_VIDEO_FORMAT_INFO_DEPTH(gst_video_format_get_info(f), 0) > 8 ? kDepth16 : kDepth8;
 }
 
+// Whether a format name is one GStreamer 1.22's CUDA allocator holds, of
+// the stages' formats: all but RGBA64_LE (which it aborts on).
+bool cuda_memory_takes(const GValue *v) {
+  if (!G_VALUE_HOLDS_STRING(v)) return false;
+  static const char *const kCuda[] = {"NV12", "I420", "RGBA", "BGRA", "RGBx", "BGRx", "P010_10LE", "I420_10LE"};
+  for (const char *name : kCuda)
+    if (std::strcmp(g_value_get_string(v), name) == 0) return true;
+  return false;
+}
+
 }  // namespace
 
 unsigned format_depths(const GstStructure *s) {
@@ -92,15 +104,15 @@ unsigned format_depths(const GstStructure *s) {
   return depths;
 }
 
-bool keep_formats(GstStructure *s, unsigned depths) {
+bool keep_cuda_formats(GstStructure *s) {
   const GValue *v = gst_structure_get_value(s, "format");
   if (!v) return true;
-  if (!GST_VALUE_HOLDS_LIST(v)) return (name_depth(v) & depths) != 0;
+  if (!GST_VALUE_HOLDS_LIST(v)) return cuda_memory_takes(v);
   GValue kept = G_VALUE_INIT;
   gst_value_list_init(&kept, gst_value_list_get_size(v));
   for (guint i = 0; i < gst_value_list_get_size(v); ++i) {
     const GValue *f = gst_value_list_get_value(v, i);
-    if (name_depth(f) & depths) gst_value_list_append_value(&kept, f);
+    if (cuda_memory_takes(f)) gst_value_list_append_value(&kept, f);
   }
   const guint n = gst_value_list_get_size(&kept);
   if (n == 1) {
@@ -131,7 +143,7 @@ GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_f
 #if HAVE_CUDA
   GstCaps *cuda = gst_caps_copy(caps);
   for (guint i = gst_caps_get_size(cuda); i > 0; --i)
-    if (!keep_formats(gst_caps_get_structure(cuda, i - 1), kDepth8)) gst_caps_remove_structure(cuda, i - 1);
+    if (!keep_cuda_formats(gst_caps_get_structure(cuda, i - 1))) gst_caps_remove_structure(cuda, i - 1);
   gst_caps_set_features_simple(cuda, gst_caps_features_new(GST_CAPS_FEATURE_MEMORY_CUDA_MEMORY, NULL));
   caps = gst_caps_merge(cuda, caps);
 #endif

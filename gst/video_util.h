@@ -6,8 +6,8 @@
 
 #include "frame.h"
 
-// Every format the stages take in system memory; CUDA memory carries the
-// 8-bit ones (caps_all_domains, keep_formats).
+// Every format the stages take in system memory; CUDA memory carries all
+// but RGBA64_LE (caps_all_domains, keep_cuda_formats).
 #define P3D_ALL_FORMATS "{ NV12, I420, RGBA, BGRA, RGBx, BGRx, P010_10LE, I420_10LE, RGBA64_LE }"
 
 namespace p3d::gst {
@@ -22,9 +22,10 @@ enum class FormatKind { Packed, Yuv420, All };
 const char *formats_for(FormatKind kind, unsigned depths);
 // The depths the format field of s names (kAnyDepth without one).
 unsigned format_depths(const GstStructure *s);
-// Leaves in the format field of s only the formats of the depths of a
-// mask; false when none is left (s is then unusable).
-bool keep_formats(GstStructure *s, unsigned depths);
+// Leaves in the format field of s only the formats CUDA memory can hold
+// (GStreamer 1.22's allocator aborts on any other, such as RGBA64_LE);
+// false when none is left (s is then unusable).
+bool keep_cuda_formats(GstStructure *s);
 // Whether a negotiated format has deep samples.
 inline bool is_deep_info(const GstVideoInfo *info) { return GST_VIDEO_INFO_COMP_DEPTH(info, 0) > 8; }
 
@@ -38,8 +39,8 @@ YuvToRgb yuv_params(const GstVideoInfo *info);
 RgbToYuv rgb_to_yuv(const GstVideoInfo *info);
 
 // Raw video of `formats` up to max_side pixels wide and high, in both memory
-// domains: CUDA memory first (preferred; its 8-bit formats only), then
-// system memory.
+// domains: CUDA memory first (preferred; keep_cuda_formats), then system
+// memory.
 GstCaps *caps_all_domains(const char *formats, int max_side, const char *extra_fields = nullptr);
 
 }  // namespace p3d::gst

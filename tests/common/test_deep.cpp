@@ -85,6 +85,31 @@ TEST(DeepFormats, EightBitReadersTakeTheHighBits) {
   }
 }
 
+// The high-byte copy (the GPU depth estimate's and filter's input) reads
+// as the deep frame does through the 8-bit readers, so the 8-bit stages of
+// the copy are those of the frame; and the copy is of the format's 8-bit
+// twin.
+TEST(DeepFormats, HighByteCopyReadsAsTheDeepFrame) {
+  const cv::Mat pic = test::deep_picture(35, 23, 6);
+  for (PixelFormat f : test::kDeepFormats) {
+    const HostFrame frame = HostFrame::from_bgr16(pic, f);
+    HostFrame copy(high_byte_format(f), frame.width(), frame.height(), 3);
+    copy.fill(0x5A);
+    high_byte_copy_cpu(frame.view(), copy.view());
+    EXPECT_FALSE(is_deep(copy.format()));
+    EXPECT_EQ(is_rgba64(f), is_packed_rgb(copy.format())) << test::format_name(f);
+    for (int y = 0; y < frame.height(); ++y)
+      for (int x = 0; x < frame.width(); ++x) {
+        ASSERT_EQ(load_luma(copy.view(), x, y), load_luma(frame.view(), x, y)) << test::format_name(f);
+        int a[3], b[3];
+        load_native3(copy.view(), x, y, a);
+        load_native3(frame.view(), x, y, b);
+        ASSERT_TRUE(a[0] == b[0] && a[1] == b[1] && a[2] == b[2]) << test::format_name(f) << " " << x << "," << y;
+      }
+  }
+  EXPECT_EQ(high_byte_format(PixelFormat::NV12), PixelFormat::NV12);
+}
+
 // A 10-bit frame whose codes are 8-bit codes shifted up estimates the very
 // depth of the 8-bit frame.
 TEST(DeepFormats, DepthOfShiftedCodesIsTheEightBitDepth) {

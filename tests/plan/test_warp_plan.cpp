@@ -478,3 +478,89 @@ TEST(WarpPlanPatch, OneWaveAtMost) {
 }  // namespace
 }  // namespace warp_detail
 }  // namespace p3d
+
+namespace p3d {
+namespace warp_detail {
+namespace {
+
+// ---- 16-bit pictures ---------------------------------------------------------
+
+constexpr size_t kDeepPixel = sizeof(Rgba16);
+
+// The source row starts on its pixels' alignment after the keys; 8-bit
+// rows keep their layout (4-byte keys end on a pixel).
+TEST(WarpPlanDeep, RowLayoutAlignsTheSixteenBitRow) {
+  EXPECT_EQ(row_smem_bytes(97, 4, 1, kDeepPixel), 392u + 97u * 8 + 4u * 8);  // 388 key bytes padded to 392
+  EXPECT_EQ(row_smem_bytes(97, 4, 1), 388u + 97u * 4 + 4u * 8);
+  EXPECT_EQ(row_smem_bytes(3840, 4, 2, kDeepPixel), 2u * 3840 * 4 + 3840u * 8 + 2u * 120 * 8);
+  EXPECT_EQ(together_smem_bytes(3840, 4, kDeepPixel), row_smem_bytes(3840, 4, 2, kDeepPixel) + 3u * 3840 * 8);
+  // Half as wide a row fits at 8 bytes a converted pixel.
+  EXPECT_TRUE(row_fits(27000, 0, kOptin, kDeepPixel));
+  EXPECT_FALSE(row_fits(29000, 0, kOptin, kDeepPixel));
+  EXPECT_TRUE(row_fits(54000, 0, kOptin));
+}
+
+// What the modelled device holds of the 16-bit kernels for rows of W
+// pixels (query_row_kernels<Rgba16>: no wide kinds).
+RowKernelResidency modelled_deep_residency(int W) {
+  RowKernelResidency r;
+  const size_t both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2, kDeepPixel);
+  r.in_turn = resident_threads(row_threads(W), row_smem_bytes(W, sizeof(NarrowKeys::Word), 1, kDeepPixel));
+  r.both = resident_threads(row_threads(W), both);
+  r.group = resident_threads(row_threads(W), both);
+  r.sms = kSms;
+  return r;
+}
+
+// A 16-bit frame takes both eyes at once and Group blocks where the device
+// holds as many threads of them (1080p), and plans the shared memory of
+// 8-byte pixels; at 4K both z-buffers beside a 16-bit row leave room for
+// a row fewer, and the eyes go in turn.
+TEST(WarpPlanDeep, GroupsWithoutTheWideKinds) {
+  const RowKernelChoice c =
+      choose_row_kernels(HoleFill::BackgroundSmooth, 1920, kOptin, modelled_deep_residency(1920), kDeepPixel);
+  EXPECT_EQ(c.pixel_bytes, kDeepPixel);
+  EXPECT_TRUE(c.both_eyes);
+  EXPECT_TRUE(c.groups);
+  EXPECT_FALSE(c.rows_together);
+  EXPECT_FALSE(c.wide_groups);
+  RowFrame f;
+  f.W = 1920;
+  f.H = 1080;
+  f.narrow_keys = f.both_warped = true;
+  f.depth_shift = 2;
+  f.smem_optin = kOptin;
+  f.pixel_bytes = kDeepPixel;
+  const RowPlan p = plan_rows(f, c);
+  EXPECT_EQ(p.keys, KeyPlace::NarrowSharedPerEye);
+  EXPECT_EQ(p.group_rows, 4);
+  EXPECT_FALSE(p.rows_together);
+  EXPECT_EQ(p.smem, row_smem_bytes(1920, sizeof(NarrowKeys::Word), 2, kDeepPixel));
+
+  const RowKernelChoice uhd =
+      choose_row_kernels(HoleFill::BackgroundSmooth, 3840, kOptin, modelled_deep_residency(3840), kDeepPixel);
+  EXPECT_FALSE(uhd.both_eyes);
+  EXPECT_FALSE(uhd.groups);
+  f.W = 3840;
+  f.H = 2160;
+  const RowPlan q = plan_rows(f, uhd);
+  EXPECT_EQ(q.keys, KeyPlace::NarrowShared);
+  EXPECT_EQ(q.smem, row_smem_bytes(3840, sizeof(NarrowKeys::Word), 1, kDeepPixel));
+}
+
+// 16-bit anchors sum wide (SmoothSum16) and stage 8-byte anchors.
+TEST(WarpPlanDeep, SmoothSumsAreWide) {
+  const SmoothPlan p = plan_smooth(shifts(0.5f, -0.5f), d_for_radius(29), 3840, 2160, kOptin, kDeepPixel);
+  EXPECT_FALSE(p.narrow);
+  const int Rx = smooth_fill_radius_x(29);
+  EXPECT_EQ(smooth_tile_v_bytes(false, Rx, p.tile_rows, kDeepPixel),
+            align16(static_cast<size_t>(smooth_tile_columns(Rx)) * p.tile_rows * sizeof(SmoothSum16)));
+  const size_t copy = smooth_tile_copy_bytes(29, Rx, p.tile_rows, kDeepPixel);
+  EXPECT_EQ(p.smem, smooth_tile_v_bytes(false, Rx, p.tile_rows, kDeepPixel) + (p.staged ? copy : 0));
+  EXPECT_LE(p.smem + 64, static_cast<size_t>(kOptin));
+  EXPECT_EQ(smooth_bytes_per_pixel(kDeepPixel), 9u);
+}
+
+}  // namespace
+}  // namespace warp_detail
+}  // namespace p3d

@@ -91,10 +91,7 @@ bool measure(const Options &o, Processing processing, const EncoderChoice &encod
     GstCapsFeatures *f = gst_caps_get_features(caps, 0);
     m->cuda_memory = f && gst_caps_features_contains(f, "memory:CUDAMemory");
     source.gate_pad(pad, false);
-    if (convert && has_deep_samples(caps) && !encoder.deep_format.empty()) {  // as convert_video.cpp feeds it
-      chain.use_format(encoder.deep_format);
-      m->encoder_format = encoder.deep_format;
-    }
+    if (convert) m->encoder_format = chain.feed_encoder(encoder, caps);  // as convert_video.cpp feeds it
     const bool attached = convert ? chain.attach(pad, caps) : gst_pad_link(pad, head) == GST_PAD_LINK_OK;
     if (!attached) post_error(pipeline, "could not link the decoded video");
   };

@@ -79,7 +79,7 @@ struct Job {
         return;
       }
       source.gate_pad(pad, false);
-      if (has_deep_samples(caps) && !encoder.deep_format.empty()) chain.use_format(encoder.deep_format);
+      chain.feed_encoder(encoder, caps);
       for (const std::string &n : {colour_loss(caps, encoder), deinterlacing_note(caps)})
         if (!n.empty()) note(n);
       if (!chain.attach(pad, caps))

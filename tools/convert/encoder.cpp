@@ -124,16 +124,16 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
   // Anaglyph colours sit in the chroma: 4:4:4 keeps them from bleeding
   // (x264 High 4:4:4, x265 Main 4:4:4). Packed stereo stays 4:2:0 for players.
   c->raw_format = layout == "anaglyph" && sink_accepts_format(c->factory.c_str(), "Y444") ? "Y444" : "I420";
-  // 10-bit input keeps 10 bits through the CPU stages into x265's Main10
-  // (Main 4:4:4 10 for anaglyphs).
-  const std::string deep = c->raw_format + "_10LE";
-  if (c->factory == "x265enc" && processing == Processing::Cpu && sink_accepts_format("x265enc", deep.c_str()))
+  // 10-bit input keeps 10 bits through the stages (CPU or GPU) into
+  // H.265 Main 10: x265enc takes I420_10LE (Y444_10LE, Main 4:4:4 10, for
+  // anaglyphs), NVENC P010_10LE (4:2:0 only).
+  const std::string deep = c->factory == "x265enc"                                 ? c->raw_format + "_10LE"
+                           : c->factory == "nvh265enc" && c->raw_format == "I420" ? std::string("P010_10LE")
+                                                                                  : std::string();
+  if (!deep.empty() && sink_accepts_format(c->factory.c_str(), deep.c_str()))
     c->deep_format = deep;
-  else if (processing == Processing::Gpu)
-    c->deep_hint = std::string("the GPU stages work in 8 bits: --processing cpu") + (h264 ? " --codec h265" : "") +
-                   " keeps 10";
   else
-    c->deep_hint = h264 ? "--codec h265 keeps 10" : "x265enc here takes no 10-bit input";
+    c->deep_hint = h264 ? "--codec h265 keeps 10" : c->factory + " here takes no 10-bit input";
   return true;
 }
 

@@ -17,8 +17,8 @@ struct EncoderChoice {
   std::string raw_format;  // what the encoder is fed: I420, or Y444 for anaglyphs
   // What it is fed for input of more than 8 bits a sample, where the
   // output keeps them: I420_10LE (Y444_10LE for anaglyphs) for x265enc's
-  // Main10 on the CPU path; empty where the output has 8 bits (H.264, and
-  // the GPU path, whose stages work in 8 bits).
+  // Main10, P010_10LE for NVENC's; empty where the output has 8 bits
+  // (H.264).
   std::string deep_format;
   // Where deep_format is empty: what keeps 10 bits instead (for the note).
   std::string deep_hint;

@@ -116,15 +116,30 @@ bool VideoChain::build(GstElement *bin, const Options &o, Processing processing,
   return true;
 }
 
-void VideoChain::use_format(const std::string &raw_format) {
+std::string VideoChain::feed_encoder(const EncoderChoice &encoder, const GstCaps *decoded) {
+  if (!has_deep_samples(decoded)) return encoder.raw_format;
+  if (!encoder.deep_format.empty()) {
+    use_format(encoder.deep_format);
+    return encoder.deep_format;
+  }
+  const GstCapsFeatures *f = gst_caps_is_empty(decoded) ? nullptr : gst_caps_get_features(decoded, 0);
+  use_format(encoder.raw_format, f && gst_caps_features_contains(f, "memory:CUDAMemory"));
+  return encoder.raw_format;
+}
+
+void VideoChain::use_format(const std::string &raw_format, bool deep_input) {
   // The bin's warp packs into 4:2:0 itself (8 or 10 bits), as pseudo3dpack
   // would (on the GPU when the frames are there): a third of the bytes to
   // download and no CPU conversion; the videoconvert after it then passes
-  // frames through. Other encoder formats (Y444 for anaglyphs) still go
-  // through videoconvert.
-  const bool packed_yuv = raw_format == "I420" || raw_format == "NV12" || raw_format == "I420_10LE";
+  // frames through. The stages keep their input's depth, so 10-bit input
+  // for an 8-bit encoder is packed into I420_10LE, which videoconvert
+  // narrows. Other encoder formats (Y444 for anaglyphs) still go through
+  // videoconvert.
+  const bool eight_bit_yuv = raw_format == "I420" || raw_format == "NV12";
+  const std::string stages_format = deep_input && eight_bit_yuv ? "I420_10LE" : raw_format;
+  const bool packed_yuv = eight_bit_yuv || stages_format == "I420_10LE" || stages_format == "P010_10LE";
   subsampled_ = packed_yuv;
-  GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, raw_format.c_str(), NULL)
+  GstCaps *sys = packed_yuv ? gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, stages_format.c_str(), NULL)
                             : gst_caps_from_string("video/x-raw");
   g_object_set(to_system_, "caps", sys, NULL);
   gst_caps_unref(sys);
@@ -137,8 +152,9 @@ GstCaps *video_caps_for(Processing processing) {
   // CUDA memory only where the GPU path runs, in the formats the stages
   // take; system memory in any format (a videoconvert goes in front).
   if (processing == Processing::Gpu)
-    return gst_caps_from_string("video/x-raw(memory:CUDAMemory), format=(string){ NV12, I420, RGBA, BGRA, RGBx, BGRx }; "
-                                "video/x-raw");
+    return gst_caps_from_string(
+        "video/x-raw(memory:CUDAMemory), format=(string){ NV12, I420, RGBA, BGRA, RGBx, BGRx, P010_10LE, I420_10LE }; "
+        "video/x-raw");
   return gst_caps_from_string("video/x-raw");
 }
 
@@ -246,8 +262,9 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
                       refuse_rotation, new RotationGuard{head_},
                       [](gpointer p) { delete static_cast<RotationGuard *>(p); });
     if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
-    // Formats the stages do not take (NVDEC's P010 for 10-bit video) are
-    // converted on the device by nvcodec's cudaconvert where it is
+    // Formats the stages do not take (NVDEC's P016 of 12-bit video, its
+    // 4:4:4 formats) are converted on the device by nvcodec's cudaconvert
+    // where it is
     // registered (it needs NVRTC); otherwise the frames are downloaded,
     // converted by videoconvert and uploaded again by pseudo3dconvert.
     GstElement *last = head_;

@@ -18,6 +18,7 @@
 
 #include <string>
 
+#include "encoder.h"
 #include "options.h"
 
 namespace p3d::convert {
@@ -34,9 +35,14 @@ class VideoChain {
   // with refusal() saying why when the chain refused the stream.
   bool attach(GstPad *decoded, const GstCaps *caps);
   const std::string &refusal() const { return refusal_; }
-  // Feeds the encoder `raw_format` instead of build()'s: before attach(),
-  // while no caps have passed the chain (10-bit input for a Main10 encoder).
-  void use_format(const std::string &raw_format);
+  // The format the encoder is fed for the decoded caps, set before
+  // attach(), while no caps have passed the chain: its deep_format for
+  // deep video where it has one (Main10), else its raw_format. NVDEC's
+  // deep frames reach the stages as they are, and the stages keep their
+  // depth: for an 8-bit encoder they pack 10-bit 4:2:0, which
+  // videoconvert narrows (system memory is narrowed before the stages).
+  // Returns the format fed.
+  std::string feed_encoder(const EncoderChoice &encoder, const GstCaps *decoded);
   // What the chain takes, for decoders' caps queries (new ref).
   GstCaps *accepted_caps() const;
   // Counts frames reaching the encoder into `progress`, with their position
@@ -58,6 +64,8 @@ class VideoChain {
   ~VideoChain();
 
  private:
+  // Feeds the encoder `raw_format`; deep_input: the stages see deep frames.
+  void use_format(const std::string &raw_format, bool deep_input = false);
   GstElement *bin_ = nullptr, *head_ = nullptr, *convert_ = nullptr, *tail_ = nullptr, *to_system_ = nullptr;
   GstPad *head_sink_ = nullptr;
   GstPad *counted_ = nullptr;  // where count_frames() counts, and its probe

@@ -1,0 +1,201 @@
+// The kernels of 16-bit pictures (P010, I420_10, RGBA64): the warp's, the
+// pack's, the bars', the change compare's and the grey depth's kernels
+// built for them, and the high-byte copy the depth estimate and the
+// filter read. This translation unit defines
+// P3D_DEVICE_DEEP before any include, so that its device code reads the
+// deep formats (common/frame.h, is_deep); the 8-bit kernels live in the
+// other files, which compile those branches away.
+#define P3D_DEVICE_DEEP 1
+
+#include <algorithm>
+
+#include "bars_kernels.cuh"
+#include "change_compare.cuh"
+#include "depth_grey.cuh"
+#include "high_bytes_gpu.h"
+#include "pack_kernels.cuh"
+#include "warp_neighbour.cuh"
+#include "warp_rows.cuh"
+#include "warp_smooth.cuh"
+
+namespace p3d {
+namespace {
+
+// A thread narrows 8 samples of a row of plane blockIdx.z (one 16-byte
+// load and one 8-byte store where both rows are aligned), high_byte()
+// each. The plane's pointers and sizes are picked by value, not indexed
+// by blockIdx.z: an array of a kernel parameter indexed at run time would
+// be copied to local memory by every thread.
+constexpr int kHighBytesPerThread = 8;
+
+// One plane of the copy: its rows in and out, their strides and sizes.
+struct HighBytePlane {
+  const uint8_t *in;
+  uint8_t *out;
+  int in_stride, out_stride, samples, rows;
+};
+struct HighBytePlanes {
+  HighBytePlane p0, p1, p2;
+};
+
+__global__ void high_byte_copy_kernel(PixelFormat format, HighBytePlanes planes) {
+  chained_kernel_start();
+  const HighBytePlane pl = blockIdx.z == 0 ? planes.p0 : blockIdx.z == 1 ? planes.p1 : planes.p2;
+  const int i0 = (blockIdx.x * blockDim.x + threadIdx.x) * kHighBytesPerThread;
+  const int y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (y >= pl.rows || i0 >= pl.samples) return;
+  const uint8_t *in = pl.in + static_cast<size_t>(y) * pl.in_stride + 2 * static_cast<size_t>(i0);
+  uint8_t *to = pl.out + static_cast<size_t>(y) * pl.out_stride + i0;
+  const bool whole = i0 + kHighBytesPerThread <= pl.samples;
+  if (whole && reinterpret_cast<uintptr_t>(in) % 16 == 0 && reinterpret_cast<uintptr_t>(to) % 8 == 0) {
+    const uint4 v = *reinterpret_cast<const uint4 *>(in);
+    unsigned lo = 0, hi = 0;
+#pragma unroll
+    for (int k = 0; k < 2; ++k) {
+      const unsigned a = k == 0 ? v.x : v.z, b = k == 0 ? v.y : v.w;
+      const unsigned word = high_byte(format, static_cast<int>(a & 0xffffu)) |
+                            high_byte(format, static_cast<int>(a >> 16)) << 8 |
+                            high_byte(format, static_cast<int>(b & 0xffffu)) << 16 |
+                            static_cast<unsigned>(high_byte(format, static_cast<int>(b >> 16))) << 24;
+      (k == 0 ? lo : hi) = word;
+    }
+    *reinterpret_cast<uint2 *>(to) = make_uint2(lo, hi);
+    return;
+  }
+  const int n = whole ? kHighBytesPerThread : pl.samples - i0;
+  for (int k = 0; k < n; ++k) to[k] = high_byte(format, load_u16(in, k));
+}
+
+}  // namespace
+
+CudaStatus high_byte_copy_gpu(const FrameView &src, const FrameView &out, cudaStream_t stream, int planes) {
+  if (!is_deep(src.format) || out.format != high_byte_format(src.format) || out.width != src.width ||
+      out.height != src.height || planes < 1 || planes > frame_plane_count(src.format))
+    return CudaStatus{cudaErrorInvalidValue, "high_byte_copy_gpu: a deep frame into its high_byte_format", __FILE__,
+                      __LINE__};
+  HighBytePlane each[3] = {};
+  int widest = 0, tallest = 0;
+  for (int p = 0; p < planes; ++p) {
+    int row_bytes = 0, rows = 0;
+    frame_plane_size(src.format, src.width, src.height, p, &row_bytes, &rows);
+    each[p] = HighBytePlane{src.plane[p], out.plane[p], src.stride[p], out.stride[p], row_bytes / 2, rows};
+    widest = std::max(widest, each[p].samples);
+    tallest = std::max(tallest, each[p].rows);
+  }
+  const dim3 block(32, 8);
+  const int threads_x = (widest + kHighBytesPerThread - 1) / kHighBytesPerThread;
+  const dim3 grid((threads_x + 31) / 32, (tallest + 7) / 8, planes);
+  P3D_CUDA_TRY(launch_chained(high_byte_copy_kernel, grid, block, 0, stream, src.format,
+                              HighBytePlanes{each[0], each[1], each[2]}));
+  return {};
+}
+
+CudaStatus HighByteFrame::of(const FrameView &src, cudaStream_t stream, FrameView *view8, bool luma_only) {
+  *view8 = src;
+  if (!is_deep(src.format)) return {};
+  FrameView out{};
+  out.format = high_byte_format(src.format);
+  out.width = src.width;
+  out.height = src.height;
+  const int planes = frame_plane_count(out.format);
+  size_t offset[3] = {0, 0, 0}, total = 0;
+  for (int p = 0; p < planes; ++p) {
+    int row = 0, rows = 0;
+    frame_plane_size(out.format, src.width, src.height, p, &row, &rows);
+    out.stride[p] = (row + 15) & ~15;
+    offset[p] = total;
+    total += static_cast<size_t>(out.stride[p]) * rows;
+  }
+  P3D_CUDA_TRY_STATUS(copy_.ensure(total));
+  for (int p = 0; p < planes; ++p) out.plane[p] = copy_.as<uint8_t>() + offset[p];
+  P3D_CUDA_TRY_STATUS(high_byte_copy_gpu(src, out, stream, luma_only ? 1 : planes));
+  *view8 = out;
+  return {};
+}
+
+namespace bars_detail {
+
+CudaStatus launch_bar_counts_deep(const FrameView &frame, int luma_threshold, uint32_t *rows, uint32_t *cols,
+                                  cudaStream_t stream) {
+  return launch_bar_counts_of(frame, luma_threshold, rows, cols, stream);
+}
+CudaStatus launch_views_outside_deep(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
+                                     cudaStream_t stream, StageGate gate) {
+  return launch_views_outside_of<Rgba16>(src, m, active, pair, stream, gate);
+}
+
+}  // namespace bars_detail
+
+namespace depth_grey_detail {
+
+CudaStatus launch_depth_from_grey_deep(const FrameView &grey, const YuvToRgb &m, ImageView<float> depth,
+                                       cudaStream_t stream) {
+  return launch_depth_from_grey_of(grey, m, depth, stream);
+}
+
+}  // namespace depth_grey_detail
+
+namespace change_detail {
+
+CudaStatus launch_compare_deep(const FrameView &frame, const KeptPlanes &kept, int planes, float tolerance,
+                               uint8_t *flags, int tiles_x, int tiles_y, cudaStream_t stream) {
+  return launch_compare_of<uint16_t>(frame, kept, planes, tolerance, flags, tiles_x, tiles_y, stream);
+}
+
+}  // namespace change_detail
+
+namespace pack_detail {
+
+CudaStatus launch_pack_deep(const PackKernelParams &kp, cudaStream_t stream) {
+  return with_input(kp.p.input, [&](auto input) { return launch_plain<decltype(input)::value, Rgba16>(kp, stream); });
+}
+
+}  // namespace pack_detail
+
+namespace warp_detail {
+
+template <>
+CudaStatus query_row_kernels<Rgba16>(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
+                                     RowKernelChoice *choice) {
+  return query_row_kernels_of<Rgba16, false>(fill, W, smem_optin, attributes_set, choice);
+}
+
+// 16-bit pictures take Row and Group blocks (query_row_kernels<Rgba16>
+// offers no other).
+template <>
+CudaStatus launch_row_kernel<Rgba16>(const RowLaunch &l) {
+  switch (l.keys) {
+    case KeyPlace::NarrowSharedPerEye:
+      if (l.group_rows == 1) return launch_rows<NarrowKeys, true, true, RowBlock::Row, false, Rgba16>(l);
+      if (!l.rows_together && !l.wide_groups)
+        return launch_rows<NarrowKeys, true, true, RowBlock::Group, false, Rgba16>(l);
+      break;
+    case KeyPlace::NarrowShared:
+      return launch_rows<NarrowKeys, true, false, RowBlock::Row, false, Rgba16>(l);
+    case KeyPlace::WideShared:
+      return launch_rows<WideKeys, true, false, RowBlock::Row, false, Rgba16>(l);
+    case KeyPlace::WideGlobal:
+      return launch_rows<WideKeys, false, false, RowBlock::Row, false, Rgba16>(l);
+  }
+  return CudaStatus{cudaErrorInvalidValue, "KeyPlace of a 16-bit picture", __FILE__, __LINE__};
+}
+
+template <>
+CudaStatus launch_smooth<Rgba16>(const SmoothPlan &plan, const SmoothScratch &sc, const FrameView &out, int W, int H,
+                                 cudaStream_t stream, int smem_optin, std::vector<const void *> *attributes_set,
+                                 SmoothSumsLaunch *threads_cache) {
+  return launch_smooth_of<Rgba16>(plan, sc, out, W, H, stream, smem_optin, attributes_set, threads_cache);
+}
+
+template <>
+CudaStatus launch_neighbour_step<Rgba16>(const FrameView &out, int W, int H, const uint8_t *mask_in,
+                                         uint8_t *mask_out, unsigned *filled, cudaStream_t stream) {
+  return launch_neighbour_step_of<Rgba16>(out, W, H, mask_in, mask_out, filled, stream);
+}
+template <>
+CudaStatus launch_paint_holes<Rgba16>(const FrameView &out, int W, int H, const uint8_t *mask, cudaStream_t stream) {
+  return launch_paint_holes_of<Rgba16>(out, W, H, mask, stream);
+}
+
+}  // namespace warp_detail
+}  // namespace p3d
