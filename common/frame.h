@@ -307,7 +307,7 @@ P3D_HD uint32_t swap_rb_word(uint32_t w) {
 // rgba_word(load_rgba()) of pixels x and x + 1 of row y into w[0] and w[1]
 // (x even; x + 1 == width: w[0] only). A 4:2:0 pair shares its chroma
 // sample, read and multiplied once: the warp converts each source row this
-// way (common/warp.cpp, cuda/warp_rows.cu).
+// way (common/warp.cpp, cuda/warp_rows.cuh).
 P3D_HD void load_rgba_pair_words(const FrameView &f, int x, int y, const YuvToRgb &m, uint32_t *w) {
   const bool second = x + 1 < f.width;
   if (is_packed_rgb(f.format) || is_deep(f.format)) {

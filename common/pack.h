@@ -395,7 +395,7 @@ P3D_HD uint8_t linear_to_code(const AnaglyphMatrices &am, float v) {
 // nearest, halves up) and clipped to 0..255. Integer arithmetic, so the
 // CPU and every GPU kernel agree without care for operation order; a pixel
 // is 18 multiply-adds where the float mix takes about 60 instructions,
-// which counts in the warp's fused anaglyph (cuda/warp_rows.cu), a kernel bound
+// which counts in the warp's fused anaglyph (cuda/warp_rows.cuh), a kernel bound
 // by its instructions (measured: docs/benchmarks.md, Design measurements,
 // "Fused pack"). |q| < 2^17 and 6 * 255 * 2^17 < 2^31: no
 // overflow. Against the float mix it differs by at most one code, where

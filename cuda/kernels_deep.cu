@@ -1,11 +1,18 @@
-// The kernels of 16-bit pictures (P010, I420_10, RGBA64): the warp's, the
-// pack's, the bars', the change compare's and the grey depth's kernels
-// built for them, and the high-byte copy the depth estimate and the
-// filter read. This translation unit defines
+// The kernels of 16-bit pictures (P010, I420_10, RGBA64): the warp's (row,
+// smooth sums, NeighborAverage), the pack's, the bars', the change
+// compare's and the grey depth's kernels built for them, and the
+// high-byte copy the depth estimate and the filter read. This translation unit defines
 // P3D_DEVICE_DEEP before any include, so that its device code reads the
 // deep formats (common/frame.h, is_deep); the 8-bit kernels live in the
 // other files, which compile those branches away.
 #define P3D_DEVICE_DEEP 1
+
+// The shared P3D_HD helpers have other device bodies here than in the
+// 8-bit units: only whole-program compilation (no -rdc, one device image a
+// unit) keeps each unit's kernels with its own.
+#ifdef __CUDACC_RDC__
+#error "cuda/kernels_deep.cu needs whole-program compilation (-rdc=false)"
+#endif
 
 #include <algorithm>
 

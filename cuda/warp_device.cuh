@@ -1,5 +1,6 @@
-// Device code that several of the warp's kernels share (cuda/warp_rows.cu,
-// warp_smooth.cu, warp_packed.cu, warp_neighbour.cu): each translation unit
+// Device code that several of the warp's kernels share (cuda/warp_rows.cuh,
+// warp_smooth.cuh, warp_neighbour.cuh, warp_packed.cu; built by warp_rows.cu,
+// warp_smooth.cu, warp_neighbour.cu and kernels_deep.cu): each translation unit
 // compiles its own copy (no -rdc).
 #pragma once
 

@@ -4,7 +4,7 @@
 // shared memory and block size, and the fused anaglyph's patch grid.
 //
 // Plain C++, no CUDA runtime: each choice is a function of numbers. The
-// launchers (cuda/warp.cu, warp_rows.cu, warp_smooth.cu, warp_packed.cu)
+// launchers (cuda/warp.cu, warp_rows.cuh, warp_smooth.cuh, warp_packed.cu)
 // ask the device (the opt-in shared memory a block, the threads an SM
 // holds resident of each candidate kernel, the SM count) and pass what it
 // said; tests/plan/test_warp_plan.cpp checks the choices on the CPU. The
@@ -49,7 +49,7 @@ bool row_fits(int W, size_t key_bytes, int smem_optin, size_t pixel_bytes = size
 // in a block of a row's size and launch bounds (Group) or in one of half
 // the threads an SM holds, one row after another (WideGroup) or side by
 // side with a source row buffer each (RowsTogether: render_rows_together,
-// cuda/warp_rows.cu).
+// cuda/warp_rows.cuh).
 // A WideGroup block: half the threads an SM holds (1024 on Hopper), two an
 // SM, for rows whose both z-buffers would leave room for fewer row blocks
 // (8K: 92 KB of shared memory a block, two still fit an SM, where a row's
@@ -107,7 +107,7 @@ struct RowKernelChoice {
 };
 
 // What the device holds of each candidate row kernel for rows of W pixels
-// (NarrowKeys, the fill's instances; cuda/warp_rows.cu, query_row_kernels):
+// (NarrowKeys, the fill's instances; cuda/warp_rows.cuh, query_row_kernels_of):
 // resident threads an SM (blocks an SM times the block's threads) of the
 // eyes in turn and both eyes at once in a row's block (row_threads), of
 // Group blocks, of WideGroup blocks and of RowsTogether blocks of 1 <<
@@ -203,7 +203,7 @@ P3D_HD size_t smooth_wide_sum_bytes(size_t pixel_bytes) {
   return pixel_bytes == sizeof(Rgba16) ? sizeof(SmoothSum16) : sizeof(SmoothSum);
 }
 
-// A tile of the sums kernel (cuda/warp_smooth.cu) is kSmoothTileW columns
+// A tile of the sums kernel (cuda/warp_smooth.cuh) is kSmoothTileW columns
 // x up to kSmoothTileRowsMax rows of one eye, in a block of
 // kSmoothTileThreads threads, or kSmoothTileThreadsMax where an SM holds as
 // many tiles of that size (choose_smooth_threads).
@@ -292,7 +292,7 @@ struct SmoothThreads {
 SmoothThreads choose_smooth_threads(int tiles, int tiles_max, int tiles_tight);
 
 // The sums kernel's block size last chosen, for a kernel and its shared
-// memory (cuda/warp_smooth.cu, smooth_tile_threads).
+// memory (cuda/warp_smooth.cuh, smooth_tile_threads).
 struct SmoothSumsLaunch {
   const void *kernel = nullptr;  // the kernel with no register bound, for the frame's plan
   size_t smem = 0;

@@ -124,16 +124,25 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
   // Anaglyph colours sit in the chroma: 4:4:4 keeps them from bleeding
   // (x264 High 4:4:4, x265 Main 4:4:4). Packed stereo stays 4:2:0 for players.
   c->raw_format = layout == "anaglyph" && sink_accepts_format(c->factory.c_str(), "Y444") ? "Y444" : "I420";
-  // 10-bit input keeps 10 bits through the stages (CPU or GPU) into
-  // H.265 Main 10: x265enc takes I420_10LE (Y444_10LE, Main 4:4:4 10, for
-  // anaglyphs), NVENC P010_10LE (4:2:0 only).
-  const std::string deep = c->factory == "x265enc"                                 ? c->raw_format + "_10LE"
+  // 10-bit input keeps 10 bits through the stages into H.265 Main 10:
+  // x265enc takes I420_10LE (Y444_10LE, Main 4:4:4 10, for anaglyphs on
+  // the CPU path), NVENC P010_10LE. On the GPU path an anaglyph keeps its
+  // 4:4:4 colours in 8 bits: CUDA memory holds no 16-bit R'G'B' for the
+  // stages to hand on, only 10-bit 4:2:0.
+  const bool gpu_anaglyph = processing == Processing::Gpu && c->raw_format == "Y444";
+  const std::string deep = gpu_anaglyph                                           ? std::string()
+                           : c->factory == "x265enc"                              ? c->raw_format + "_10LE"
                            : c->factory == "nvh265enc" && c->raw_format == "I420" ? std::string("P010_10LE")
                                                                                   : std::string();
   if (!deep.empty() && sink_accepts_format(c->factory.c_str(), deep.c_str()))
     c->deep_format = deep;
+  else if (gpu_anaglyph)
+    c->deep_hint = std::string("the GPU path keeps an anaglyph's 4:4:4 colours in 8 bits: --processing cpu") +
+                   (h264 ? " --codec h265" : "") + " keeps 10";
+  else if (h264)
+    c->deep_hint = "--codec h265 keeps 10";
   else
-    c->deep_hint = h264 ? "--codec h265 keeps 10" : c->factory + " here takes no 10-bit input";
+    c->deep_hint = c->factory + " here takes no 10-bit input";
   return true;
 }
 

@@ -123,7 +123,16 @@ std::string VideoChain::feed_encoder(const EncoderChoice &encoder, const GstCaps
     return encoder.deep_format;
   }
   const GstCapsFeatures *f = gst_caps_is_empty(decoded) ? nullptr : gst_caps_get_features(decoded, 0);
-  use_format(encoder.raw_format, f && gst_caps_features_contains(f, "memory:CUDAMemory"));
+  const bool cuda = f && gst_caps_features_contains(f, "memory:CUDAMemory");
+  // An 8-bit encoder: CUDA frames are narrowed on the device by
+  // cudaconvert where it is registered, and always for formats the 10-bit
+  // stages cannot pack on CUDA memory (an anaglyph's 4:4:4, which would
+  // otherwise go through 4:2:0); else the stages keep 10 bits to the end.
+  const bool yuv420 = encoder.raw_format == "I420" || encoder.raw_format == "NV12";
+  GstElementFactory *cudaconvert = gst_element_factory_find("cudaconvert");
+  if (cudaconvert) gst_object_unref(cudaconvert);
+  narrow_before_stages_ = cuda && (!yuv420 || cudaconvert != nullptr);
+  use_format(encoder.raw_format, cuda && !narrow_before_stages_);
   return encoder.raw_format;
 }
 
@@ -263,13 +272,14 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
                       [](gpointer p) { delete static_cast<RotationGuard *>(p); });
     if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
     // Formats the stages do not take (NVDEC's P016 of 12-bit video, its
-    // 4:4:4 formats) are converted on the device by nvcodec's cudaconvert
-    // where it is
-    // registered (it needs NVRTC); otherwise the frames are downloaded,
-    // converted by videoconvert and uploaded again by pseudo3dconvert.
+    // 4:4:4 formats), and deep frames feed_encoder() narrows, are converted
+    // on the device by nvcodec's cudaconvert where it is registered (it
+    // needs NVRTC); otherwise the frames are downloaded, converted by
+    // videoconvert and uploaded again by pseudo3dconvert. Narrowed frames
+    // pass a filter of the 8-bit formats.
     GstElement *last = head_;
     GstCaps *taken = video_caps_for(Processing::Gpu);
-    const bool convert_format = known && !gst_caps_can_intersect(caps, taken);
+    const bool convert_format = known && (narrow_before_stages_ || !gst_caps_can_intersect(caps, taken));
     gst_caps_unref(taken);
     if (convert_format) {
       std::vector<GstElement *> converters;
@@ -281,6 +291,16 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
         g_object_set(vconv, "n-threads", 0u, NULL);
         converters = {down, vconv};
       }
+      if (narrow_before_stages_) {
+        GstElement *eight = add_to_bin(bin_, "capsfilter");
+        if (!eight) return false;
+        GstCaps *formats = gst_caps_from_string(
+            "video/x-raw(memory:CUDAMemory), format=(string){ NV12, I420, RGBA, BGRA, RGBx, BGRx }; "
+            "video/x-raw, format=(string){ NV12, I420, RGBA, BGRA, RGBx, BGRx }");
+        g_object_set(eight, "caps", formats, NULL);
+        gst_caps_unref(formats);
+        converters.push_back(eight);
+      }
       for (GstElement *c : converters) {
         if (!gst_element_link(last, c)) return false;
         last = c;
@@ -290,7 +310,8 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   }
   if (gst_pad_link(decoded, head_sink_) != GST_PAD_LINK_OK) return false;
   // System memory: videoconvert passes the formats the stages take through
-  // untouched and converts the rest (10-bit, 4:2:2...).
+  // untouched and converts the rest (4:2:2, 12-bit, and 10-bit for an
+  // 8-bit encoder...).
   GstElement *vconv = add_to_bin(bin_, "videoconvert");
   if (!vconv) return false;
   g_object_set(vconv, "n-threads", 0u, NULL);

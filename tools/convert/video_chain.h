@@ -39,8 +39,10 @@ class VideoChain {
   // attach(), while no caps have passed the chain: its deep_format for
   // deep video where it has one (Main10), else its raw_format. NVDEC's
   // deep frames reach the stages as they are, and the stages keep their
-  // depth: for an 8-bit encoder they pack 10-bit 4:2:0, which
-  // videoconvert narrows (system memory is narrowed before the stages).
+  // depth: for an 8-bit 4:2:0 encoder they pack 10-bit 4:2:0, which
+  // videoconvert narrows, unless cudaconvert can narrow the frames on the
+  // device first; an 8-bit 4:4:4 encoder (anaglyphs) gets frames narrowed
+  // before the stages (system memory is narrowed before them in any case).
   // Returns the format fed.
   std::string feed_encoder(const EncoderChoice &encoder, const GstCaps *decoded);
   // What the chain takes, for decoders' caps queries (new ref).
@@ -74,6 +76,7 @@ class VideoChain {
   Processing processing_ = Processing::Cpu;
   bool subsampled_ = false;  // the encoder takes 4:2:0, which needs even sizes
   bool cuda_input_ = false, cropped_ = false;
+  bool narrow_before_stages_ = false;  // deep CUDA frames narrowed to 8 bits before the stages (feed_encoder)
   std::string refusal_;
 };
 
