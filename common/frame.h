@@ -239,8 +239,20 @@ P3D_HD Rgba load_packed(const FrameView &f, int x, int y) {
   const bool bgr = is_bgr_order(f.format), alpha = has_alpha(f.format);
   return Rgba{bgr ? p[2] : p[0], p[1], bgr ? p[0] : p[2], alpha ? p[3] : static_cast<uint8_t>(255)};
 }
+// In device code an 8-byte aligned RGBA64 pixel (every pair buffer the
+// stages allocate) moves as one 64-bit word: the 8 byte accesses it takes
+// otherwise bound the 16-bit pack and fill kernels by their load and store
+// instructions. Other addresses keep the byte accesses, so no frame can
+// make the device access memory misaligned.
 P3D_HD Rgba16 load_packed16(const FrameView &f, int x, int y) {
   const uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0];
+#ifdef __CUDA_ARCH__
+  if (reinterpret_cast<uintptr_t>(p + 8 * static_cast<size_t>(x)) % 8 == 0) {
+    const uint64_t w = *reinterpret_cast<const uint64_t *>(p + 8 * static_cast<size_t>(x));
+    return Rgba16{static_cast<uint16_t>(w), static_cast<uint16_t>(w >> 16), static_cast<uint16_t>(w >> 32),
+                  static_cast<uint16_t>(w >> 48)};
+  }
+#endif
   return Rgba16{static_cast<uint16_t>(load_u16(p, 4 * x)), static_cast<uint16_t>(load_u16(p, 4 * x + 1)),
                 static_cast<uint16_t>(load_u16(p, 4 * x + 2)), static_cast<uint16_t>(load_u16(p, 4 * x + 3))};
 }
@@ -355,6 +367,13 @@ P3D_HD void store_rgba(const FrameView &f, int x, int y, Rgba c) {
 P3D_HD void store_rgba16(const FrameView &f, int x, int y, Rgba16 c) {
   if (!is_rgba64(f.format)) return store_rgba(f, x, y, narrow(c));
   uint8_t *p = f.plane[0] + static_cast<size_t>(y) * f.stride[0];
+#ifdef __CUDA_ARCH__
+  if (reinterpret_cast<uintptr_t>(p + 8 * static_cast<size_t>(x)) % 8 == 0) {  // as load_packed16
+    *reinterpret_cast<uint64_t *>(p + 8 * static_cast<size_t>(x)) =
+        c.r | static_cast<uint64_t>(c.g) << 16 | static_cast<uint64_t>(c.b) << 32 | static_cast<uint64_t>(c.a) << 48;
+    return;
+  }
+#endif
   store_u16(p, 4 * x, c.r);
   store_u16(p, 4 * x + 1, c.g);
   store_u16(p, 4 * x + 2, c.b);

@@ -419,18 +419,30 @@ P3D_HD Rgba anaglyph_gamma(const AnaglyphMatrices &am, Rgba l, Rgba r) {
 }
 
 // The gamma mix of 16-bit pixels: anaglyph_mix_word()'s sums on 16-bit
-// channels, in 64 bits (6 * 65535 * 2^17 > 2^31), clipped to 0..65535.
-P3D_HD Rgba16 anaglyph_gamma16(const AnaglyphMatrices &am, Rgba16 l, Rgba16 r) {
-  const long long lc[3] = {l.r, l.g, l.b}, rc[3] = {r.r, r.g, r.b};
-  long long v[3];
-  for (int k = 0; k < 3; ++k) {
-    const long long sum = am.left_q[3 * k] * lc[0] + am.left_q[3 * k + 1] * lc[1] + am.left_q[3 * k + 2] * lc[2] +
-                          am.right_q[3 * k] * rc[0] + am.right_q[3 * k + 1] * rc[1] + am.right_q[3 * k + 2] * rc[2] +
-                          32768;
-    const long long q = sum >> 16;
-    v[k] = q < 0 ? 0 : (q > 65535 ? 65535 : q);
+// channels c, sum = sum(q * c) + 2^15, shifted down 16 bits and clipped
+// to 0..65535. The sum needs 36 bits (6 * 65535 * 2^17 > 2^31), but the GPU
+// has no 64-bit multiply-add, and 64-bit sums made the 16-bit anaglyph
+// pack kernel bound by its instructions. So the sum is split: with
+// c = 256 h + l (its high and low bytes), sum = 256 A + B + 2^15 with
+// A = sum(q * h) and B = sum(q * l), each |.| < 6 * 2^17 * 255 < 2^31; with
+// A = 256 a1 + a0 (a1 = A >> 8, a0 = A & 255),
+// sum >> 16 = a1 + ((256 a0 + B + 2^15) >> 16): the 64-bit result, in
+// 32-bit integers (tests/common/test_pack.cpp checks it against the sum in
+// 64 bits).
+P3D_HD int mix16_channel(const int32_t *lq, const int32_t *rq, const int lc[3], const int rc[3]) {
+  int a = 0, b = 0;
+  for (int i = 0; i < 3; ++i) {
+    a += lq[i] * (lc[i] >> 8) + rq[i] * (rc[i] >> 8);
+    b += lq[i] * (lc[i] & 255) + rq[i] * (rc[i] & 255);
   }
-  return Rgba16{static_cast<uint16_t>(v[0]), static_cast<uint16_t>(v[1]), static_cast<uint16_t>(v[2]), l.a};
+  const int q = (a >> 8) + ((((a & 255) << 8) + b + 32768) >> 16);
+  return q < 0 ? 0 : (q > 65535 ? 65535 : q);
+}
+P3D_HD Rgba16 anaglyph_gamma16(const AnaglyphMatrices &am, Rgba16 l, Rgba16 r) {
+  const int lc[3] = {l.r, l.g, l.b}, rc[3] = {r.r, r.g, r.b};
+  return Rgba16{static_cast<uint16_t>(mix16_channel(am.left_q, am.right_q, lc, rc)),
+                static_cast<uint16_t>(mix16_channel(am.left_q + 3, am.right_q + 3, lc, rc)),
+                static_cast<uint16_t>(mix16_channel(am.left_q + 6, am.right_q + 6, lc, rc)), l.a};
 }
 
 // The 8-bit code nearest a 16-bit level (round(v / 257)).

@@ -152,8 +152,52 @@ CudaStatus launch_compare_deep(const FrameView &frame, const KeptPlanes &kept, i
 }  // namespace change_detail
 
 namespace pack_detail {
+namespace {
+
+// The 16-bit default case, an anaglyph of a side-by-side RGBA64 pair into
+// RGBA64, two pixels a thread: each eye's two input pixels come in one
+// 16-byte load and the two outputs go in one 16-byte store (the launcher
+// checks 16-byte aligned rows and an even view width, so no thread has a
+// ragged end), anaglyph() per pixel as pack_pixel_for gives it. The
+// generic kernel reads and writes each pixel through the format-generic
+// load_pixel / store_pixel, which next to the mix's own sums made this
+// pack bound by its instructions (measured: docs/benchmarks.md, "10-bit
+// frames (P010)").
+constexpr int kDeepVec = 2;
+__global__ void pack_anaglyph_pair16_vec(const PackKernelParams kp) {
+  chained_kernel_start();
+  if (kp.gate.closed()) return;
+  const int x0 = (blockIdx.x * blockDim.x + threadIdx.x) * kDeepVec;
+  const int y = (gridDim.y - 1 - blockIdx.y) * blockDim.y + threadIdx.y;  // bottom up, as every pack kernel
+  if (x0 >= kp.out.width || y >= kp.out.height) return;
+  const int w = kp.in.width / 2;
+  const uint8_t *row = kp.in.plane[0] + static_cast<size_t>(y) * kp.in.stride[0];
+  ulonglong2 eye[2];
+  for (int e = 0; e < 2; ++e)
+    eye[e] = *reinterpret_cast<const ulonglong2 *>(row + 8 * static_cast<size_t>(x0 + view_slot(kp.p, e) * w));
+  const uint64_t a = rgba_word(anaglyph(kp.am, word_rgba(static_cast<uint64_t>(eye[0].x)),
+                                        word_rgba(static_cast<uint64_t>(eye[1].x))));
+  const uint64_t b = rgba_word(anaglyph(kp.am, word_rgba(static_cast<uint64_t>(eye[0].y)),
+                                        word_rgba(static_cast<uint64_t>(eye[1].y))));
+  *reinterpret_cast<ulonglong2 *>(kp.out.plane[0] + static_cast<size_t>(y) * kp.out.stride[0] +
+                                  8 * static_cast<size_t>(x0)) = make_ulonglong2(a, b);
+}
+
+// pack_anaglyph_pair16_vec's conditions (besides the side-by-side input).
+bool anaglyph_pair16_vec(const PackParams &p, const FrameView &in, const FrameView &out) {
+  return p.layout == PackLayout::Anaglyph && out.format == PixelFormat::RGBA64 && (in.width / 2) % kDeepVec == 0 &&
+         rows_aligned(in, 0, 16) && rows_aligned(out, 0, 16);
+}
+
+}  // namespace
 
 CudaStatus launch_pack_deep(const PackKernelParams &kp, cudaStream_t stream) {
+  if (kp.p.input == StereoInput::SideBySide && anaglyph_pair16_vec(kp.p, kp.in, kp.out)) {
+    const dim3 block(kBlockX, kBlockY);
+    const dim3 grid((kp.out.width / kDeepVec + kBlockX - 1) / kBlockX, (kp.out.height + kBlockY - 1) / kBlockY);
+    P3D_CUDA_TRY(launch_chained(pack_anaglyph_pair16_vec, grid, block, 0, stream, kp));
+    return {};
+  }
   return with_input(kp.p.input, [&](auto input) { return launch_plain<decltype(input)::value, Rgba16>(kp, stream); });
 }
 
@@ -164,19 +208,18 @@ namespace warp_detail {
 template <>
 CudaStatus query_row_kernels<Rgba16>(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                                      RowKernelChoice *choice) {
-  return query_row_kernels_of<Rgba16, false>(fill, W, smem_optin, attributes_set, choice);
+  return query_row_kernels_of<Rgba16>(fill, W, smem_optin, attributes_set, choice);
 }
 
-// 16-bit pictures take Row and Group blocks (query_row_kernels<Rgba16>
-// offers no other).
+// 16-bit pictures take every block kind but the fused anaglyph's.
 template <>
 CudaStatus launch_row_kernel<Rgba16>(const RowLaunch &l) {
   switch (l.keys) {
     case KeyPlace::NarrowSharedPerEye:
       if (l.group_rows == 1) return launch_rows<NarrowKeys, true, true, RowBlock::Row, false, Rgba16>(l);
-      if (!l.rows_together && !l.wide_groups)
-        return launch_rows<NarrowKeys, true, true, RowBlock::Group, false, Rgba16>(l);
-      break;
+      if (l.rows_together) return launch_rows<NarrowKeys, true, true, RowBlock::RowsTogether, false, Rgba16>(l);
+      return l.wide_groups ? launch_rows<NarrowKeys, true, true, RowBlock::WideGroup, false, Rgba16>(l)
+                           : launch_rows<NarrowKeys, true, true, RowBlock::Group, false, Rgba16>(l);
     case KeyPlace::NarrowShared:
       return launch_rows<NarrowKeys, true, false, RowBlock::Row, false, Rgba16>(l);
     case KeyPlace::WideShared:

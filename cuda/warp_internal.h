@@ -115,7 +115,7 @@ template <>
 CudaStatus query_row_kernels<Rgba16>(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                                      RowKernelChoice *choice);
 // The row kernel for the run's key place, row groups and fill, on pixels
-// of type Px (Rgba16: the Row and Group blocks alone; warp_plan.h).
+// of type Px (Rgba16: no fused anaglyph; warp_plan.h).
 template <class Px>
 CudaStatus launch_row_kernel(const RowLaunch &l);
 template <>

@@ -143,8 +143,11 @@ bool rows_together_fit(int W, int smem_optin, size_t pixel_bytes = sizeof(Rgba))
 //    (measured: docs/benchmarks.md, Design measurements, "Warp: row
 //    groups").
 // Where both z-buffers do not fit (both_eyes_fit), only width, fill and
-// pixel size are set. 16-bit pictures (pixel_bytes 8) have no WideGroup
-// or RowsTogether kernels: their residency is 0.
+// pixel size are set. 16-bit pictures (pixel_bytes 8) go by the same rule
+// with their larger rows: at 4K on Hopper the eyes in turn and two
+// WideGroup blocks hold 2048 threads, a row's block with both z-buffers
+// 1536 and a RowsTogether block 1024, so their cells' rows take WideGroup
+// blocks.
 RowKernelChoice choose_row_kernels(HoleFill fill, int W, int smem_optin, const RowKernelResidency &resident,
                                    size_t pixel_bytes = sizeof(Rgba));
 

@@ -29,7 +29,7 @@ CudaStatus launch_row_kernel<Rgba>(const RowLaunch &l) {
 template <>
 CudaStatus query_row_kernels<Rgba>(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                                    RowKernelChoice *choice) {
-  return query_row_kernels_of<Rgba, true>(fill, W, smem_optin, attributes_set, choice);
+  return query_row_kernels_of<Rgba>(fill, W, smem_optin, attributes_set, choice);
 }
 
 }  // namespace warp_detail

@@ -749,10 +749,8 @@ CudaStatus resident_threads(const void *kernel, int threads, size_t smem, int *r
 // choose_row_kernels' residency of each candidate kernel of pixels Px,
 // read from the device: every kernel's shared-memory attributes set
 // first, then the threads an SM holds of each (RowsTogether only where its
-// block fits). kWideKinds: the WideGroup and RowsTogether kernels are
-// candidates too (the 8-bit kernels; the 16-bit ones take Row and Group
-// blocks alone).
-template <class Px, bool kWideKinds>
+// block fits).
+template <class Px>
 CudaStatus query_row_kernels_of(HoleFill fill, int W, int smem_optin, std::vector<const void *> *attributes_set,
                                 RowKernelChoice *choice) {
   constexpr size_t kPx = sizeof(Px);
@@ -764,35 +762,30 @@ CudaStatus query_row_kernels_of(HoleFill fill, int W, int smem_optin, std::vecto
   const auto in_turn = row_kernel_for<NarrowKeys, true, false, RowBlock::Row, false, Px>(fill);
   const auto both = row_kernel_for<NarrowKeys, true, true, RowBlock::Row, false, Px>(fill);
   const auto group = row_kernel_for<NarrowKeys, true, true, RowBlock::Group, false, Px>(fill);
-  if (!in_turn || !both || !group)
+  const auto wide = row_kernel_for<NarrowKeys, true, true, RowBlock::WideGroup, false, Px>(fill);
+  const auto together = row_kernel_for<NarrowKeys, true, true, RowBlock::RowsTogether, false, Px>(fill);
+  if (!in_turn || !both || !group || !wide || !together)
     return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
   for (const void *k : {reinterpret_cast<const void *>(in_turn), reinterpret_cast<const void *>(both),
-                        reinterpret_cast<const void *>(group)})
+                        reinterpret_cast<const void *>(group), reinterpret_cast<const void *>(wide),
+                        reinterpret_cast<const void *>(together)})
     P3D_CUDA_TRY_STATUS(allow_shared_memory(k, smem_optin, attributes_set));
   RowKernelResidency r;
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(in_turn), row_threads(W),
                                        row_smem_bytes(W, sizeof(NarrowKeys::Word), 1, kPx), &r.in_turn));
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(both), row_threads(W), smem_both, &r.both));
   P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(group), row_threads(W), smem_both, &r.group));
-  if constexpr (kWideKinds) {
-    const auto wide = row_kernel_for<NarrowKeys, true, true, RowBlock::WideGroup, false, Px>(fill);
-    const auto together = row_kernel_for<NarrowKeys, true, true, RowBlock::RowsTogether, false, Px>(fill);
-    if (!wide || !together)
-      return CudaStatus{cudaErrorInvalidValue, "WarpParams::fill is a HoleFill", __FILE__, __LINE__};
-    for (const void *k : {reinterpret_cast<const void *>(wide), reinterpret_cast<const void *>(together)})
-      P3D_CUDA_TRY_STATUS(allow_shared_memory(k, smem_optin, attributes_set));
-    // A wide block's size is its kernel's launch bound on this device's
-    // architecture (kWideGroupThreads of the machine code it runs).
-    cudaFuncAttributes wide_attr{}, together_attr{};
-    P3D_CUDA_TRY(cudaFuncGetAttributes(&wide_attr, reinterpret_cast<const void *>(wide)));
-    P3D_CUDA_TRY(cudaFuncGetAttributes(&together_attr, reinterpret_cast<const void *>(together)));
-    r.wide_block = wide_attr.maxThreadsPerBlock;
-    r.together_block = together_attr.maxThreadsPerBlock;
-    P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(wide), r.wide_block, smem_both, &r.wide));
-    if (rows_together_fit(W, smem_optin, kPx))
-      P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(together), r.together_block,
-                                           together_smem_bytes(W, 1 << kGroupShiftMax, kPx), &r.together));
-  }
+  // A wide block's size is its kernel's launch bound on this device's
+  // architecture (kWideGroupThreads of the machine code it runs).
+  cudaFuncAttributes wide_attr{}, together_attr{};
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&wide_attr, reinterpret_cast<const void *>(wide)));
+  P3D_CUDA_TRY(cudaFuncGetAttributes(&together_attr, reinterpret_cast<const void *>(together)));
+  r.wide_block = wide_attr.maxThreadsPerBlock;
+  r.together_block = together_attr.maxThreadsPerBlock;
+  P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(wide), r.wide_block, smem_both, &r.wide));
+  if (rows_together_fit(W, smem_optin, kPx))
+    P3D_CUDA_TRY_STATUS(resident_threads(reinterpret_cast<const void *>(together), r.together_block,
+                                         together_smem_bytes(W, 1 << kGroupShiftMax, kPx), &r.together));
   int dev = 0;
   P3D_CUDA_TRY(cudaGetDevice(&dev));
   P3D_CUDA_TRY(cudaDeviceGetAttribute(&r.sms, cudaDevAttrMultiProcessorCount, dev));

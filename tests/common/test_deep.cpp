@@ -266,6 +266,57 @@ TEST(DeepPack, LayoutsKeepSixteenBits) {
   }
 }
 
+// The 16-bit gamma mix (anaglyph_gamma16), computed in 32-bit integers,
+// equals its definition in 64 bits, sum(q * c) + 2^15 shifted down 16 bits
+// and clipped, for every method's matrices and for random matrices up to
+// the 2^17 bound, on random channels and the extremes 0 and 65535.
+TEST(DeepPack, GammaMixEqualsItsSixtyFourBitSums) {
+  std::mt19937 rng(2026);
+  std::uniform_int_distribution<int> level(0, 65535), q(-(1 << 17) + 1, (1 << 17) - 1);
+  auto reference = [](const AnaglyphMatrices &am, Rgba16 l, Rgba16 r) {
+    const long long lc[3] = {l.r, l.g, l.b}, rc[3] = {r.r, r.g, r.b};
+    uint16_t v[3];
+    for (int k = 0; k < 3; ++k) {
+      long long sum = 32768;
+      for (int i = 0; i < 3; ++i)
+        sum += static_cast<long long>(am.left_q[3 * k + i]) * lc[i] +
+               static_cast<long long>(am.right_q[3 * k + i]) * rc[i];
+      const long long shifted = sum >> 16;
+      v[k] = static_cast<uint16_t>(shifted < 0 ? 0 : (shifted > 65535 ? 65535 : shifted));
+    }
+    return Rgba16{v[0], v[1], v[2], l.a};
+  };
+  std::vector<AnaglyphMatrices> matrices;
+  for (const auto method : test::kAllMethods) matrices.push_back(anaglyph_matrices(AnaglyphGlasses::RedCyan, method));
+  for (int m = 0; m < 200; ++m) {
+    AnaglyphMatrices am = matrices[0];
+    for (int i = 0; i < 9; ++i) {
+      am.left_q[i] = q(rng);
+      am.right_q[i] = q(rng);
+    }
+    matrices.push_back(am);
+  }
+  const uint16_t extremes[2] = {0, 65535};
+  for (const AnaglyphMatrices &am : matrices) {
+    for (int n = 0; n < 2000; ++n) {
+      Rgba16 l{}, r{};
+      if (n < 128) {  // every corner of the extremes
+        l = Rgba16{extremes[n & 1], extremes[(n >> 1) & 1], extremes[(n >> 2) & 1], 65535};
+        r = Rgba16{extremes[(n >> 3) & 1], extremes[(n >> 4) & 1], extremes[(n >> 5) & 1], 65535};
+      } else {
+        l = Rgba16{static_cast<uint16_t>(level(rng)), static_cast<uint16_t>(level(rng)),
+                   static_cast<uint16_t>(level(rng)), static_cast<uint16_t>(level(rng))};
+        r = Rgba16{static_cast<uint16_t>(level(rng)), static_cast<uint16_t>(level(rng)),
+                   static_cast<uint16_t>(level(rng)), static_cast<uint16_t>(level(rng))};
+      }
+      const Rgba16 got = pack_detail::anaglyph_gamma16(am, l, r), want = reference(am, l, r);
+      ASSERT_TRUE(got.r == want.r && got.g == want.g && got.b == want.b && got.a == want.a)
+          << "l " << l.r << "," << l.g << "," << l.b << " r " << r.r << "," << r.g << "," << r.b << ": " << got.r
+          << "," << got.g << "," << got.b << " want " << want.r << "," << want.g << "," << want.b;
+    }
+  }
+}
+
 // Every layout and anaglyph method of a pair widened from an 8-bit one
 // gives the 8-bit output widened, within one level; reading back a pair
 // packed in each arrangement too.

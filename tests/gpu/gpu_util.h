@@ -62,11 +62,11 @@ cv::Mat cell_constant(const cv::Mat &depth, int shift);
 // Asserts inside: fails the current test on a CUDA error.
 void check_cuda(const CudaStatus &st);
 
-// An output frame of a packed RGB format in device memory with a chosen
-// stride and start offset, so that the kernels' aligned paths (word and
-// 16-byte stores) and their per-pixel paths (unaligned rows) both run, and
-// with a guard band after the last row. Every byte of the allocation starts
-// as `poison`.
+// An output frame of a packed RGB format (RGBA64 too) in device memory
+// with a chosen stride and start offset, so that the kernels' aligned
+// paths (word and 16-byte stores) and their per-pixel paths (unaligned
+// rows) both run, and with a guard band after the last row. Every byte of
+// the allocation starts as `poison`.
 class DeviceOutput {
  public:
   DeviceOutput(PixelFormat f, int w, int h, size_t stride, size_t offset, uint8_t poison) : poison_(poison) {
@@ -82,7 +82,7 @@ class DeviceOutput {
   }
   // Row-aligned like a pooled CUDA buffer: 512-byte pitch, aligned start.
   static DeviceOutput aligned(PixelFormat f, int w, int h, uint8_t poison) {
-    const size_t stride = (4 * static_cast<size_t>(w) + 64 + 511) / 512 * 512;
+    const size_t stride = (packed_pixel_bytes(f) * static_cast<size_t>(w) + 64 + 511) / 512 * 512;
     return DeviceOutput(f, w, h, stride, 0, poison);
   }
   FrameView view() const { return view_; }
@@ -99,7 +99,8 @@ class DeviceOutput {
     EXPECT_EQ(cudaSuccess, cudaMemcpy(all.data(), buf_.get(), bytes_, cudaMemcpyDeviceToHost));
     Result r{HostFrame(view_.format, view_.width, view_.height, 4)};
     const FrameView hv = r.frame.view();
-    const size_t row_bytes = 4 * static_cast<size_t>(view_.width), stride = view_.stride[0];
+    const size_t row_bytes = packed_pixel_bytes(view_.format) * static_cast<size_t>(view_.width);
+    const size_t stride = view_.stride[0];
     auto count_changed = [&](size_t from, size_t to) {
       for (size_t i = from; i < to; ++i) r.writes_outside += all[i] != poison_;
     };

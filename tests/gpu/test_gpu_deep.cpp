@@ -26,6 +26,7 @@
 #include "test_data.h"
 #include "warp.h"
 #include "warp_gpu.h"
+#include "warp_internal.h"
 
 namespace p3d {
 namespace {
@@ -254,8 +255,32 @@ TEST_F(GpuDeep, WarpAtEveryKeyPlace) {
     }
 }
 
+// The row kernels the device's residency picks for 16-bit rows take the
+// rows of a depth cell together (what WarpOnDepthGrids then compares). On
+// Hopper (cuda/warp_plan.h): RowsTogether blocks at 1080p, WideGroup
+// blocks at 4K.
+TEST_F(GpuDeep, RowsOfACellGoTogether) {
+  int dev = 0, optin = 0, major = 0;
+  ASSERT_EQ(cudaSuccess, cudaGetDevice(&dev));
+  ASSERT_EQ(cudaSuccess, cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+  ASSERT_EQ(cudaSuccess, cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, dev));
+  std::vector<const void *> attributes_set;
+  for (const int w : {1920, 3840}) {
+    warp_detail::RowKernelChoice c;
+    test::check_cuda(
+        warp_detail::query_row_kernels<Rgba16>(HoleFill::BackgroundSmooth, w, optin, &attributes_set, &c));
+    EXPECT_TRUE(c.groups) << w;
+    EXPECT_EQ(c.pixel_bytes, sizeof(Rgba16));
+    if (major == 9) {
+      EXPECT_EQ(c.rows_together, w == 1920) << w;
+      EXPECT_EQ(c.wide_groups, w == 3840) << w;
+    }
+  }
+}
+
 // Depth on cells of 2, 4 and 8 pixels, both eyes warped: the rows of a
-// group share one z-buffer (Group blocks), at a 1080p and a 4K width.
+// group share one z-buffer (RowsTogether and WideGroup blocks:
+// RowsOfACellGoTogether), at a 1080p and a 4K width.
 TEST_F(GpuDeep, WarpOnDepthGrids) {
   const uint32_t seed = fresh_seed();
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
@@ -269,29 +294,70 @@ TEST_F(GpuDeep, WarpOnDepthGrids) {
     }
 }
 
+// Every layout and method into each deep format, on views 45 and 46
+// pixels wide: an even width into RGBA64 takes the two-pixel anaglyph
+// kernel (pack_anaglyph_pair16_vec), an odd one the generic kernel; the
+// even width with the eyes swapped.
 TEST_F(GpuDeep, PackEveryLayoutIntoEveryDeepFormat) {
   const uint32_t seed = fresh_seed();
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
-  HostFrame pair(PixelFormat::RGBA64, 2 * 45, 27, 8);
+  for (const int vw : {45, 46}) {
+    HostFrame pair(PixelFormat::RGBA64, 2 * vw, 27, 8);
+    pair.fill_random(seed + vw);
+    const DeviceFrame dpair = DeviceFrame::upload(pair);
+    for (PixelFormat out_format : test::kDeepFormats)
+      for (PackLayout layout : test::kAllLayouts)
+        for (AnaglyphMethod method : test::kAllMethods) {
+          if (layout != PackLayout::Anaglyph && method != AnaglyphMethod::Dubois) continue;
+          PackParams p = test::pack_params(layout, AnaglyphGlasses::RedCyan, method);
+          p.yuv = rgb_to_yuv_params(0.2126, 0.0722, false, 10);
+          p.swap_eyes = vw % 2 == 0;
+          SCOPED_TRACE(std::string(test::format_name(out_format)) + " width " + std::to_string(vw) + " layout " +
+                       std::to_string(int(layout)) + " method " + std::to_string(int(method)));
+          int w = 0, h = 0;
+          pack_size(layout, vw, 27, &w, &h);
+          HostFrame cpu(out_format, w, h, 8);
+          pack_cpu(p, pair.view(), cpu.view());
+          const DeviceFrame dout(out_format, w, h);
+          test::check_cuda(pack_gpu(p, dpair.view(), dout.view(), stream_));
+          ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
+          EXPECT_EQ(plane_difference(cpu, dout.download()), "");
+        }
+  }
+}
+
+// RGBA64 pixels move as 64-bit words where they are 8-byte aligned and as
+// bytes elsewhere (load_packed16, store_rgba16 in device code): the pack
+// of a pair at a 2-byte offset, into an output at a 6-byte offset, gives
+// the CPU's bytes and writes nothing outside its pixels, as the aligned
+// frames do.
+TEST_F(GpuDeep, PackOfMisalignedRgba64Frames) {
+  const uint32_t seed = fresh_seed();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  constexpr int kW = 46, kH = 27;  // even: aligned frames take the two-pixel anaglyph kernel
+  HostFrame pair(PixelFormat::RGBA64, 2 * kW, kH, 8);
   pair.fill_random(seed);
-  const DeviceFrame dpair = DeviceFrame::upload(pair);
-  for (PixelFormat out_format : test::kDeepFormats)
-    for (PackLayout layout : test::kAllLayouts)
-      for (AnaglyphMethod method : test::kAllMethods) {
-        if (layout != PackLayout::Anaglyph && method != AnaglyphMethod::Dubois) continue;
-        PackParams p = test::pack_params(layout, AnaglyphGlasses::RedCyan, method);
-        p.yuv = rgb_to_yuv_params(0.2126, 0.0722, false, 10);
-        SCOPED_TRACE(std::string(test::format_name(out_format)) + " layout " + std::to_string(int(layout)) +
-                     " method " + std::to_string(int(method)));
+  const size_t pair_row = 8 * 2 * kW;
+  for (const size_t in_offset : {0, 2}) {
+    test::DeviceOutput in(PixelFormat::RGBA64, 2 * kW, kH, pair_row + 16, in_offset, 0);
+    ASSERT_EQ(cudaSuccess, cudaMemcpy2D(in.view().plane[0], in.view().stride[0], pair.view().plane[0],
+                                        pair.view().stride[0], pair_row, kH, cudaMemcpyHostToDevice));
+    for (const size_t out_offset : {0, 6})
+      for (PackLayout layout : {PackLayout::SideBySide, PackLayout::SideBySideHalf, PackLayout::Anaglyph}) {
+        SCOPED_TRACE(::testing::Message() << "offsets " << in_offset << "/" << out_offset << " layout "
+                                          << static_cast<int>(layout));
+        const PackParams p = test::pack_params(layout);
         int w = 0, h = 0;
-        pack_size(layout, 45, 27, &w, &h);
-        HostFrame cpu(out_format, w, h, 8);
+        pack_size(layout, kW, kH, &w, &h);
+        HostFrame cpu(PixelFormat::RGBA64, w, h, 8);
         pack_cpu(p, pair.view(), cpu.view());
-        const DeviceFrame dout(out_format, w, h);
-        test::check_cuda(pack_gpu(p, dpair.view(), dout.view(), stream_));
-        ASSERT_EQ(cudaSuccess, cudaStreamSynchronize(stream_));
-        EXPECT_EQ(plane_difference(cpu, dout.download()), "");
+        test::DeviceOutput out(PixelFormat::RGBA64, w, h, 8 * static_cast<size_t>(w) + 8, out_offset, 0xa5);
+        test::check_cuda(pack_gpu(p, in.view(), out.view(), stream_));
+        const test::DeviceOutput::Result r = out.download();
+        EXPECT_EQ(r.writes_outside, 0);
+        EXPECT_EQ(plane_difference(cpu, r.frame), "");
       }
+  }
 }
 
 TEST_F(GpuDeep, RenderPackedFromEachDeepSourceIntoEachDeepOutput) {

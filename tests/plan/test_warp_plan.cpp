@@ -42,17 +42,18 @@ int resident_threads(int threads, size_t smem) {
   return std::min(kThreadsPerSm / threads, by_smem) * threads;
 }
 
-// What query_row_kernels reads of such a device for rows of W pixels.
-RowKernelResidency modelled_residency(int W) {
+// What query_row_kernels reads of such a device for rows of W pixels of
+// pixel_bytes converted pixels (sizeof(Rgba16) for 16-bit pictures).
+RowKernelResidency modelled_residency(int W, size_t pixel_bytes = sizeof(Rgba)) {
   RowKernelResidency r;
-  const size_t both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2);
-  r.in_turn = resident_threads(row_threads(W), row_smem_bytes(W, sizeof(NarrowKeys::Word), 1));
+  const size_t both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2, pixel_bytes);
+  r.in_turn = resident_threads(row_threads(W), row_smem_bytes(W, sizeof(NarrowKeys::Word), 1, pixel_bytes));
   r.both = resident_threads(row_threads(W), both);
   r.group = resident_threads(row_threads(W), both);
   r.wide_block = r.together_block = kWideBlock;
   r.wide = resident_threads(kWideBlock, both);
-  if (rows_together_fit(W, kOptin))
-    r.together = resident_threads(kWideBlock, together_smem_bytes(W, 1 << kGroupShiftMax));
+  if (rows_together_fit(W, kOptin, pixel_bytes))
+    r.together = resident_threads(kWideBlock, together_smem_bytes(W, 1 << kGroupShiftMax, pixel_bytes));
   r.sms = kSms;
   return r;
 }
@@ -500,30 +501,20 @@ TEST(WarpPlanDeep, RowLayoutAlignsTheSixteenBitRow) {
   EXPECT_TRUE(row_fits(54000, 0, kOptin));
 }
 
-// What the modelled device holds of the 16-bit kernels for rows of W
-// pixels (query_row_kernels<Rgba16>: no wide kinds).
-RowKernelResidency modelled_deep_residency(int W) {
-  RowKernelResidency r;
-  const size_t both = row_smem_bytes(W, sizeof(NarrowKeys::Word), 2, kDeepPixel);
-  r.in_turn = resident_threads(row_threads(W), row_smem_bytes(W, sizeof(NarrowKeys::Word), 1, kDeepPixel));
-  r.both = resident_threads(row_threads(W), both);
-  r.group = resident_threads(row_threads(W), both);
-  r.sms = kSms;
-  return r;
-}
-
-// A 16-bit frame takes both eyes at once and Group blocks where the device
-// holds as many threads of them (1080p), and plans the shared memory of
-// 8-byte pixels; at 4K both z-buffers beside a 16-bit row leave room for
-// a row fewer, and the eyes go in turn.
-TEST(WarpPlanDeep, GroupsWithoutTheWideKinds) {
+// A 16-bit frame takes the same kinds of row kernel as an 8-bit one, by
+// the threads each holds with rows of 8-byte pixels. At 1080p RowsTogether
+// blocks (77 KB) still hold as many threads as a row's block. At 4K both
+// z-buffers beside a 16-bit row (61 KB) leave room for a row's block fewer
+// (1536 threads, where the eyes in turn hold 2048) and a RowsTogether
+// block (154 KB) for one a SM, but two WideGroup blocks hold 2048: the
+// rows of a cell go through one scatter in WideGroup blocks.
+TEST(WarpPlanDeep, RowKernelsOfSixteenBitRows) {
   const RowKernelChoice c =
-      choose_row_kernels(HoleFill::BackgroundSmooth, 1920, kOptin, modelled_deep_residency(1920), kDeepPixel);
+      choose_row_kernels(HoleFill::BackgroundSmooth, 1920, kOptin, modelled_residency(1920, kDeepPixel), kDeepPixel);
   EXPECT_EQ(c.pixel_bytes, kDeepPixel);
   EXPECT_TRUE(c.both_eyes);
   EXPECT_TRUE(c.groups);
-  EXPECT_FALSE(c.rows_together);
-  EXPECT_FALSE(c.wide_groups);
+  EXPECT_TRUE(c.rows_together);
   RowFrame f;
   f.W = 1920;
   f.H = 1080;
@@ -534,21 +525,29 @@ TEST(WarpPlanDeep, GroupsWithoutTheWideKinds) {
   const RowPlan p = plan_rows(f, c);
   EXPECT_EQ(p.keys, KeyPlace::NarrowSharedPerEye);
   EXPECT_EQ(p.group_rows, 4);
-  EXPECT_FALSE(p.rows_together);
-  EXPECT_EQ(p.smem, row_smem_bytes(1920, sizeof(NarrowKeys::Word), 2, kDeepPixel));
+  EXPECT_TRUE(p.rows_together);
+  EXPECT_EQ(p.smem, together_smem_bytes(1920, 4, kDeepPixel));
 
-  const RowKernelChoice uhd =
-      choose_row_kernels(HoleFill::BackgroundSmooth, 3840, kOptin, modelled_deep_residency(3840), kDeepPixel);
+  const RowKernelResidency r = modelled_residency(3840, kDeepPixel);
+  EXPECT_EQ(r.in_turn, 2048);
+  EXPECT_EQ(r.both, 1536);
+  EXPECT_EQ(r.together, 1024);
+  EXPECT_EQ(r.wide, 2048);
+  const RowKernelChoice uhd = choose_row_kernels(HoleFill::BackgroundSmooth, 3840, kOptin, r, kDeepPixel);
   EXPECT_FALSE(uhd.both_eyes);
-  EXPECT_FALSE(uhd.groups);
+  EXPECT_TRUE(uhd.groups);
+  EXPECT_TRUE(uhd.wide_groups);
+  EXPECT_FALSE(uhd.rows_together);
+  EXPECT_EQ(uhd.wide_group_threads, kWideBlock);
   f.W = 3840;
   f.H = 2160;
   const RowPlan q = plan_rows(f, uhd);
-  EXPECT_EQ(q.keys, KeyPlace::NarrowShared);
-  EXPECT_EQ(q.smem, row_smem_bytes(3840, sizeof(NarrowKeys::Word), 1, kDeepPixel));
+  EXPECT_EQ(q.keys, KeyPlace::NarrowSharedPerEye);
+  EXPECT_EQ(q.group_rows, 4);
+  EXPECT_TRUE(q.wide_groups);
+  EXPECT_EQ(q.smem, row_smem_bytes(3840, sizeof(NarrowKeys::Word), 2, kDeepPixel));
 }
 
-// 16-bit anchors sum wide (SmoothSum16) and stage 8-byte anchors.
 TEST(WarpPlanDeep, SmoothSumsAreWide) {
   const SmoothPlan p = plan_smooth(shifts(0.5f, -0.5f), d_for_radius(29), 3840, 2160, kOptin, kDeepPixel);
   EXPECT_FALSE(p.narrow);
