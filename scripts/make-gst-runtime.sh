@@ -21,7 +21,7 @@ scanner=$multiarch/gstreamer1.0/gstreamer-1.0/gst-plugin-scanner
 
 # Plugins worth having for tests, benchmarks and example pipelines.
 plugins=${GST_RUNTIME_PLUGINS:-"coreelements videotestsrc videoconvertscale app
-  playback typefindfunctions isomp4 matroska videoparsersbad nvcodec x264
+  playback typefindfunctions isomp4 matroska videoparsersbad nvcodec x264 x265
   png jpeg multifile debugutilsbad coretracers imagefreeze videorate pnm
   rawparse videofilter autodetect deinterlace"}
 

@@ -74,7 +74,7 @@ Fixture *g_fx = nullptr;
 // 2 s at 160x120, 25 frames/s, with 2 s of 48 kHz stereo audio.
 std::string clip_launch(const std::string &path, const std::string &audio_encoder, const std::string &mux,
                         int seconds = 2, int width = 160, int height = 120) {
-  return "videotestsrc num-buffers=" + std::to_string(25 * seconds) + " pattern=ball ! video/x-raw,width=" +
+  return "videotestsrc num-buffers=" + std::to_string(25 * seconds) + " pattern=ball ! video/x-raw,format=I420,width=" +
          std::to_string(width) + ",height=" + std::to_string(height) +
          ",framerate=25/1 ! x264enc speed-preset=ultrafast ! h264parse ! " + mux + " name=m ! filesink location=" +
          path + " audiotestsrc num-buffers=" + std::to_string(50 * seconds) +
@@ -324,7 +324,8 @@ TEST_F(Convert, UsageErrorsAreOneLine) {
         {fx().aac_mp4, fx().dir + "/x.mp4", "--start", "1:99"},
         {fx().aac_mp4, fx().dir + "/x.mp4", "--duration", "1e1"},
         {fx().aac_mp4, fx().dir + "/x.mp4", "--duration", "99999999999999999999"},
-        {fx().aac_mp4, fx().dir + "/x.mp4", "--crf", "+5"}, {fx().aac_mp4, fx().dir + "/x.mp4", "--crf", " 5"}}) {
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--crf", "+5"}, {fx().aac_mp4, fx().dir + "/x.mp4", "--crf", " 5"},
+        {fx().aac_mp4, fx().dir + "/x.mp4", "--codec", "h266"}}) {
     const ToolRun r = run_convert(args);
     EXPECT_EQ(r.status, 2) << args.back();
     EXPECT_EQ(line_count(r.err), 1) << r.err;
@@ -341,8 +342,8 @@ TEST_F(Convert, InputUnderAnotherNameIsRefused) {
   const std::string in = fx().dir + "/own.mp4", link = fx().dir + "/own-link.mp4";
   g_remove(in.c_str());
   g_remove(link.c_str());
-  ASSERT_EQ(make_clip("videotestsrc num-buffers=5 ! video/x-raw,width=64,height=48 ! x264enc ! mp4mux ! filesink "
-                      "location=" + in),
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=5 ! video/x-raw,format=I420,width=64,height=48 ! x264enc ! mp4mux ! "
+                      "filesink location=" + in),
             "");
   const std::vector<uint8_t> before = read_bytes(in);
   ASSERT_EQ(symlink("own.mp4", link.c_str()), 0);  // beside the link, whatever the folder is called
@@ -389,7 +390,8 @@ TEST_F(Convert, TruncatedInputIsReported) {
   // frame starts 2 s before the end and lasts until it.
   const std::string slow = fx().dir + "/slideshow.mp4", slow_out = fx().dir + "/from-slideshow.mp4";
   g_remove(slow_out.c_str());
-  ASSERT_EQ(make_clip("videotestsrc num-buffers=4 ! video/x-raw,width=64,height=48,framerate=1/2 ! x264enc ! mp4mux ! "
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=4 ! video/x-raw,format=I420,width=64,height=48,framerate=1/2 ! "
+                      "x264enc ! mp4mux ! "
                       "filesink location=" + slow),
             "");
   const ToolRun complete = run_convert({slow, slow_out, "--quiet", "--preset", "ultrafast"});
@@ -437,7 +439,8 @@ TEST_F(Convert, NoFramesWithoutStartDoesNotBlameStart) {
 TEST_F(Convert, FramelessStreamFailsWithoutCritical) {
   const std::string mp4 = fx().dir + "/faststart.mp4", cut_mkv = fx().dir + "/frameless.mkv",
                     cut_mp4 = fx().dir + "/frameless.mp4", out = fx().dir + "/from-frameless.mp4";
-  ASSERT_EQ(make_clip("videotestsrc num-buffers=10 ! video/x-raw,width=160,height=120,framerate=25/1 ! x264enc ! "
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=10 ! video/x-raw,format=I420,width=160,height=120,framerate=25/1 ! "
+                      "x264enc ! "
                       "mp4mux faststart=true ! filesink location=" + mp4),
             "");
   ASSERT_TRUE(cut_into(fx().vorbis_mkv, cut_mkv, kMkvCluster));
@@ -1098,7 +1101,8 @@ TEST_F(Convert, OversizedPicturesAreRefusedNamingTheLimit) {
                     clip = fx().dir + "/wide-8200x64.mkv", y4m = fx().dir + "/wide-9000x10.y4m";
   ASSERT_TRUE(cv::imwrite(wide, cv::Mat(10, 9000, CV_8UC3, cv::Scalar(40, 90, 160))));
   write_png_declaring(huge, 20000, 20000);
-  ASSERT_EQ(make_clip("videotestsrc num-buffers=3 ! video/x-raw,width=8200,height=64,framerate=25/1 ! x264enc "
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=3 ! video/x-raw,format=I420,width=8200,height=64,framerate=25/1 ! "
+                      "x264enc "
                       "speed-preset=ultrafast ! h264parse ! matroskamux ! filesink location=" + clip),
             "");
   ASSERT_EQ(make_clip("videotestsrc num-buffers=2 ! video/x-raw,format=I420,width=9000,height=10,framerate=25/1 ! "

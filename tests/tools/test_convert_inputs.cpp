@@ -1,11 +1,12 @@
 // pseudo3d-convert on the inputs of real films, clips made by GStreamer's
 // encoders, converted and read back with ffprobe:
 //  * HDR and 10-bit: HDR10 (PQ, mastering display, content light level),
-//    HLG and 10-bit SDR. With H.265 the output is 10-bit Main10 and states
-//    the input's transfer, primaries and matrix and the same
-//    mastering-display and light-level values; 8-bit input stays 8-bit;
-//    H.264 with HDR10 input is 8-bit and says what it leaves out; an
-//    anaglyph of HDR input is refused with a message.
+//    HLG and 10-bit SDR. With H.265, the default for them, the output is
+//    10-bit Main10 and states the input's transfer, primaries and matrix
+//    and the same mastering-display and light-level values; 8-bit input
+//    stays 8-bit and gets H.264 by default; H.264 asked for with HDR10
+//    input is 8-bit and says what it leaves out; an anaglyph of HDR input
+//    is refused with a message.
 //  * Interlaced: 576i (SAR 64:45) and 1080i come out progressive, a frame
 //    for each field, with the input's duration and SAR.
 #include <gtest/gtest.h>
@@ -81,7 +82,8 @@ class ConvertInputs : public ::testing::Test {
 
 }  // namespace
 
-// Each clip through the converter into H.265 in MP4 and Matroska: the
+// Each clip through the converter into H.265 in MP4 (the default codec,
+// --codec auto, for 10-bit input) and Matroska (--codec h265): the
 // transfer, primaries and matrix ffprobe reads are the input's, and so are
 // the mastering-display and light-level values of HDR10.
 TEST_F(ConvertInputs, H265KeepsTheInputsColourSignal) {
@@ -92,12 +94,14 @@ TEST_F(ConvertInputs, H265KeepsTheInputsColourSignal) {
     ASSERT_EQ(ffprobe_value(in_frame, "color_transfer"), c.transfer) << c.name << ": the clip itself";
     for (const char *ext : {".mp4", ".mkv"}) {
       const std::string out = dir_ + "/" + c.name + "-sbs" + ext;
-      const ToolRun r = run_convert({in, out, "--codec", "h265", "--preset", "ultrafast", "--processing", "cpu",
-                                     "--force"});
+      std::vector<std::string> args = {in, out, "--preset", "ultrafast", "--processing", "cpu", "--force"};
+      if (std::string(ext) == ".mkv") args.insert(args.end(), {"--codec", "h265"});
+      const ToolRun r = run_convert(args);
       ASSERT_EQ(r.status, 0) << c.name << ext << ": " << r.err;
       const std::string what = std::string(c.name) + ext;
-      const std::string s =
-          ffprobe_stream(out, "v:0", "color_transfer,color_primaries,color_space,color_range,pix_fmt,profile");
+      const std::string s = ffprobe_stream(
+          out, "v:0", "codec_name,color_transfer,color_primaries,color_space,color_range,pix_fmt,profile");
+      EXPECT_EQ(ffprobe_value(s, "codec_name"), "hevc") << what;
       EXPECT_EQ(ffprobe_value(s, "pix_fmt"), "yuv420p10le") << what;
       EXPECT_EQ(ffprobe_value(s, "profile"), "Main 10") << what;
       EXPECT_EQ(r.err.find("bits a sample"), std::string::npos) << what << ": no note of lost bits expected: " << r.err;
@@ -138,15 +142,39 @@ TEST_F(ConvertInputs, EightBitInputStaysEightBit) {
       EXPECT_EQ(ffprobe_value(s, "profile"), "Main");
     }
   }
+  // --crf 51 is H.265's alone: for 8-bit input --codec auto chose H.264.
+  const ToolRun r = run_convert({in, dir_ + "/sdr8-crf51.mp4", "--crf", "51", "--processing", "cpu", "--force"});
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("0 to 50 for H.264, which --codec auto chose"), std::string::npos) << r.err;
 }
 
-// H.264 of HDR10: the colours are stated, and the converter says that the
+// 10-bit H.264 (High 10) gets H.265 Main 10 by default too: the sample
+// depth comes from h264parse's bit-depth-luma (input_probe.h).
+TEST_F(ConvertInputs, TenBitH264GetsH265ByDefault) {
+  const std::string in = dir_ + "/h264-10.mp4";
+  ASSERT_EQ(make_clip("videotestsrc num-buffers=10 pattern=ball ! video/x-raw,format=I420_10LE,width=160,height=96,"
+                      "framerate=25/1 ! x264enc speed-preset=ultrafast ! h264parse ! mp4mux ! filesink location=" +
+                      in),
+            "");
+  ASSERT_EQ(ffprobe_value(ffprobe_stream(in, "v:0", "codec_name,pix_fmt"), "pix_fmt"), "yuv420p10le");
+  const std::string out = dir_ + "/h264-10-sbs.mkv";
+  const ToolRun r = run_convert({in, out, "--preset", "ultrafast", "--processing", "cpu", "--force"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("x265enc"), std::string::npos) << r.err;
+  const std::string s = ffprobe_stream(out, "v:0", "codec_name,pix_fmt,profile");
+  EXPECT_EQ(ffprobe_value(s, "codec_name"), "hevc");
+  EXPECT_EQ(ffprobe_value(s, "pix_fmt"), "yuv420p10le");
+  EXPECT_EQ(ffprobe_value(s, "profile"), "Main 10");
+}
+
+// H.264 of HDR10, asked for: the colours are stated, and the converter says that the
 // mastering-display and light-level metadata is left out and how to keep it.
 TEST_F(ConvertInputs, H264OfHdr10SaysWhatItLeavesOut) {
   const std::string in = make_hevc10(dir_, kClips[0]);
   ASSERT_FALSE(in.empty());
   const std::string out = dir_ + "/hdr10-h264.mp4";
-  const ToolRun r = run_convert({in, out, "--preset", "ultrafast", "--processing", "cpu", "--force"});
+  const ToolRun r =
+      run_convert({in, out, "--codec", "h264", "--preset", "ultrafast", "--processing", "cpu", "--force"});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("mastering-display and light-level metadata is not written by x264enc"), std::string::npos)
       << r.err;

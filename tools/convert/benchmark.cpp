@@ -136,6 +136,7 @@ bool run_benchmark(const Options &o, std::string *error) {
   if (processing == Processing::Gpu) prefer_gpu_decoders();
   Options conv = o;
   conv.kind = OutputKind::Mp4;  // the conversion a film gets: side-by-side-half unless --layout
+  if (!settle_codec(&conv, processing, error)) return false;
   const std::string layout = effective_layout(conv);
   EncoderChoice encoder;
   if (!choose_encoder(conv, processing, layout, &encoder, error)) return false;

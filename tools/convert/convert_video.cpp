@@ -230,10 +230,14 @@ struct Job {
 
 }  // namespace
 
-bool convert_video(const Options &o, std::string *error) {
+bool convert_video(const Options &given, std::string *error) {
+  Processing processing;
+  if (!resolve_processing(given.processing, &processing, error)) return false;
+  if (processing == Processing::Gpu) prefer_gpu_decoders();
+  Options o = given;
+  if (!settle_codec(&o, processing, error)) return false;
   Job job(o);
-  if (!resolve_processing(o.processing, &job.processing, error)) return false;
-  if (job.processing == Processing::Gpu) prefer_gpu_decoders();
+  job.processing = processing;
   job.layout = effective_layout(o);
   if (!depth_file_readable(o, error)) return false;
   if (!choose_encoder(o, job.processing, job.layout, &job.encoder, error)) return false;

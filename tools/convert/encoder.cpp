@@ -1,5 +1,7 @@
 #include "encoder.h"
 
+#include "gst_run.h"
+#include "input_probe.h"
 #include "mkv_stereo.h"
 
 #include <gst/video/video.h>
@@ -9,12 +11,6 @@
 namespace p3d::convert {
 
 namespace {
-
-bool have(const char *factory) {
-  GstElementFactory *f = gst_element_factory_find(factory);
-  if (f) gst_object_unref(f);
-  return f != nullptr;
-}
 
 // Whether the encoder's sink template lists a raw format.
 bool sink_accepts_format(const char *factory, const char *format) {
@@ -91,6 +87,24 @@ std::string colour_loss(const GstCaps *decoded, const EncoderChoice &c) {
 
 int default_crf(Codec codec) { return codec == Codec::H264 ? 20 : 24; }
 
+namespace {
+
+bool have_h265_encoder(Processing processing) {
+  return have_element("x265enc") || (processing == Processing::Gpu && have_element("nvh265enc"));
+}
+
+}  // namespace
+
+bool settle_codec(Options *o, Processing processing, std::string *error) {
+  if (o->codec != Codec::Auto) return true;
+  o->codec = have_h265_encoder(processing) && video_sample_bits(o->input) > 8 ? Codec::H265 : Codec::H264;
+  if (o->codec == Codec::H264 && o->crf > 50) {
+    *error = "invalid value '" + std::to_string(o->crf) + "' for --crf (0 to 50 for H.264, which --codec auto chose)";
+    return false;
+  }
+  return true;
+}
+
 bool is_stereo_layout(const std::string &layout) {
   MkvStereoLayout arrangement;
   return mkv_stereo_layout_from_name(layout, &arrangement) && arrangement != MkvStereoLayout::Mono;
@@ -109,10 +123,10 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
   // its StereoMode after muxing instead (container_stereo.h).
   const bool mp4_family = o.kind == OutputKind::Mp4 || o.kind == OutputKind::Mov;
   const bool sei_needed = h264 && is_stereo_layout(layout) && mp4_family;
-  const bool use_hw = processing == Processing::Gpu && have(hw) && !(sei_needed && have(sw));
+  const bool use_hw = processing == Processing::Gpu && have_element(hw) && !(sei_needed && have_element(sw));
   if (use_hw) {
     c->factory = hw;
-  } else if (have(sw)) {
+  } else if (have_element(sw)) {
     c->factory = sw;
   } else {
     *error = std::string("no ") + (h264 ? "H.264" : "H.265") + " encoder installed (" + sw + " from " +
@@ -140,7 +154,9 @@ bool choose_encoder(const Options &o, Processing processing, const std::string &
     c->deep_hint = std::string("the GPU path keeps an anaglyph's 4:4:4 colours in 8 bits: --processing cpu") +
                    (h264 ? " --codec h265" : "") + " keeps 10";
   else if (h264)
-    c->deep_hint = "--codec h265 keeps 10";
+    c->deep_hint = have_h265_encoder(processing)
+                       ? "--codec h265 keeps 10"
+                       : "an H.265 encoder would keep 10: x265enc, in gstreamer1.0-plugins-bad";
   else
     c->deep_hint = c->factory + " here takes no 10-bit input";
   return true;

@@ -27,7 +27,14 @@ struct EncoderChoice {
   bool writes_stereo_sei = false;
 };
 
-// Picks the encoder for the codec, the processing in use and the layout.
+// Settles --codec auto for the input: H.265 where the input's video has
+// more than 8 bits a sample (video_sample_bits, input_probe.h) and an
+// H.265 encoder for the processing is installed, so that 10-bit and HDR
+// films keep their 10 bits (Main 10); H.264 otherwise. False with *error
+// when it chose H.264 and --crf is out of H.264's range.
+bool settle_codec(Options *o, Processing processing, std::string *error);
+
+// Picks the encoder for the codec (settled), the processing in use and the layout.
 // False with *error when no encoder for the codec is installed.
 bool choose_encoder(const Options &o, Processing processing, const std::string &layout, EncoderChoice *choice,
                     std::string *error);

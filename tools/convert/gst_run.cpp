@@ -32,6 +32,12 @@ void post_error(GstElement *element, const std::string &text) {
   g_error_free(err);
 }
 
+bool have_element(const char *factory) {
+  GstElementFactory *f = gst_element_factory_find(factory);
+  if (f) gst_object_unref(f);
+  return f != nullptr;
+}
+
 bool too_large(const GstCaps *caps, std::string *message) {
   if (!caps || gst_caps_is_empty(caps) || gst_caps_is_any(caps)) return false;
   const GstStructure *s = gst_caps_get_structure(caps, 0);

@@ -19,6 +19,9 @@ std::string message_source_path(GstMessage *msg);
 // Posts an error on `element`'s bus from any thread.
 void post_error(GstElement *element, const std::string &text);
 
+// Whether an element factory of this name is registered.
+bool have_element(const char *factory);
+
 // Whether `caps` give a width or height beyond the kMaxFrameSide pixels the
 // 3D stages take (frame.h), with *message naming the size and the limit.
 // Caps without a size pass. Checked on the caps decodebin sees before it

@@ -163,7 +163,8 @@ void print_usage(FILE *f) {
       "  --crop-bars auto|off  leave letterbox and pillarbox bars out of the 3D, black and flat\n"
       "                        in both views (default auto)\n"
       "Video options:\n"
-      "  --codec h264|h265     (default h264)\n"
+      "  --codec auto|h264|h265  (default auto: H.265 Main 10 for video of more than 8 bits a\n"
+      "                        sample where an H.265 encoder is installed, else H.264)\n"
       "  --crf N               constant quality, lower is better (default 20 for H.264, 24 for H.265)\n"
       "  --preset P            ultrafast ... veryslow (default: medium)\n"
       "  --start T --duration T   convert a piece only (seconds or [HH:]MM:SS[.frac])\n"
@@ -270,8 +271,8 @@ ParseResult parse_args(int argc, char **argv, Options *o, std::string *error) {
       if (!take_value(&v)) return ParseResult::ExitUsage;
       bool ok = true;
       if (name == "codec") {
-        ok = v == "h264" || v == "h265";
-        o->codec = v == "h265" ? Codec::H265 : Codec::H264;
+        ok = v == "auto" || v == "h264" || v == "h265";
+        o->codec = v == "h265" ? Codec::H265 : v == "h264" ? Codec::H264 : Codec::Auto;
       } else if (name == "crf") {
         ok = parse_int(v, 0, 51, &o->crf);
       } else if (name == "preset") {

@@ -27,7 +27,9 @@ constexpr GstClockTime kStillDuration = 5 * GST_SECOND;
 constexpr int kStillFrameRate = 25;
 
 enum class Processing { Auto, Cpu, Gpu };
-enum class Codec { H264, H265 };
+// Auto: H.265 for video of more than 8 bits a sample, H.264 otherwise
+// (settle_codec, encoder.h).
+enum class Codec { Auto, H264, H265 };
 
 struct Options {
   std::string input, output;
@@ -35,7 +37,7 @@ struct Options {
   // option without its dashes), in command-line order: layout, glasses,
   // anaglyph-method, swap-eyes, max-disparity, convergence, hypothesis.
   std::vector<std::pair<std::string, std::string>> stage_values;
-  Codec codec = Codec::H264;
+  Codec codec = Codec::Auto;
   int crf = -1;         // -1: the codec's default (encoder.h)
   std::string preset;   // empty: the encoder's default
   GstClockTime start = GST_CLOCK_TIME_NONE;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "gst_run.h"
+
 namespace p3d::convert {
 
 namespace {
@@ -28,12 +30,6 @@ const AudioCodec kAudio[] = {
 const char *const kAudioEncodersMp4[] = {"avenc_aac", "voaacenc", "fdkaacenc", "opusenc"};
 const char *const kAudioEncodersMkv[] = {"avenc_aac", "voaacenc", "fdkaacenc", "opusenc", "vorbisenc"};
 
-bool have(const char *factory) {
-  GstElementFactory *f = gst_element_factory_find(factory);
-  if (f) gst_object_unref(f);
-  return f != nullptr;
-}
-
 const AudioCodec *audio_codec(const GstStructure *s) {
   for (const AudioCodec &c : kAudio) {
     if (!gst_structure_has_name(s, c.media)) continue;
@@ -51,10 +47,10 @@ bool container_takes(const AudioCodec &c, OutputKind kind) { return kind == Outp
 const char *audio_encoder(OutputKind kind) {
   if (kind == OutputKind::Mkv) {
     for (const char *e : kAudioEncodersMkv)
-      if (have(e)) return e;
+      if (have_element(e)) return e;
   } else {
     for (const char *e : kAudioEncodersMp4)
-      if (have(e)) return e;
+      if (have_element(e)) return e;
   }
   return nullptr;
 }
@@ -145,7 +141,7 @@ GstElement *make_unbounded_queue() {
 bool keep_encoded(const GstCaps *caps, OutputKind kind) {
   if (gst_caps_is_empty(caps) || gst_caps_is_any(caps)) return false;
   const GstStructure *s = gst_caps_get_structure(caps, 0);
-  if (const AudioCodec *c = audio_codec(s)) return container_takes(*c, kind) && have(c->parser);
+  if (const AudioCodec *c = audio_codec(s)) return container_takes(*c, kind) && have_element(c->parser);
   if (gst_structure_has_name(s, "application/x-ass") || gst_structure_has_name(s, "application/x-ssa"))
     return kind == OutputKind::Mkv;  // MP4: let decodebin turn it into text
   return false;
@@ -160,7 +156,7 @@ StreamRoute route_stream(const GstCaps *caps, OutputKind kind) {
     r.mux_pad = "audio_%u";
     r.action = audio_encoder(kind) ? StreamAction::Encode : StreamAction::Drop;
     r.why = "no AAC, Opus or Vorbis encoder installed (gstreamer1.0-libav has avenc_aac)";
-  } else if (const AudioCodec *c = audio_codec(s); c && container_takes(*c, kind) && have(c->parser)) {
+  } else if (const AudioCodec *c = audio_codec(s); c && container_takes(*c, kind) && have_element(c->parser)) {
     r.action = StreamAction::Copy;
     r.parser = c->parser;
     r.mux_pad = "audio_%u";
@@ -171,7 +167,7 @@ StreamRoute route_stream(const GstCaps *caps, OutputKind kind) {
     r.mux_pad = "subtitle_%u";
     if (format && std::strcmp(format, "utf8") == 0) {
       r.action = StreamAction::Copy;
-    } else if (have("capssetter")) {
+    } else if (have_element("capssetter")) {
       r.action = StreamAction::Text;
     } else {
       r.why = "subtitle markup needs capssetter (gstreamer1.0-plugins-good)";

@@ -129,9 +129,7 @@ std::string VideoChain::feed_encoder(const EncoderChoice &encoder, const GstCaps
   // stages cannot pack on CUDA memory (an anaglyph's 4:4:4, which would
   // otherwise go through 4:2:0); else the stages keep 10 bits to the end.
   const bool yuv420 = encoder.raw_format == "I420" || encoder.raw_format == "NV12";
-  GstElementFactory *cudaconvert = gst_element_factory_find("cudaconvert");
-  if (cudaconvert) gst_object_unref(cudaconvert);
-  narrow_before_stages_ = cuda && (!yuv420 || cudaconvert != nullptr);
+  narrow_before_stages_ = cuda && (!yuv420 || have_element("cudaconvert"));
   use_format(encoder.raw_format, cuda && !narrow_before_stages_);
   return encoder.raw_format;
 }
