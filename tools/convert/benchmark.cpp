@@ -10,6 +10,7 @@
 #include "encoder.h"
 #include "gpu.h"
 #include "gst_run.h"
+#include "input_probe.h"
 #include "json_line.h"
 #include "media_source.h"
 #include "progress.h"
@@ -41,11 +42,12 @@ GstPadProbeReturn read_frame(GstPad *, GstPadProbeInfo *info, gpointer) {
 }
 
 // One timed run; `convert` selects the full video chain.
-bool measure(const Options &o, Processing processing, const EncoderChoice &encoder, bool convert, Measure *m,
-             std::string *error) {
+bool measure(const Options &o, Processing processing, const EncoderChoice &encoder, const InputFacts &facts,
+             bool convert, Measure *m, std::string *error) {
   GstElement *pipeline = gst_pipeline_new("pseudo3d-benchmark");
   MediaSource source;
   VideoChain chain;
+  chain.expect_rotation(facts.rotated);
   Progress counter(false);
   GstElement *vsink = gst_element_factory_make("fakesink", "video-sink");
   g_object_set(vsink, "sync", FALSE, NULL);
@@ -136,7 +138,8 @@ bool run_benchmark(const Options &o, std::string *error) {
   if (processing == Processing::Gpu) prefer_gpu_decoders();
   Options conv = o;
   conv.kind = OutputKind::Mp4;  // the conversion a film gets: side-by-side-half unless --layout
-  if (!settle_codec(&conv, processing, error)) return false;
+  const InputFacts facts = probe_input(o.input);
+  if (!settle_codec(&conv, processing, facts.bits, error)) return false;
   const std::string layout = effective_layout(conv);
   EncoderChoice encoder;
   if (!choose_encoder(conv, processing, layout, &encoder, error)) return false;
@@ -153,7 +156,7 @@ bool run_benchmark(const Options &o, std::string *error) {
   for (int run = 1; run <= o.benchmark_runs && ok; ++run) {
     for (int convert = 0; convert < 2 && ok; ++convert) {
       Measure m;
-      ok = measure(conv, processing, encoder, convert != 0, &m, error);
+      ok = measure(conv, processing, encoder, facts, convert != 0, &m, error);
       if (!ok) break;
       best[convert] = std::max(best[convert], m.fps());
       std::printf("run %d  %-17s %6llu frames  %8.3f s  %8.1f frames/s  (wall %.3f s; %dx%d, %s%s)\n", run,

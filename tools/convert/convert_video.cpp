@@ -12,6 +12,7 @@
 #include "encoder.h"
 #include "gpu.h"
 #include "gst_run.h"
+#include "input_probe.h"
 #include "media_source.h"
 #include "container_stereo.h"
 #include "depth_source.h"
@@ -235,9 +236,11 @@ bool convert_video(const Options &given, std::string *error) {
   if (!resolve_processing(given.processing, &processing, error)) return false;
   if (processing == Processing::Gpu) prefer_gpu_decoders();
   Options o = given;
-  if (!settle_codec(&o, processing, error)) return false;
+  const InputFacts facts = probe_input(o.input);
+  if (!settle_codec(&o, processing, facts.bits, error)) return false;
   Job job(o);
   job.processing = processing;
+  job.chain.expect_rotation(facts.rotated);
   job.layout = effective_layout(o);
   if (!depth_file_readable(o, error)) return false;
   if (!choose_encoder(o, job.processing, job.layout, &job.encoder, error)) return false;

@@ -1,7 +1,6 @@
 #include "encoder.h"
 
 #include "gst_run.h"
-#include "input_probe.h"
 #include "mkv_stereo.h"
 
 #include <gst/video/video.h>
@@ -95,9 +94,9 @@ bool have_h265_encoder(Processing processing) {
 
 }  // namespace
 
-bool settle_codec(Options *o, Processing processing, std::string *error) {
+bool settle_codec(Options *o, Processing processing, int input_bits, std::string *error) {
   if (o->codec != Codec::Auto) return true;
-  o->codec = have_h265_encoder(processing) && video_sample_bits(o->input) > 8 ? Codec::H265 : Codec::H264;
+  o->codec = have_h265_encoder(processing) && input_bits > 8 ? Codec::H265 : Codec::H264;
   if (o->codec == Codec::H264 && o->crf > 50) {
     *error = "invalid value '" + std::to_string(o->crf) + "' for --crf (0 to 50 for H.264, which --codec auto chose)";
     return false;

@@ -28,11 +28,11 @@ struct EncoderChoice {
 };
 
 // Settles --codec auto for the input: H.265 where the input's video has
-// more than 8 bits a sample (video_sample_bits, input_probe.h) and an
-// H.265 encoder for the processing is installed, so that 10-bit and HDR
-// films keep their 10 bits (Main 10); H.264 otherwise. False with *error
-// when it chose H.264 and --crf is out of H.264's range.
-bool settle_codec(Options *o, Processing processing, std::string *error);
+// more than 8 bits a sample (input_bits: probe_input, input_probe.h) and
+// an H.265 encoder for the processing is installed, so that 10-bit and
+// HDR films keep their 10 bits (Main 10); H.264 otherwise. False with
+// *error when it chose H.264 and --crf is out of H.264's range.
+bool settle_codec(Options *o, Processing processing, int input_bits, std::string *error);
 
 // Picks the encoder for the codec (settled), the processing in use and the layout.
 // False with *error when no encoder for the codec is installed.

@@ -4,15 +4,31 @@
 // nothing; the conversion reports it).
 #pragma once
 
+#include <gst/gst.h>
+
 #include <string>
 
 namespace p3d::convert {
 
-// Bits a sample of the file's first video stream: the bit-depth-luma its
-// parser states (h264parse, h265parse, vp9parse, av1parse), else the
-// depth of a raw stream's format. 0 where it cannot be known: not a
-// regular file (a FIFO or a device is read once, by the conversion), no
-// video stream, no parser for it, or no video pad within 10 s.
-int video_sample_bits(const std::string &path);
+struct InputFacts {
+  // Bits a sample of the first video stream: the bit-depth-luma its
+  // parser states (h264parse, h265parse, vp9parse, av1parse), else the
+  // depth of a raw stream's format; 0 where unknown.
+  int bits = 0;
+  // Whether that stream carries an orientation tag other than rotate-0
+  // (phone video stored sideways).
+  bool rotated = false;
+};
+
+// The facts of `path`'s first video stream, read up to its first parsed
+// frame. Nothing is known (all 0) of what is not a regular file (a FIFO
+// or a device is read once, by the conversion), of a file with no video
+// stream or no parser for it, or after 10 s.
+InputFacts probe_input(const std::string &path);
+
+// The orientation a tag list's GST_TAG_IMAGE_ORIENTATION asks for
+// ("rotate-90", "flip-rotate-270", ...), empty for none ("rotate-0" or no
+// such tag).
+std::string tagged_rotation(const GstTagList *tags);
 
 }  // namespace p3d::convert

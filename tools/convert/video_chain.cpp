@@ -9,6 +9,7 @@
 #include "depth_source.h"
 #include "gpu.h"
 #include "gst_run.h"
+#include "input_probe.h"
 #include "progress.h"
 #include "stage_settings.h"
 
@@ -169,23 +170,14 @@ GstCaps *VideoChain::accepted_caps() const { return video_caps_for(processing_);
 
 namespace {
 
-// The orientation a tag list's GST_TAG_IMAGE_ORIENTATION asks for
-// ("rotate-90", "flip-rotate-270", ...), empty for none ("rotate-0" or no
-// such tag).
-std::string tagged_rotation(const GstTagList *tags) {
-  gchar *value = nullptr;
-  if (!gst_tag_list_get_string(tags, GST_TAG_IMAGE_ORIENTATION, &value)) return {};
-  std::string r = value ? value : "";
-  g_free(value);
-  return r == "rotate-0" ? std::string() : r;
-}
-
-// The GPU path's probe on the decoded video: NVDEC's CUDA frames cannot go
-// through videoflip (system memory only in GStreamer 1.22, whose CUDA
-// converters cannot rotate), so an orientation tag there is refused with
-// the reason, once, instead of converting the picture as stored (its depth
-// hypotheses and stereo layout would describe the stored, not the upright,
-// scene); the frames after it are dropped while the pipeline stops.
+// The GPU path's probe on the decoded video for orientation tags that
+// probe_input() did not find: NVDEC's CUDA frames cannot go through
+// videoflip (system memory only in GStreamer 1.22, whose CUDA converters
+// cannot rotate), and this chain is already linked on the device, so the
+// tag is refused with the reason, once, instead of converting the picture
+// as stored (its depth hypotheses and stereo layout would describe the
+// stored, not the upright, scene); the frames after it are dropped while
+// the pipeline stops.
 struct RotationGuard {
   GstElement *poster;  // the chain's first element, which posts the error
   bool refused = false;
@@ -247,22 +239,18 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   const bool known = gst_caps_is_fixed(caps) && gst_video_info_from_caps(&info, caps);
   const int crop_right = known && subsampled_ ? GST_VIDEO_INFO_WIDTH(&info) % 2 : 0;
   const int crop_bottom = known && subsampled_ ? GST_VIDEO_INFO_HEIGHT(&info) % 2 : 0;
-  if (cuda_input_ && known_interlaced(caps)) {
-    // GStreamer 1.22 has no deinterlacer for CUDA memory.
-    refusal_ = "the GPU path cannot deinterlace interlaced video: use --processing cpu";
-    return false;
-  }
-  if (cuda_input_) {
-    // NVDEC's CUDA frames are not cropped (no CUDA crop in 1.22's nvcodec):
-    // refuse an odd size here, with the reason, rather than let x264 fail.
-    if (crop_right || crop_bottom) {
-      refusal_ = "the GPU path cannot crop an odd-sized picture (" + std::to_string(GST_VIDEO_INFO_WIDTH(&info)) + "x" +
-                 std::to_string(GST_VIDEO_INFO_HEIGHT(&info)) +
-                 ") to the even size the 4:2:0 encoder needs: use --processing cpu";
-      return false;
-    }
-    // Before linking, so that no event passes unseen (the decoder's sticky
-    // tags reach head_sink_ after the link).
+  // GStreamer 1.22 has no deinterlacer, crop or rotation for CUDA memory:
+  // NVDEC's frames that need one (interlaced video, an odd size for a
+  // 4:2:0 encoder, an orientation tag found by probe_input) are
+  // downloaded and take the system-memory route below, where
+  // pseudo3dconvert deinterlaces them and uploads them again for the GPU
+  // stages.
+  const bool download = cuda_input_ && (known_interlaced(caps) || crop_right || crop_bottom || rotated_);
+  if (cuda_input_ && !download) {
+    // An orientation tag the probe did not see (an input read as a
+    // stream) is refused, once, with the reason. Before linking, so that
+    // no event passes unseen (the decoder's sticky tags reach head_sink_
+    // after the link).
     gst_pad_add_probe(head_sink_,
                       static_cast<GstPadProbeType>(GST_PAD_PROBE_TYPE_EVENT_DOWNSTREAM | GST_PAD_PROBE_TYPE_BUFFER |
                                                    GST_PAD_PROBE_TYPE_BUFFER_LIST),
@@ -310,10 +298,16 @@ bool VideoChain::attach(GstPad *decoded, const GstCaps *caps) {
   // System memory: videoconvert passes the formats the stages take through
   // untouched and converts the rest (4:2:2, 12-bit, and 10-bit for an
   // 8-bit encoder...).
+  std::vector<GstElement *> links = {head_};
+  if (download) {
+    GstElement *down = add_to_bin(bin_, "cudadownload");
+    if (!down) return false;
+    links.push_back(down);
+  }
   GstElement *vconv = add_to_bin(bin_, "videoconvert");
   if (!vconv) return false;
   g_object_set(vconv, "n-threads", 0u, NULL);
-  std::vector<GstElement *> links = {head_, vconv};
+  links.push_back(vconv);
   if (crop_right || crop_bottom) {
     GstElement *crop = add_to_bin(bin_, "videocrop");
     if (!crop) return false;

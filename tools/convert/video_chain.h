@@ -59,6 +59,9 @@ class VideoChain {
   GstPad *sink_pad() const { return head_sink_; }  // the first queue's sink pad
   GstElement *tail() const { return tail_; }       // links to the encoder
   GstElement *converter() const { return convert_; }
+  // Before attach: whether the input's video carries an orientation tag
+  // (probe_input), so that its CUDA frames are downloaded for videoflip.
+  void expect_rotation(bool rotated) { rotated_ = rotated; }
   bool on_gpu_memory() const { return cuda_input_; }  // decoded frames arrive in CUDA memory
   // The odd width or height cropped to even for a 4:2:0 encoder (attach()).
   bool cropped_to_even() const { return cropped_; }
@@ -76,6 +79,7 @@ class VideoChain {
   Processing processing_ = Processing::Cpu;
   bool subsampled_ = false;  // the encoder takes 4:2:0, which needs even sizes
   bool cuda_input_ = false, cropped_ = false;
+  bool rotated_ = false;  // expect_rotation()
   bool narrow_before_stages_ = false;  // deep CUDA frames narrowed to 8 bits before the stages (feed_encoder)
   std::string refusal_;
 };
