@@ -427,7 +427,7 @@ P3D_HD Rgba anaglyph_gamma(const AnaglyphMatrices &am, Rgba l, Rgba r) {
 // A = sum(q * h) and B = sum(q * l), each |.| < 6 * 2^17 * 255 < 2^31; with
 // A = 256 a1 + a0 (a1 = A >> 8, a0 = A & 255),
 // sum >> 16 = a1 + ((256 a0 + B + 2^15) >> 16): the 64-bit result, in
-// 32-bit integers (tests/common/test_pack.cpp checks it against the sum in
+// 32-bit integers (tests/common/test_deep.cpp checks it against the sum in
 // 64 bits).
 P3D_HD int mix16_channel(const int32_t *lq, const int32_t *rq, const int lc[3], const int rc[3]) {
   int a = 0, b = 0;

@@ -147,8 +147,9 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
   }
   const bool words = rows_aligned(out, 0, static_cast<int>(pixel_bytes));
   // The pack fused where the rows are resolved together (both eyes of a
-  // target at hand) and the sums kernel fills the holes.
-  const bool fuse = fused_request && rows.rows_together && smooth && words;
+  // target at hand) and the sums kernel fills the holes; 8-bit views only
+  // (the 16-bit row kernels have no fused anaglyph).
+  const bool fuse = fused_request && !deep && rows.rows_together && smooth && words;
   const RowLaunch launch{src, m, depth, out, eyes, D, p.convergence, p.fill,
                          rows.keys, keys_.as<WideKeys::Word>(), mask, sc, total, words, rows.smem, stream, smem_optin_,
                          &attributes_set_, rows.group_rows, rows.tail_y0, rows.wide_groups, rows.rows_together,

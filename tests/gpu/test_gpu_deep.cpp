@@ -351,7 +351,9 @@ TEST_F(GpuDeep, PackOfMisalignedRgba64Frames) {
         pack_size(layout, kW, kH, &w, &h);
         HostFrame cpu(PixelFormat::RGBA64, w, h, 8);
         pack_cpu(p, pair.view(), cpu.view());
-        test::DeviceOutput out(PixelFormat::RGBA64, w, h, 8 * static_cast<size_t>(w) + 8, out_offset, 0xa5);
+        // Rows 16-byte aligned at offset 0, so that the anaglyph takes the
+        // two-pixel kernel there.
+        test::DeviceOutput out(PixelFormat::RGBA64, w, h, 8 * static_cast<size_t>(w) + 16, out_offset, 0xa5);
         test::check_cuda(pack_gpu(p, in.view(), out.view(), stream_));
         const test::DeviceOutput::Result r = out.download();
         EXPECT_EQ(r.writes_outside, 0);

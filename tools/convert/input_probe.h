@@ -21,9 +21,10 @@ struct InputFacts {
 };
 
 // The facts of `path`'s first video stream, read up to its first parsed
-// frame. Nothing is known (all 0) of what is not a regular file (a FIFO
-// or a device is read once, by the conversion), of a file with no video
-// stream or no parser for it, or after 10 s.
+// frame, an error or 10 s, whichever comes first (what was read by then
+// is kept). Nothing is known (all 0) of what is not a regular file (a
+// FIFO or a device is read once, by the conversion), or of a file with no
+// video stream or no parser for it.
 InputFacts probe_input(const std::string &path);
 
 // The orientation a tag list's GST_TAG_IMAGE_ORIENTATION asks for
