@@ -1,9 +1,8 @@
 #include "encoder.h"
 
 #include "gst_run.h"
+#include "input_probe.h"
 #include "mkv_stereo.h"
-
-#include <gst/video/video.h>
 
 #include <cstring>
 
@@ -51,25 +50,13 @@ const char *nvenc_preset(const std::string &p) {
 
 }  // namespace
 
-namespace {
-
-// Bits a sample of decoded caps (0: unknown).
-int sample_bits(const GstCaps *decoded) {
-  if (!decoded || gst_caps_is_empty(decoded)) return 0;
-  const gchar *format = gst_structure_get_string(gst_caps_get_structure(decoded, 0), "format");
-  const GstVideoFormatInfo *finfo = format ? gst_video_format_get_info(gst_video_format_from_string(format)) : nullptr;
-  return finfo ? static_cast<int>(GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0)) : 0;
-}
-
-}  // namespace
-
-bool has_deep_samples(const GstCaps *decoded) { return sample_bits(decoded) > 8; }
+bool has_deep_samples(const GstCaps *decoded) { return caps_sample_bits(decoded) > 8; }
 
 std::string colour_loss(const GstCaps *decoded, const EncoderChoice &c) {
   if (!decoded || gst_caps_is_empty(decoded)) return "";
   const GstStructure *s = gst_caps_get_structure(decoded, 0);
   std::string loss;
-  const int bits = sample_bits(decoded);
+  const int bits = caps_sample_bits(decoded);
   if (bits > 8 && c.deep_format.empty())
     loss = "the input has " + std::to_string(bits) + " bits a sample; the output has 8 (" + c.deep_hint + ")";
   else if (bits > 10)

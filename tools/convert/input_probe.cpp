@@ -17,10 +17,8 @@ std::string tagged_rotation(const GstTagList *tags) {
   return r == "rotate-0" ? std::string() : r;
 }
 
-namespace {
-
-// Bits a sample of parsed video caps, 0 when they do not say.
 int caps_sample_bits(const GstCaps *caps) {
+  if (!caps || gst_caps_is_empty(caps)) return 0;
   const GstStructure *s = gst_caps_get_structure(caps, 0);
   guint luma = 0;
   if (gst_structure_get_uint(s, "bit-depth-luma", &luma)) return static_cast<int>(luma);
@@ -28,6 +26,8 @@ int caps_sample_bits(const GstCaps *caps) {
   const GstVideoFormatInfo *finfo = format ? gst_video_format_get_info(gst_video_format_from_string(format)) : nullptr;
   return finfo ? static_cast<int>(GST_VIDEO_FORMAT_INFO_DEPTH(finfo, 0)) : 0;
 }
+
+namespace {
 
 // What the streaming threads find, read by the main thread once the wait
 // is over and the pipeline stopped.

@@ -27,6 +27,11 @@ struct InputFacts {
 // video stream or no parser for it.
 InputFacts probe_input(const std::string &path);
 
+// Bits a sample that video caps state: a parser's bit-depth-luma, else the
+// depth of a raw format; 0 when they do not say (also for null or empty
+// caps). Parsed caps here, decoded caps for the encoder (encoder.h).
+int caps_sample_bits(const GstCaps *caps);
+
 // The orientation a tag list's GST_TAG_IMAGE_ORIENTATION asks for
 // ("rotate-90", "flip-rotate-270", ...), empty for none ("rotate-0" or no
 // such tag).
