@@ -32,6 +32,28 @@ cv::Mat copy_of(ImageView<const float> v) {
 // A CV_32FC1 matrix as the filter's image view.
 ImageView<float> float_view(cv::Mat &m) { return ImageView<float>{m.ptr<float>(), m.cols, m.rows, m.step[0]}; }
 
+// Adjacent output pixels computed together (window_strip()).
+constexpr int kStrip = 16;
+
+// Whether every tap of the strip's windows reads one finite depth v: then
+// every difference is 0, sum_wd stays +0 and each pixel's result is
+// v + 0 / sum_w = v + 0 (sum_w >= 1, the centre tap's weight), whatever
+// the guide, so the strip is v + 0 without its taps. The depth maps the
+// estimator makes are constant over each region along a row, which is
+// most of a picture for the row pass.
+inline bool flat_strip(const float *tap_depth, ptrdiff_t depth_step_bytes, int dy0, int dy1, int dx0, int dx1,
+                       float *out) {
+  const float v = tap_depth[0];
+  if (!(v - v == 0.f)) return false;  // inf or NaN: the taps' sums are not 0
+  for (int dy = dy0; dy <= dy1; ++dy) {
+    const float *row = reinterpret_cast<const float *>(reinterpret_cast<const char *>(tap_depth) + depth_step_bytes * dy);
+    for (int dx = dx0; dx <= dx1 + kStrip - 1; ++dx)
+      if (row[dx] != v) return false;
+  }
+  for (int k = 0; k < kStrip; ++k) out[k] = v + 0.f;
+  return true;
+}
+
 // kStrip adjacent output pixels of one window at once: the taps (dx, dy)
 // for dy from dy0 to dy1 (outer) and dx from dx0 to dx1 (inner), the order
 // of bilateral_pixel() and bilateral_pass_pixel(), each through
@@ -48,11 +70,10 @@ ImageView<float> float_view(cv::Mat &m) { return ImageView<float>{m.ptr<float>()
 // several times faster than a pixel at a time (row pass) or row sweeps
 // (column pass) (measured: docs/benchmarks.md, Design measurements,
 // "Filter").
-constexpr int kStrip = 16;
-
 inline void window_strip(const uint8_t *tap_guide, ptrdiff_t guide_step, const float *tap_depth,
                          ptrdiff_t depth_step_bytes, int dy0, int dy1, int dx0, int dx1, const float *space_centre,
                          int side, const float *range, float *out) {
+  if (flat_strip(tap_depth, depth_step_bytes, dy0, dy1, dx0, dx1, out)) return;
   float sum_w[kStrip] = {}, sum_wd[kStrip] = {}, centre[kStrip];
   for (int k = 0; k < kStrip; ++k) centre[k] = tap_depth[k];
   for (int dy = dy0; dy <= dy1; ++dy)

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstring>
-#include <numeric>
 
 #include <opencv2/core.hpp>
 
@@ -41,68 +40,24 @@ void block_features_cpu(const FrameView &frame, int block_size, std::vector<floa
   });
 }
 
-namespace {
-
-// Parents always point to a smaller index, so a root is the smallest index
-// of its tree: the label the spec asks for falls out of the forest.
-int find_root(std::vector<int> &parent, int i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];  // path halving
-    i = parent[i];
-  }
-  return i;
-}
-
-void unite(std::vector<int> &parent, int a, int b) {
-  a = find_root(parent, a);
-  b = find_root(parent, b);
-  if (a < b)
-    parent[b] = a;
-  else if (b < a)
-    parent[a] = b;
-}
-
-}  // namespace
-
 void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold, bool yuv,
                        std::vector<int> &labels) {
-  const int n = blocks_x * blocks_y;
-  labels.resize(n);
-  std::iota(labels.begin(), labels.end(), 0);
-  for (int j = 0; j < blocks_y; ++j)
-    for (int i = 0; i < blocks_x; ++i) {
-      const int k = j * blocks_x + i;
-      const float *f = &features[static_cast<size_t>(k) * 3];
-      if (i + 1 < blocks_x && blocks_joined(f, f + 3, edge_threshold, yuv)) unite(labels, k, k + 1);
-      if (j + 1 < blocks_y && blocks_joined(f, f + static_cast<size_t>(blocks_x) * 3, edge_threshold, yuv))
-        unite(labels, k, k + blocks_x);
-    }
-  for (int k = 0; k < n; ++k) labels[k] = find_root(labels, k);
+  BlockRegions regions;
+  regions.label(features, blocks_x, blocks_y, edge_threshold, yuv, nullptr);
+  labels = regions.labels();
 }
 
-void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
-                     int block_size, const DepthParams &params, std::vector<float> &block_depth) {
-  const size_t n = static_cast<size_t>(blocks_x) * blocks_y;
-  std::vector<uint32_t> hq(n), count(n, 0), max(n, 0);
-  std::vector<uint64_t> sum(n, 0);
+void block_hypotheses_cpu(Hypothesis h, int blocks_x, int blocks_y, int width, int height, int block_size,
+                          std::vector<uint32_t> &hq) {
+  hq.resize(static_cast<size_t>(blocks_x) * blocks_y);
   std::vector<float> cx(blocks_x);  // block_centre() once per column, not per block
   for (int i = 0; i < blocks_x; ++i) cx[i] = block_centre(i, block_size, width);
-  for (int j = 0; j < blocks_y; ++j) {
-    const float cy = block_centre(j, block_size, height);
-    for (int i = 0; i < blocks_x; ++i) {
-      const size_t k = static_cast<size_t>(j) * blocks_x + i;
-      const int r = labels[k];
-      hq[k] = hypothesis_q(params.hypothesis, cx[i], cy);
-      sum[r] += hq[k];
-      ++count[r];
-      max[r] = std::max(max[r], hq[k]);
+  cv::parallel_for_(cv::Range(0, blocks_y), [&](const cv::Range &range) {
+    for (int j = range.start; j < range.end; ++j) {
+      const float cy = block_centre(j, block_size, height);
+      for (int i = 0; i < blocks_x; ++i) hq[static_cast<size_t>(j) * blocks_x + i] = hypothesis_q(h, cx[i], cy);
     }
-  }
-  block_depth.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    const int r = labels[k];
-    block_depth[k] = block_depth_value(params, sum[r], count[r], max[r], hq[k]);
-  }
+  });
 }
 
 void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x, int block_size,
@@ -266,24 +221,34 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
     output_changed_ = false;
     return decision;
   }
-  region_labels_cpu(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), labels_);
-  block_depth_cpu(labels_, bx, by, W, H, B, params, fresh_depth_);
+  // Step 3's hypotheses depend on the grid alone: kept while it stays.
+  const HypothesisGrid grid{params.hypothesis, bx, by, W, H, B};
+  if (!(grid == hq_grid_) || hq_.size() != static_cast<size_t>(bx) * by) {
+    block_hypotheses_cpu(params.hypothesis, bx, by, W, H, B, hq_);
+    hq_grid_ = grid;
+  }
+  regions_.label(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), hq_.data());
+  const std::vector<int> &labels = regions_.labels();
 
-  const bool had_output = block_depth_.size() == fresh_depth_.size();
-  block_depth_.resize(fresh_depth_.size());  // a cut ignores the (then stale) previous values
-  std::vector<uint8_t> row_changed(static_cast<size_t>(by), had_output ? 0 : 1);
+  const size_t n = static_cast<size_t>(bx) * by;
+  const bool had_output = block_depth_.size() == n;
+  block_depth_.resize(n);  // a cut ignores the (then stale) previous values
+  row_changed_.assign(static_cast<size_t>(by), had_output ? 0 : 1);
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
     for (int j = range.start; j < range.end; ++j) {
       bool changed = false;
       for (size_t k = static_cast<size_t>(j) * bx; k < static_cast<size_t>(j + 1) * bx; ++k) {
-        const float out = temporal_output(decision, block_depth_[k], fresh_depth_[k], params.temporal_smoothing);
+        const int r = labels[k];
+        const float fresh =
+            block_depth_value(params, regions_.sum(r), regions_.count(r), regions_.max(r), hq_[k]);  // step 4
+        const float out = temporal_output(decision, block_depth_[k], fresh, params.temporal_smoothing);
         changed = changed || std::memcmp(&out, &block_depth_[k], sizeof out) != 0;
         block_depth_[k] = out;
       }
-      if (changed) row_changed[j] = 1;
+      if (changed) row_changed_[j] = 1;
     }
   });
-  output_changed_ = std::find(row_changed.begin(), row_changed.end(), 1) != row_changed.end();
+  output_changed_ = std::find(row_changed_.begin(), row_changed_.end(), 1) != row_changed_.end();
   return decision;
 }
 

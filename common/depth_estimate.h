@@ -18,8 +18,9 @@
 //     since the block last moved, so that camera noise does not flip edges).
 //     Regions are the connected components of that graph. A component's label
 //     is the smallest block index (by * blocks_x + bx) in it, so any correct
-//     connected-components algorithm (sequential union-find, parallel
-//     union-find on the GPU) gives identical labels.
+//     connected-components algorithm (union-find in parallel strips on the
+//     CPU, common/block_regions.h; parallel union-find on the GPU) gives
+//     identical labels.
 //  3. Hypothesis. h(block) = hypothesis evaluated at the block's centre
 //     (cx = (bx*B + min(B, W - bx*B) / 2.0) / W, likewise cy), see
 //     hypothesis_depth(). It is quantised hq = (uint32)(h * 65535 + 0.5).
@@ -58,6 +59,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "block_regions.h"
 #include "change_map.h"
 #include "enum_name.h"
 #include "frame.h"
@@ -259,7 +261,7 @@ class DepthEstimatorCpu {
   void reset();  // forget history (next frame is treated as a cut)
 
   // Block-level results of the last call, for tests.
-  const std::vector<int> &labels() const { return labels_; }
+  const std::vector<int> &labels() const { return regions_.labels(); }
   const std::vector<float> &smoothed_features() const { return smoothed_; }  // step 2's s, 3 per block
   const std::vector<float> &block_depth() const { return block_depth_; }
   int blocks_x() const { return bx_; }
@@ -273,9 +275,20 @@ class DepthEstimatorCpu {
   std::vector<float> ref_features_;  // 3 per block, last computed frame
   std::vector<float> smoothed_;      // 3 per block, step 2's s
   std::vector<uint64_t> row_diff_;   // step 5's fixed-point sum, per block row
-  std::vector<int> labels_;
+  // The grid step 3's hypotheses were computed for.
+  struct HypothesisGrid {
+    Hypothesis hypothesis = Hypothesis::TopBottom;
+    int bx = 0, by = 0, width = 0, height = 0, block = 0;
+    bool operator==(const HypothesisGrid &o) const {
+      return hypothesis == o.hypothesis && bx == o.bx && by == o.by && width == o.width && height == o.height &&
+             block == o.block;
+    }
+  };
+  HypothesisGrid hq_grid_;
+  std::vector<uint32_t> hq_;         // step 3, one a block, for hq_grid_
+  BlockRegions regions_;             // steps 2 and 4
   std::vector<float> block_depth_;   // output of the last frame
-  std::vector<float> fresh_depth_;   // b of this frame (step 4), before step 5
+  std::vector<uint8_t> row_changed_; // block rows whose output changed in the last call
   float last_diff_ = 0.f;
   TemporalDecision last_decision_ = TemporalDecision::Cut;
   bool have_state_ = false;
@@ -293,8 +306,9 @@ void block_features_cpu(const FrameView &frame, int block_size, std::vector<floa
 // yuv: the features are Y'CbCr means (blocks_joined()).
 void region_labels_cpu(const std::vector<float> &features, int blocks_x, int blocks_y, float edge_threshold, bool yuv,
                        std::vector<int> &labels);
-void block_depth_cpu(const std::vector<int> &labels, int blocks_x, int blocks_y, int width, int height,
-                     int block_size, const DepthParams &params, std::vector<float> &block_depth);
+// Step 3's quantised hypothesis of every block (block_hypothesis_q()).
+void block_hypotheses_cpu(Hypothesis h, int blocks_x, int blocks_y, int width, int height, int block_size,
+                          std::vector<uint32_t> &hq);
 // Writes depth's pixels that the block grid covers (all of them when depth has the frame's size).
 void expand_block_depth_cpu(const std::vector<float> &block_depth, int blocks_x, int block_size, ImageView<float> depth);
 

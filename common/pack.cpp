@@ -1,6 +1,8 @@
 #include "pack.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <vector>
 
@@ -232,6 +234,52 @@ void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const F
   });
 }
 
+// The side-by-side-half layout of a side-by-side pair into packed RGB of
+// the input's format, a row at a time: output column i of a half is
+// mean2() of its view's columns 2i and 2i+1 (clamped to the view), per
+// channel, which for samples stored as they are read is a lane-wise mean
+// of the stored words (mean2_word()). The byte order is the same in and
+// out, so no channel moves; an RGBx/BGRx padding byte becomes 255, as
+// store_rgba() writes the 255 that load_rgba() reads there. A loop over
+// plain words, so the compiler vectorises it (tests/common/test_pack.cpp
+// checks it against pack_pixel() for every packed format, width and eye
+// order).
+template <class Word>
+void half_pair_row(const uint8_t *view, int view_width, uint8_t *o, int n, Word set_bits) {
+  auto load = [view](int i) {
+    Word w;
+    std::memcpy(&w, view + sizeof(Word) * static_cast<size_t>(i), sizeof w);
+    return w;
+  };
+  const int pairs = std::min(n, view_width / 2);  // outputs whose 2i + 1 is inside the view
+  for (int i = 0; i < pairs; ++i) {
+    const Word w = pack_detail::mean2_word(load(2 * i), load(2 * i + 1)) | set_bits;
+    std::memcpy(o + sizeof(Word) * static_cast<size_t>(i), &w, sizeof w);
+  }
+  for (int i = pairs; i < n; ++i) {  // an odd view's last column pairs with itself
+    const Word w = load(std::min(2 * i, view_width - 1)) | set_bits;
+    std::memcpy(o + sizeof(Word) * static_cast<size_t>(i), &w, sizeof w);
+  }
+}
+
+template <class Word>
+void half_pair_rows(const PackParams &p, const FrameView &in, const FrameView &out, const std::vector<uint8_t> *only) {
+  const int w = in.width / 2, split = half_split(out.width);
+  const Word set_bits = has_alpha(in.format) ? Word{0} : Word{0xff} << 24;  // the padding byte of RGBx/BGRx
+  const size_t bytes = sizeof(Word);
+  const size_t view0 = bytes * static_cast<size_t>(pack_detail::view_slot(p, 0) * w);
+  const size_t view1 = bytes * static_cast<size_t>(pack_detail::view_slot(p, 1) * w);
+  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      if (only && !(*only)[y]) continue;
+      const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
+      uint8_t *o = out.plane[0] + static_cast<size_t>(y) * out.stride[0];
+      half_pair_row<Word>(row + view0, w, o, split, set_bits);
+      half_pair_row<Word>(row + view1, w, o + bytes * static_cast<size_t>(split), out.width - split, set_bits);
+    }
+  });
+}
+
 // The frame for input arrangement I: one loop instantiation per arrangement
 // (the per-pixel function inlines into it, as in the kernel).
 // only: the output rows to write (one flag a row), null: all.
@@ -251,6 +299,9 @@ void pack_rows(const PackParams &params, const AnaglyphMatrices &am, const Frame
   }
   if (I == StereoInput::SideBySide && params.layout == PackLayout::Anaglyph && !am.linear_light && !is_deep(in.format))
     return anaglyph_pair_rows(params, am, in, out, only);
+  if (I == StereoInput::SideBySide && params.layout == PackLayout::SideBySideHalf && in.format == out.format)
+    return is_deep(in.format) ? half_pair_rows<uint64_t>(params, in, out, only)
+                              : half_pair_rows<uint32_t>(params, in, out, only);
   cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
     for (int y = rows.start; y < rows.end; ++y)
       if (wanted(y))

@@ -264,6 +264,17 @@ template <class Px>
 P3D_HD Px mean2(Px a, Px b) {
   return Px{mean2(a.r, b.r), mean2(a.g, b.g), mean2(a.b, b.b), mean2(a.a, b.a)};
 }
+// mean2() of every lane of two words of 8-bit lanes (uint32_t: one Rgba
+// word) or 16-bit lanes (uint64_t: one Rgba16 word), in word operations:
+// per lane a + b = 2 (a & b) + (a ^ b), so (a + b + 1) / 2 = (a & b) +
+// ceil((a ^ b) / 2) = (a | b) - floor((a ^ b) / 2). The shifted XOR is
+// masked to its own lane, and never exceeds a | b there, so no lane
+// borrows from the next.
+template <class Word>
+P3D_HD Word mean2_word(Word a, Word b) {
+  constexpr Word kLaneLow = static_cast<Word>(sizeof(Word) == 4 ? 0x7f7f7f7full : 0x7fff7fff7fff7fffull);
+  return (a | b) - (((a ^ b) >> 1) & kLaneLow);
+}
 // (3a + b + 2) / 4: a quarter of the way from sample a towards sample b.
 P3D_HD uint8_t mix31(uint8_t a, uint8_t b) { return static_cast<uint8_t>((3 * a + b + 2) / 4); }
 P3D_HD uint16_t mix31(uint16_t a, uint16_t b) { return static_cast<uint16_t>((3 * a + b + 2) / 4); }

@@ -9,10 +9,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/hal/intrin.hpp>
+
+#include "row_convert.h"
 
 namespace p3d {
 namespace {
@@ -51,7 +55,11 @@ struct SourceRow {
   std::vector<WordOf<Px>> words;
   explicit SourceRow(int width) : words(static_cast<size_t>(width)) {}
   void load(const WarpJob &j, int y) {
-    for (int x = 0; x < j.width; x += 2) load_rgba_pair_words(j.src, x, y, j.m, words.data() + x);
+    if constexpr (std::is_same_v<Px, Rgba>) {
+      rgba_words_of_row(j.src, y, j.m, words.data());
+    } else {
+      for (int x = 0; x < j.width; x += 2) load_rgba_pair_words(j.src, x, y, j.m, words.data() + x);
+    }
   }
 };
 
@@ -77,6 +85,73 @@ struct OutputRow {
   }
 };
 
+// Every source pixel's span of targets in one eye's row (warp_span()) and
+// the hits (warp_hit_at()) it offers the span's first two targets: a pixel
+// covers one or two targets but where the surface stretches.
+struct SpanKeys {
+  std::vector<int> first, count;
+  std::vector<unsigned int> depth0, u0, depth1, u1;
+  explicit SpanKeys(int width)
+      : first(width), count(width), depth0(width), u0(width), depth1(width), u1(width) {}
+};
+
+// SpanKeys of the source pixels [0, end) of a row from their read depths
+// d and targets t, several pixels at a time with OpenCV's universal
+// intrinsics; returns end, where the caller takes over with the scalar
+// helpers (the last pixel, which has no neighbour, and the remainder).
+// Each lane computes what warp_link(), warp_span() and warp_hit_at()
+// compute, in their operation order: IEEE single precision, no fused
+// multiply-add, so the same bits (tests/common/test_warp.cpp compares the
+// renders of rows of every width). v_ceil() equals ceil_to_int() for
+// every target of a row; the clamps are written as min and max, which
+// give the same values for the finite operands they get.
+int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
+  int x = 0;
+#if CV_SIMD
+  using namespace cv;
+  constexpr int kLanes = v_float32::nlanes;
+  const v_float32 zero = vx_setall_f32(0.f), one = vx_setall_f32(1.f), half = vx_setall_f32(0.5f);
+  const v_float32 max_gap = vx_setall_f32(1.f + kMaxStretch), hi = vx_setall_f32(static_cast<float>(width - 1));
+  const v_float32 depth_scale = vx_setall_f32(65535.f), u_scale = vx_setall_f32(256.f);
+  const v_int32 last_column = vx_setall_s32(width - 1), int_one = vx_setall_s32(1);
+  int lane_index[kLanes];
+  for (int i = 0; i < kLanes; ++i) lane_index[i] = i;
+  const v_int32 lanes = vx_load(lane_index);
+  for (; x + kLanes < width; x += kLanes) {  // every lane has a right neighbour
+    const v_float32 d0 = vx_load(d + x), t0 = vx_load(t + x), d1 = vx_load(d + x + 1), t1 = vx_load(t + x + 1);
+    const v_float32 xs = v_cvt_f32(vx_setall_s32(x) + lanes);
+    // warp_link
+    const v_float32 gap = t1 - t0;
+    const v_float32 connected = (gap > zero) & (gap <= max_gap);
+    const v_float32 inv_gap = v_select(connected, one / gap, zero);
+    const v_int32 linked = v_reinterpret_as_s32(connected);
+    // warp_span
+    const v_int32 X0 = v_ceil(t0 - half), end = v_ceil(t1) - int_one;
+    const v_int32 last = v_min(v_select(linked & (end > X0), end, X0), last_column);
+    const v_int32 first = v_max(X0, vx_setzero_s32());
+    v_store(k.first.data() + x, first);
+    v_store(k.count.data() + x, last - first + int_one);
+    // warp_hit_at of targets first and first + 1
+    for (int i = 0; i < 2; ++i) {
+      const v_float32 xf = v_cvt_f32(first + vx_setall_s32(i));
+      const v_float32 on_span = connected & (xf >= t0) & (xf < t1);
+      const v_float32 u_span = v_min(v_max(xs + (xf - t0) * inv_gap, zero), hi);
+      const v_float32 u_own = v_min(v_max(xs + (xf - t0), zero), hi);
+      const v_float32 u = v_select(on_span, u_span, u_own);
+      const v_float32 depth = v_select(on_span, d0 + (u - xs) * (d1 - d0), d0);
+      const v_int32 depth_code = v_trunc(v_min(v_max(depth, zero), one) * depth_scale + half);
+      const v_int32 u_code = v_trunc(u * u_scale + half) + int_one;
+      v_store(reinterpret_cast<int *>((i ? k.depth1 : k.depth0).data() + x), depth_code);
+      v_store(reinterpret_cast<int *>((i ? k.u1 : k.u0).data() + x), u_code);
+    }
+  }
+  vx_cleanup();
+#else
+  (void)d, (void)t, (void)width, (void)k;
+#endif
+  return x;
+}
+
 // Per-row scratch of a row task: the converted source row, every pixel's
 // read depth and target for the eye being scattered, the z-buffer keys and
 // the Background fill's nearest-right index.
@@ -85,11 +160,12 @@ struct RowScratch {
   SourceRow<Px> src;
   std::vector<float> depth, target;
   std::vector<Keys::Word> keys;
-  std::vector<int> right, right_clean;  // right_clean: BackgroundSmooth only
-  std::vector<uint8_t> clean;           // BackgroundSmooth only
+  SpanKeys spans;
+  std::vector<int> right;                // Background only
+  std::vector<std::pair<int, int>> runs;  // BackgroundSmooth only: the row's runs of holes
+  std::vector<int> right_clean;           // and each run's nearest clean pixel on the right
   RowScratch(int width, bool smooth)
-      : src(width), depth(width), target(width), keys(width), right(width), right_clean(smooth ? width : 0),
-        clean(smooth ? width : 0) {}
+      : src(width), depth(width), target(width), keys(width), spans(width), right(width), right_clean(smooth ? width : 0) {}
 };
 
 // Z-buffer of row y: keys[X] = the largest key any source pixel offers X.
@@ -105,11 +181,33 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
     d[x] = warp_depth(drow[x]);
     t[x] = warp_target(x, d[x], eye.shift, j.D, j.params.convergence);
   }
-  for (int x = 0; x < j.width; ++x) {
+  auto source = [&](int x) {
     const bool has_next = x + 1 < j.width;
-    const WarpSource s = warp_link(x, d[x], t[x], has_next ? d[x + 1] : d[x], has_next ? t[x + 1] : t[x], has_next);
+    return warp_link(x, d[x], t[x], has_next ? d[x + 1] : d[x], has_next ? t[x + 1] : t[x], has_next);
+  };
+  SpanKeys &k = r.spans;
+  const int vector_end = span_keys_vector(d, t, j.width, k);
+  for (int x = vector_end; x < j.width; ++x) {
+    const WarpSource s = source(x);
     const WarpSpan span = warp_span(s, j.width);
-    for (int X = span.first; X <= span.last; ++X) keys[X] = std::max(keys[X], Keys::key(warp_hit_at(s, X, j.width), X));
+    k.first[x] = span.first;
+    k.count[x] = span.last - span.first + 1;
+    const WarpHit h0 = warp_hit_at(s, span.first, j.width), h1 = warp_hit_at(s, span.first + 1, j.width);
+    k.depth0[x] = h0.depth;
+    k.u0[x] = h0.u;
+    k.depth1[x] = h1.depth;
+    k.u1[x] = h1.u;
+  }
+  // The z-buffer's max; the rare longer spans take their further targets here.
+  for (int x = 0; x < j.width; ++x) {
+    const int X = k.first[x], n = k.count[x];
+    if (n <= 0) continue;
+    keys[X] = std::max(keys[X], Keys::key(WarpHit{k.depth0[x], k.u0[x]}, X));
+    if (n == 1) continue;
+    keys[X + 1] = std::max(keys[X + 1], Keys::key(WarpHit{k.depth1[x], k.u1[x]}, X + 1));
+    if (n == 2) continue;
+    const WarpSource s = source(x);
+    for (int i = 2; i < n; ++i) keys[X + i] = std::max(keys[X + i], Keys::key(warp_hit_at(s, X + i, j.width), X + i));
   }
 }
 
@@ -172,51 +270,53 @@ struct EyeScratch {
 };
 
 // BackgroundSmooth, row part: the state and anchor of every pixel of row y,
-// whose keys are final and whose non-holes are rendered. Clean pixels from
-// the distance to the nearest hole on either side (smooth_is_clean), then
-// each hole's nearest clean / non-hole pixel on either side.
+// whose keys are final and whose non-holes are rendered, from the row's
+// runs of holes. Clean pixels (smooth_is_clean) are those of the gaps
+// between runs, kSmoothClean pixels in from each hole (the row's ends
+// count as no hole), so a hole's nearest clean pixel on either side is an
+// end of the nearest gap on that side that has any; its nearest non-hole
+// is the pixel beside its run. The work follows the holes, not the row.
 template <class Px>
 void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r, EyeScratch<Px> &s) {
-  const int W = j.width;
+  const int W = j.width, K = kSmoothClean;
   const std::vector<Keys::Word> &keys = r.keys;
-  uint8_t *clean = r.clean.data();
-  int *right_clean = r.right_clean.data(), *right_any = r.right.data();
-  int hole = -kSmoothClean - 1;  // the last hole at or left of X
-  for (int X = 0; X < W; ++X) {
-    if (keys[X] == 0) hole = X;
-    clean[X] = X - hole > kSmoothClean;
-  }
-  hole = W + kSmoothClean;  // the first hole at or right of X
-  for (int X = W - 1; X >= 0; --X) {
-    if (keys[X] == 0) hole = X;
-    clean[X] = clean[X] && hole - X > kSmoothClean;
-  }
-  int near_clean = -1, near_any = -1;
-  for (int X = W - 1; X >= 0; --X) {  // nearest clean / non-hole pixel right of X
-    right_clean[X] = near_clean;
-    right_any[X] = near_any;
-    if (keys[X] != 0) near_any = X;
-    if (clean[X]) near_clean = X;
-  }
   const size_t base = static_cast<size_t>(y) * W;
   uint8_t *state = s.state + base;
   Px *anchor = s.anchor + base;
-  near_clean = -1;
-  near_any = -1;
+  std::memset(state, 0, static_cast<size_t>(W));
+  std::vector<std::pair<int, int>> &runs = r.runs;  // [first, last] hole of each run
+  runs.clear();
   for (int X = 0; X < W; ++X) {
-    if (keys[X] != 0) {
-      state[X] = 0;
-      near_any = X;
-      if (clean[X]) near_clean = X;
-      continue;
+    if (keys[X] != 0) continue;
+    const int a = X;
+    while (X + 1 < W && keys[X + 1] == 0) ++X;
+    runs.emplace_back(a, X);
+  }
+  const int n = static_cast<int>(runs.size());
+  // Gap g lies before run g (gap n after the last run); its clean pixels
+  // are [clean_lo(g), clean_hi(g)], empty when lo > hi.
+  auto clean_lo = [&](int g) { return g == 0 ? 0 : runs[g - 1].second + 1 + K; };
+  auto clean_hi = [&](int g) { return g == n ? W - 1 : runs[g].first - 1 - K; };
+  std::vector<int> &right_clean = r.right_clean;  // per run: the nearest clean pixel right of it, -1: none
+  for (int g = n, next = -1; g >= 1; --g) {
+    if (clean_lo(g) <= clean_hi(g)) next = clean_lo(g);
+    right_clean[g - 1] = next;
+  }
+  int left_clean = -1;
+  for (int i = 0; i < n; ++i) {
+    if (clean_lo(i) <= clean_hi(i)) left_clean = clean_hi(i);
+    const int a = runs[i].first, b = runs[i].second;
+    const int xl = smooth_side(left_clean, a - 1), xr = smooth_side(right_clean[i], b + 1 < W ? b + 1 : -1);
+    const unsigned int depth_l = key_depth_at<Keys>(keys.data(), xl), depth_r = key_depth_at<Keys>(keys.data(), xr);
+    for (int X = a; X <= b; ++X) {
+      const int pick = background_source(X, xl, depth_l, xr, depth_r);
+      if (pick < 0) {
+        state[X] = kSmoothHole;
+        continue;
+      }
+      state[X] = kSmoothAnchor;
+      load_pixel(j.out, eye.col0 + pick, y, &anchor[X]);
     }
-    state[X] = kSmoothHole;
-    const int xl = smooth_side(near_clean, near_any), xr = smooth_side(right_clean[X], right_any[X]);
-    const int pick =
-        background_source(X, xl, key_depth_at<Keys>(keys.data(), xl), xr, key_depth_at<Keys>(keys.data(), xr));
-    if (pick < 0) continue;
-    state[X] = kSmoothAnchor;
-    load_pixel(j.out, eye.col0 + pick, y, &anchor[X]);
   }
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -429,21 +430,38 @@ TEST(BilateralSeparable, RadiusZeroInPlaceThreadsAndSanitise) {
 }
 
 // The CPU filter runs both modes in strips of 16 pixels (for speed; the
-// last strip of a row overlaps the one before it); the GPU kernels run the
-// per-pixel functions of common/bilateral.h. Both must give the same bits,
-// so the CPU filter is pinned here to bilateral_pixel() and
-// bilateral_pass_pixel() on the same tables, in both modes: sizes narrower
-// and shorter than the window or a strip, rows with and without a partial
-// last strip, several radii, random guides.
+// last strip of a row overlaps the one before it, and a strip whose taps
+// all read one finite depth is that depth without its taps); the GPU
+// kernels run the per-pixel functions of common/bilateral.h. Both must
+// give the same bits, so the CPU filter is pinned here to
+// bilateral_pixel() and bilateral_pass_pixel() on the same tables, in both
+// modes: sizes narrower and shorter than the window or a strip, rows with
+// and without a partial last strip, several radii, random guides; random
+// depth, and depth constant over blocks as the estimator makes it, some
+// blocks 0, -0, infinite or NaN.
+cv::Mat blocky_depth(int w, int h, uint32_t seed) {
+  std::mt19937 rng(seed);
+  const float specials[] = {0.f, -0.f, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+  std::vector<float> block((w / 24 + 1) * (h / 3 + 1));
+  for (float &v : block) v = rng() % 8 == 0 ? specials[rng() % 4] : std::uniform_real_distribution<float>(0.f, 1.f)(rng);
+  cv::Mat d(h, w, CV_32FC1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) d.at<float>(y, x) = block[(y / 3) * (w / 24 + 1) + x / 24];
+  return d;
+}
+
 TEST(BilateralCpu, StripsEqualThePerPixelFunctionsBitForBit) {
   for (const cv::Size sz : {cv::Size(67, 45), cv::Size(1, 1), cv::Size(4, 3), cv::Size(1, 30), cv::Size(30, 1),
-                            cv::Size(48, 20), cv::Size(16, 17), cv::Size(15, 9)})
+                            cv::Size(48, 20), cv::Size(16, 17), cv::Size(15, 9), cv::Size(203, 31)})
     for (int r : {0, 1, 5, 16})
-      for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable}) {
-        SCOPED_TRACE(::testing::Message() << sz << " r=" << r << " mode=" << static_cast<int>(mode));
+      for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable})
+        for (bool blocky : {false, true}) {
+        SCOPED_TRACE(::testing::Message() << sz << " r=" << r << " mode=" << static_cast<int>(mode) << " blocky "
+                                          << blocky);
         HostFrame guide(PixelFormat::I420, sz.width, sz.height, 2);
         guide.fill_random(90 + r);
-        const cv::Mat depth = random_depth(sz.width, sz.height, 91 + r);
+        const cv::Mat depth =
+            blocky ? blocky_depth(sz.width, sz.height, 92 + r) : random_depth(sz.width, sz.height, 91 + r);
         BilateralParams p{r, 0.6f * r + 0.5f, 14.f};
         p.mode = mode;
         const BilateralParams s = bilateral_sanitize(p);

@@ -7,6 +7,7 @@
 
 #include "frame.h"
 #include "host_frame.h"
+#include "row_convert.h"
 #include "test_data.h"
 
 namespace p3d {
@@ -290,6 +291,75 @@ TEST(ColourChroma, PairWordsAreLoadRgbaWords) {
         EXPECT_EQ(words[width], 0xdeadbeefu) << "wrote past the row: " << test::format_name(f) << " " << width;
       }
     }
+}
+
+// rgba_words_of_row() converts 8-bit 4:2:0 rows several pixels at a time
+// (vector code); its words must be load_rgba()'s, bit for bit, for every
+// format, every width from 1 to 70 (all remainders of the vector width),
+// on random samples and on the extreme codes that clamp, with the
+// parameters of BT.601 and BT.709 in both ranges and of the default.
+TEST(ColourChroma, RowWordsAreLoadRgbaWords) {
+  const YuvToRgb params[] = {YuvToRgb(), yuv_to_rgb_params(0.299, 0.114, false), yuv_to_rgb_params(0.299, 0.114, true),
+                             yuv_to_rgb_params(0.2126, 0.0722, false), yuv_to_rgb_params(0.2126, 0.0722, true)};
+  for (const YuvToRgb &m : params)
+    for (PixelFormat f : test::kAllFormats) {
+      if (!params_fit(f, m)) continue;
+      for (int width = 1; width <= 70; ++width) {
+        HostFrame h(f, width, 4, 3);
+        h.fill_random(static_cast<uint32_t>(width) * 11 + static_cast<uint32_t>(f));
+        const FrameView v = h.view();
+        if (width % 3 == 0)  // extremes: black and white luma under the strongest chroma
+          for (int p = 0; p < 3 && v.plane[p]; ++p)
+            for (int y = 0; y < (p ? 2 : 4); ++y)
+              for (int i = 0; i < v.stride[p]; ++i) v.plane[p][static_cast<size_t>(y) * v.stride[p] + i] = (i + y) % 2 ? 255 : 0;
+        for (int y = 0; y < 4; ++y) {
+          std::vector<uint32_t> words(static_cast<size_t>(width) + 1, 0xdeadbeefu);
+          rgba_words_of_row(v, y, m, words.data());
+          for (int x = 0; x < width; ++x)
+            ASSERT_EQ(words[x], rgba_word(load_rgba(v, x, y, m)))
+                << test::format_name(f) << " width " << width << " pixel " << x << "," << y;
+          ASSERT_EQ(words[width], 0xdeadbeefu) << "wrote past the row: " << test::format_name(f) << " " << width;
+        }
+      }
+    }
+}
+
+// The same on every 8-bit code: a 4096 x 4096 frame whose 2 x 2 blocks
+// hold each Cb/Cr pair under every luma code once (64 blocks of four
+// codes a pair), so every input the vector rows can meet is compared.
+TEST(ColourChroma, RowWordsOfEveryCodeAreLoadRgbaWords) {
+  const int side = 4096;
+  const struct {
+    PixelFormat format;
+    YuvToRgb m;
+  } cases[] = {{PixelFormat::NV12, YuvToRgb()},
+               {PixelFormat::NV12, yuv_to_rgb_params(0.2126, 0.0722, true)},
+               {PixelFormat::I420, yuv_to_rgb_params(0.2126, 0.0722, false)}};
+  for (const auto &c : cases) {
+    HostFrame h(c.format, side, side);
+    const FrameView v = h.view();
+    for (int by = 0; by < side / 2; ++by)
+      for (int bx = 0; bx < side / 2; ++bx) {
+        const int block = by * (side / 2) + bx, pair = block / 64, group = block % 64;
+        for (int k = 0; k < 4; ++k)
+          v.plane[0][static_cast<size_t>(2 * by + k / 2) * v.stride[0] + 2 * bx + k % 2] = static_cast<uint8_t>(4 * group + k);
+        uint8_t *chroma = v.plane[1] + static_cast<size_t>(by) * v.stride[1];
+        if (c.format == PixelFormat::NV12) {
+          chroma[2 * bx] = static_cast<uint8_t>(pair & 255);
+          chroma[2 * bx + 1] = static_cast<uint8_t>(pair >> 8);
+        } else {
+          chroma[bx] = static_cast<uint8_t>(pair & 255);
+          v.plane[2][static_cast<size_t>(by) * v.stride[2] + bx] = static_cast<uint8_t>(pair >> 8);
+        }
+      }
+    std::vector<uint32_t> words(side);
+    long long mismatches = 0;
+    for (int y = 0; y < side; ++y) {
+      rgba_words_of_row(v, y, c.m, words.data());
+      for (int x = 0; x < side; ++x) mismatches += words[x] != rgba_word(load_rgba(v, x, y, c.m));
+    }
+    EXPECT_EQ(mismatches, 0) << test::format_name(c.format);
+  }
 }
 
 TEST(ColourPlanes, PlaneSizesOfOddFrames) {

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "block_regions.h"
 #include "depth_estimate.h"
 #include "host_frame.h"
 #include "test_data.h"
@@ -211,6 +212,45 @@ TEST(DepthRegions, MatchesFloodFillOnRandomMazes) {
     std::vector<int> labels;
     region_labels_cpu(feat, bx, by, 24.f, false, labels);
     EXPECT_EQ(labels, flood_labels(feat, bx, by, 24.f)) << bx << "x" << by;
+  }
+}
+
+// BlockRegions labels strips of block rows in parallel and joins them
+// serially; its labels and each region's hq sum, count and max must be
+// those of a flood fill, whatever the number of threads (and so of
+// strips): grids up to 300 block rows, one thread and the default.
+TEST(DepthRegions, StatisticsOfEveryRegionWhateverTheThreads) {
+  std::mt19937 rng(std::random_device{}());
+  const int threads = cv::getNumThreads();
+  for (int trial = 0; trial < 12; ++trial) {
+    const int bx = 1 + rng() % 90, by = 1 + rng() % 300;
+    std::vector<float> feat;
+    std::vector<uint32_t> hq;
+    for (int k = 0; k < bx * by; ++k) {
+      const float v = (rng() % 100) < 59 ? 20.f : 220.f;
+      feat.insert(feat.end(), {v, v * 0.5f, 3.f});
+      hq.push_back(rng() % 65536);
+    }
+    const std::vector<int> want = flood_labels(feat, bx, by, 24.f);
+    std::vector<uint64_t> sum(want.size(), 0);
+    std::vector<uint32_t> count(want.size(), 0), max(want.size(), 0);
+    for (size_t k = 0; k < want.size(); ++k) {
+      sum[want[k]] += hq[k];
+      ++count[want[k]];
+      max[want[k]] = std::max(max[want[k]], hq[k]);
+    }
+    for (int t : {1, std::max(threads, 4)}) {
+      cv::setNumThreads(t);
+      BlockRegions regions;
+      regions.label(feat, bx, by, 24.f, false, hq.data());
+      ASSERT_EQ(regions.labels(), want) << bx << "x" << by << ", " << t << " threads";
+      for (size_t k = 0; k < want.size(); ++k) {
+        if (want[k] != static_cast<int>(k)) continue;
+        ASSERT_TRUE(regions.sum(k) == sum[k] && regions.count(k) == count[k] && regions.max(k) == max[k])
+            << "region " << k << " of " << bx << "x" << by << ", " << t << " threads";
+      }
+    }
+    cv::setNumThreads(threads);
   }
 }
 

@@ -3,6 +3,7 @@
 // nothing is written outside the output rows; 4:2:0 output against an
 // independent conversion and OpenCV's.
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <random>
 #include <stdexcept>
@@ -194,6 +195,60 @@ TEST(PackLayouts, SideBySideHalfAveragesColumnPairs) {
     EXPECT_TRUE(same(at(out, 3, y), Rgba{102, 154, b, 52}));
     EXPECT_TRUE(same(at(out, 4, y), Rgba{128, 128, b, 65}));
   }
+}
+
+// pack_detail::mean2_word() is mean2() in every lane: all 65536 byte pairs in each lane
+// of a word (the other lanes holding the extremes a borrow would reach),
+// and 16-bit lanes on the extremes and random pairs.
+TEST(PackLayouts, WordMeanIsTheMeanOfEveryLane) {
+  for (int lane = 0; lane < 4; ++lane)
+    for (uint32_t a = 0; a < 256; ++a)
+      for (uint32_t b = 0; b < 256; ++b) {
+        const uint32_t others = lane % 2 ? 0x00ff00ffu : 0xff00ff00u;
+        const uint32_t wa = (others & ~(0xffu << 8 * lane)) | a << 8 * lane, wb = (~others & ~(0xffu << 8 * lane)) | b << 8 * lane;
+        const uint32_t got = pack_detail::mean2_word(wa, wb);
+        for (int l = 0; l < 4; ++l)
+          ASSERT_EQ(got >> 8 * l & 0xff, pack_detail::mean2(uint8_t(wa >> 8 * l), uint8_t(wb >> 8 * l)))
+              << "lane " << l << " of " << std::hex << wa << " and " << wb;
+      }
+  std::mt19937 rng(5);
+  std::vector<uint16_t> samples = {0, 1, 2, 32767, 32768, 65534, 65535};
+  for (int i = 0; i < 2000; ++i) samples.push_back(uint16_t(rng()));
+  for (uint16_t a : samples)
+    for (size_t k = 0; k < samples.size(); k += 7) {
+      const uint16_t b = samples[(k + a) % samples.size()];
+      const uint64_t wa = uint64_t(a) * 0x0001000100010001ull ^ 0xffff00000000ffffull;
+      const uint64_t wb = uint64_t(b) * 0x0001000100010001ull;
+      const uint64_t got = pack_detail::mean2_word(wa, wb);
+      for (int l = 0; l < 4; ++l)
+        ASSERT_EQ(got >> 16 * l & 0xffff, pack_detail::mean2(uint16_t(wa >> 16 * l), uint16_t(wb >> 16 * l)))
+            << "lane " << l << " of " << std::hex << wa << " and " << wb;
+    }
+}
+
+// pack_cpu runs side-by-side-half of a side-by-side pair into packed RGB a
+// row at a time on stored words; every byte of its rows (an RGBx padding
+// byte included) must be what pack_pixel() stored through store_rgba()
+// gives, for every packed format, odd and even view widths (the odd view's
+// last column pairs with itself), eye order and rows of padding.
+TEST(PackLayouts, SideBySideHalfRowLoopEqualsThePerPixelFunction) {
+  for (PixelFormat f : kPackedFormats)
+    for (int w : {1, 2, 3, 4, 5, 37, 38, 67})
+      for (bool swap : {false, true}) {
+        HostFrame in(f, 2 * w, 4, 12);
+        in.fill_random(3 * w + static_cast<int>(f));
+        PackParams p = layout_params(PackLayout::SideBySideHalf, swap);
+        const AnaglyphMatrices am = anaglyph_matrices(p.glasses, p.method);
+        const HostFrame out = pack(p, in, 8);
+        HostFrame want(f, w, 4, 8);
+        want.fill(kPoison);
+        for (int y = 0; y < 4; ++y)
+          for (int x = 0; x < w; ++x) store_rgba(want.view(), x, y, pack_pixel(p, am, in.view(), x, y));
+        for (int y = 0; y < 4; ++y)
+          ASSERT_EQ(0, std::memcmp(out.view().plane[0] + static_cast<size_t>(y) * out.view().stride[0],
+                                   want.view().plane[0] + static_cast<size_t>(y) * want.view().stride[0], 4 * w))
+              << test::format_name(f) << " view width " << w << " swap " << swap << " row " << y;
+      }
 }
 
 TEST(PackLayouts, TopBottomHalfAveragesRowPairs) {

@@ -270,6 +270,59 @@ TEST(WarpStretch, GapUpToMaxStretchIsInterpolatedWiderIsAHole) {
 
 // The shared helpers on the stretched step above: pixel 29 (depth 0.25,
 // t = 27) connected to pixel 30 (depth 0, t = 30).
+// The render (fill none) against the z-buffer read literally off the
+// header: every target X of a row keeps the largest key of the source
+// pixels that cover it (warp_covers(), warp_hit_at()), each pixel placed by
+// warp_source(), and shows sample_row() at the winner's u. The renderer
+// computes spans and the first two hits of many pixels at once
+// (span_keys_vector in common/warp.cpp), so rows of every width from 1 to
+// 70 (all remainders of the vector width), with depths that stretch,
+// fold, jump, and leave [0, 1] or are NaN, for every view.
+TEST(WarpScatter, RenderIsTheLiteralZBuffer) {
+  std::mt19937 rng(std::random_device{}());
+  for (int trial = 0; trial < 140; ++trial) {
+    const int w = 1 + trial % 70, h = 3;
+    const HostFrame src = textured(PixelFormat::RGBA, w, h, rng());
+    std::uniform_real_distribution<float> unit(0.f, 1.f);
+    const int kind = trial % 4;
+    const cv::Mat depth = make_depth(w, h, [&](int x, int) {
+      switch (kind) {
+        case 0: return unit(rng);                                         // noise: folds and holes
+        case 1: return 0.3f + 0.4f * std::sin(0.37f * x) + 0.05f * unit(rng);  // smooth: stretches
+        case 2: return (x / 7) % 2 ? 0.95f : 0.05f;                        // steps
+        default: {
+          const float v = unit(rng);
+          return v < 0.1f ? std::nanf("") : 3.f * v - 1.f;                 // outside [0, 1], NaN
+        }
+      }
+    });
+    const WarpParams p = warp_params(5.f + 20.f * unit(rng), unit(rng), kAllViews[trial % 3], HoleFill::None);
+    const Rendered got = render(p, src, depth, PixelFormat::RGBA);
+    const WarpParams sp = warp_sanitize(p);
+    const float D = disparity_scale(sp, w);
+    for (int eye = 0; eye < 2; ++eye) {
+      const float shift = warp_eye_shift(sp, D, eye);
+      for (int y = 0; y < h; ++y) {
+        std::vector<Rgba> row(w);
+        for (int x = 0; x < w; ++x) row[x] = at(src, x, y);
+        for (int X = 0; X < w; ++X) {
+          Rgba want = row[X];
+          if (shift != 0.f) {
+            WideKeys::Word best = 0;
+            for (int x = 0; x < w; ++x) {
+              const WarpSource s = warp_source(depth.ptr<float>(y), x, w, shift, D, sp.convergence);
+              if (warp_covers(s, X)) best = std::max(best, WideKeys::key(warp_hit_at(s, X, w), X));
+            }
+            want = best ? sample_row(row.data(), w, WideKeys::u(best, X)) : kHoleColour;
+          }
+          ASSERT_TRUE(same(view_at(got.out, eye, X, y), want))
+              << "width " << w << " depth kind " << kind << " eye " << eye << " at (" << X << "," << y << ")";
+        }
+      }
+    }
+  }
+}
+
 TEST(WarpHelpers, StretchedSpanKeys) {
   float depth[64];
   for (int x = 0; x < 64; ++x) depth[x] = x >= 20 && x <= 29 ? 0.25f : 0.f;

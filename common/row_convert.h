@@ -1,0 +1,20 @@
+// A row of a frame converted to R'G'B'A words (rgba_word(load_rgba())),
+// for CPU loops that convert every pixel of a row once: the warp's source
+// row. 8-bit Y'CbCr 4:2:0 rows are converted several pixels at a time
+// with OpenCV's universal intrinsics (SSE, AVX2 or NEON from one source),
+// in the operation order of chroma_terms() and yuv_rgba(), so the words
+// are the same bits as the per-pixel functions give (IEEE single
+// precision, no fused multiply-add: common/ is built with
+// -ffp-contract=off); other formats take load_rgba_pair_words().
+#pragma once
+
+#include <cstdint>
+
+#include "frame.h"
+
+namespace p3d {
+
+// words[x] = rgba_word(load_rgba(f, x, y, m)) for every x of row y.
+void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words);
+
+}  // namespace p3d
