@@ -376,6 +376,18 @@ struct ColumnWindow {
   Sum s;
 };
 
+// The first column at or after X whose state is a hole (W: none), eight
+// states at a time where they are all 0: most of a row is no hole.
+inline int next_hole(const uint8_t *row, int X, int W) {
+  for (; X + 8 <= W; X += 8) {
+    uint64_t eight;
+    std::memcpy(&eight, row + X, sizeof eight);
+    if (eight != 0) break;
+  }
+  while (X < W && !row[X]) ++X;
+  return X;
+}
+
 template <class Px>
 void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int R, int Rx, int y0, int y1,
                  std::vector<ColumnWindow<Px>> &win, std::vector<typename ColumnWindow<Px>::Sum> &V,
@@ -388,8 +400,7 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int
   for (int y = y0; y < y1; ++y) {
     const uint8_t *row = state + at(y, 0);
     bool any = false;
-    for (int X = 0; X < W; ++X) {
-      if (!row[X]) continue;
+    for (int X = next_hole(row, 0, W); X < W; X = next_hole(row, X + 1, W)) {
       any = true;
       ColumnWindow<Px> &w = win[X];
       if (y == y0 || !state[at(y - 1, X)]) {  // a new run, or the band's first row: lo = the run's start
@@ -411,12 +422,7 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int
     }
     if (!any) continue;
     // Every hole becomes the mean of V over its row run within +-Rx.
-    int X = 0;
-    while (X < W) {
-      if (!row[X]) {
-        ++X;
-        continue;
-      }
+    for (int X = next_hole(row, 0, W); X < W; X = next_hole(row, X, W)) {
       const int a = X;  // the run is columns a..b
       prefix[0] = Sum{0, 0, 0, 0, 0};
       for (; X < W && row[X]; ++X) {

@@ -124,6 +124,44 @@ TEST(DepthFeatures, YuvFeaturesAreNativeChannels) {
   }
 }
 
+// Step 1: every block's means are those of load_native3() summed over its
+// pixels, for every format, odd and even sizes (partial blocks), odd and
+// even block sizes; the adaptive call computes its subset of blocks and
+// leaves the others as they were.
+TEST(DepthFeatures, MeansAreThoseOfEveryPixelsNativeChannels) {
+  std::mt19937 rng(std::random_device{}());
+  for (PixelFormat fmt : test::kAllFormats)
+    for (int B : {2, 3, 4, 8})
+      for (const auto &size : {std::pair<int, int>{37, 21}, {64, 32}, {2, 2}, {1, 5}}) {
+        HostFrame f(fmt, size.first, size.second, kPad);
+        f.fill_random(rng());
+        const FrameView v = f.view();
+        const int bx = (v.width + B - 1) / B, by = (v.height + B - 1) / B;
+        std::vector<uint8_t> only(static_cast<size_t>(bx) * by);
+        for (uint8_t &o : only) o = rng() % 2;
+        std::vector<float> all, some(static_cast<size_t>(bx) * by * 3, -1.f);
+        block_features_cpu(v, B, all);
+        block_features_cpu(v, B, some, &only);
+        for (int j = 0; j < by; ++j)
+          for (int i = 0; i < bx; ++i) {
+            uint32_t sum[3] = {0, 0, 0};
+            int n = 0;
+            for (int y = j * B; y < std::min(v.height, (j + 1) * B); ++y)
+              for (int x = i * B; x < std::min(v.width, (i + 1) * B); ++x, ++n) {
+                int c[3];
+                load_native3(v, x, y, c);
+                for (int k = 0; k < 3; ++k) sum[k] += c[k];
+              }
+            const size_t b = static_cast<size_t>(j) * bx + i;
+            for (int k = 0; k < 3; ++k) {
+              ASSERT_EQ(all[3 * b + k], block_mean(sum[k], n))
+                  << test::format_name(fmt) << " B=" << B << " block " << i << "," << j << " channel " << k;
+              ASSERT_EQ(some[3 * b + k], only[b] ? block_mean(sum[k], n) : -1.f) << "the adaptive subset";
+            }
+          }
+      }
+}
+
 // -------------------------------------------------------------- regions ---
 
 TEST(DepthRegions, TwoFlatHalvesGiveTwoRegions) {
