@@ -198,19 +198,29 @@ inline int bilateral_space_table_size(int radius) { return (2 * radius + 1) * (2
 // identical weights. The zero-distance weights are returned as exactly 1
 // without evaluating d/(2 sigma^2), which would be 0/0 when sigma^2
 // underflows to 0.
+//
+// A weight under kBilateralMinWeight counts as 0. Beside the centre's
+// weight 1 it changes no sum of weights (2^-60 is far under the half unit
+// of float's last place at 1, 2^-24), and a product of two table weights
+// is then 0 or at least 2^-120, a normal float: on x86 CPUs a subnormal
+// operand or result costs tens of times a normal one, and strong guide
+// edges (a luma step of 159 to 171 levels at the default sigma_range 12)
+// gave subnormal range weights.
+constexpr float kBilateralMinWeight = 0x1p-60f;
+inline float bilateral_kept_weight(float w) { return w < kBilateralMinWeight ? 0.f : w; }
 inline float bilateral_space_weight(const BilateralParams &p, int dx, int dy) {
   const int d2 = dx * dx + dy * dy;
   if (d2 == 0) return 1.f;
   const float denom = 2.f * p.sigma_space * p.sigma_space;
   if (!(denom > 0.f)) return 0.f;
-  return expf(-static_cast<float>(d2) / denom);
+  return bilateral_kept_weight(expf(-static_cast<float>(d2) / denom));
 }
 inline float bilateral_range_weight(const BilateralParams &p, int absdiff) {
   if (absdiff == 0) return 1.f;
   if (!(p.sigma_range > 0.f)) return 0.f;
   const float denom = 2.f * p.sigma_range * p.sigma_range;
   if (!(denom > 0.f)) return 0.f;
-  return expf(-static_cast<float>(absdiff * absdiff) / denom);
+  return bilateral_kept_weight(expf(-static_cast<float>(absdiff * absdiff) / denom));
 }
 
 // Tables the filter uses (host side): space[(dy+r)*(2r+1)+(dx+r)], range[0..255],

@@ -114,6 +114,33 @@ TEST(BilateralTables, CentreIsOneSymmetricAndGaussian) {
   for (int g = 1; g < kBilateralRangeTableSize; ++g) EXPECT_LE(range[g], range[g - 1]);
 }
 
+// No table weight is subnormal, for any sigma: each is 0, or the
+// Gaussian's value from kBilateralMinWeight (2^-60) up, so every product
+// of two is 0 or a normal float.
+TEST(BilateralTables, NoSubnormalWeights) {
+  for (const float sigma_space : {0.1f, 0.5f, 1.f, 3.f, 100.f})
+    for (const float sigma_range : {0.01f, 1.f, 12.f, 50.f, 1000.f}) {
+      const BilateralParams p = bilateral_sanitize({kMaxBilateralRadius, sigma_space, sigma_range});
+      std::vector<float> space(bilateral_space_table_size(p.radius)), range(kBilateralRangeTableSize);
+      bilateral_tables(p, space.data(), range.data());
+      auto check = [&](float w, float gaussian) {
+        if (gaussian < kBilateralMinWeight) return w == 0.f;
+        return w == gaussian && std::fpclassify(w) == FP_NORMAL;
+      };
+      for (int g = 1; g < kBilateralRangeTableSize; ++g)
+        ASSERT_TRUE(check(range[g], expf(-static_cast<float>(g * g) / (2.f * p.sigma_range * p.sigma_range))))
+            << "range weight of " << g << " at sigma_range " << sigma_range;
+      const int r = p.radius, side = 2 * r + 1;
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx) {
+          if (dx == 0 && dy == 0) continue;
+          ASSERT_TRUE(check(space[(dy + r) * side + dx + r],
+                            expf(-static_cast<float>(dx * dx + dy * dy) / (2.f * p.sigma_space * p.sigma_space))))
+              << "space weight of " << dx << "," << dy << " at sigma_space " << sigma_space;
+        }
+    }
+}
+
 TEST(BilateralTables, SanitiseClampsAndCanonicalises) {
   EXPECT_EQ(bilateral_sanitize({-4, 3.f, 12.f}).radius, 0);
   EXPECT_EQ(bilateral_sanitize({99, 3.f, 12.f}).radius, kMaxBilateralRadius);
