@@ -103,8 +103,13 @@ struct SpanKeys {
 // compute, in their operation order: IEEE single precision, no fused
 // multiply-add, so the same bits (tests/common/test_warp.cpp compares the
 // renders of rows of every width). v_ceil() equals ceil_to_int() for
-// every target of a row; the clamps are written as min and max, which
-// give the same values for the finite operands they get.
+// every target of a row. The clamps are written as min and max, which
+// give clamp_value()'s result for every operand but NaN and -0, and
+// neither reaches them: the read depths and targets are finite, and
+// 1 / gap is infinite only for a subnormal gap, which only t(x+1) = 0
+// beside a subnormal t(x) < 0 makes (t(x+1) = (x+1) + s p(x+1) is 0 or at
+// least 2^-25 in size), a span that holds no integer target; and a sum
+// x + (X - t) * inv_gap that is 0 is +0.
 int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
   int x = 0;
 #if CV_SIMD
@@ -153,8 +158,9 @@ int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
 }
 
 // Per-row scratch of a row task: the converted source row, every pixel's
-// read depth and target for the eye being scattered, the z-buffer keys and
-// the Background fill's nearest-right index.
+// read depth, target and span keys for the eye being scattered, the
+// z-buffer keys, the Background fill's nearest-right index and the
+// BackgroundSmooth anchors' runs of holes.
 template <class Px>
 struct RowScratch {
   SourceRow<Px> src;

@@ -333,8 +333,11 @@ P3D_HD WarpSource warp_source(const float *depth_row, int x, int width, float sh
   return warp_place(x, d0, has_next ? warp_depth(depth_row[x + 1]) : d0, has_next, shift, D, convergence);
 }
 
-// Whether x covers target X (footprint or connected span). t0 +- 0.5f is
-// exact for |t0| < 2^23, so the footprint holds exactly one integer.
+// Whether x covers target X (footprint or connected span), the rule above
+// evaluated in float: a reading for tests. t0 + 0.5f is not always exact
+// (t0 = 0.50000006 gives 1), so this can miss the footprint's integer at
+// such a boundary; the renderers on both devices take warp_span(), which
+// finds it as ceil(t0 - 0.5).
 P3D_HD bool warp_covers(const WarpSource &s, int X) {
   const float xf = static_cast<float>(X);
   if (xf >= s.t0 - 0.5f && xf < s.t0 + 0.5f) return true;

@@ -272,31 +272,41 @@ TEST(WarpStretch, GapUpToMaxStretchIsInterpolatedWiderIsAHole) {
 // t = 27) connected to pixel 30 (depth 0, t = 30).
 // The render (fill none) against the z-buffer read literally off the
 // header: every target X of a row keeps the largest key of the source
-// pixels that cover it (warp_covers(), warp_hit_at()), each pixel placed by
-// warp_source(), and shows sample_row() at the winner's u. The renderer
+// pixels whose covered run holds it (warp_span(), warp_hit_at()), each
+// pixel placed by warp_source(), and shows sample_row() at the winner's u.
+// (warp_span(), not warp_covers(): in float, t + 0.5 can round up to the
+// next integer, so warp_covers() can miss a target whose t - 0.5 <= X <
+// t + 0.5 holds exactly; warp_span() is what both devices render.) The renderer
 // computes spans and the first two hits of many pixels at once
 // (span_keys_vector in common/warp.cpp), so rows of every width from 1 to
 // 70 (all remainders of the vector width), with depths that stretch,
-// fold, jump, and leave [0, 1] or are NaN, for every view.
+// fold, jump, leave [0, 1] or are NaN, and subnormal depths beside 1 at
+// convergence 0 with D = 2 (a subnormal gap: an infinite 1 / gap), for
+// every view.
 TEST(WarpScatter, RenderIsTheLiteralZBuffer) {
   std::mt19937 rng(std::random_device{}());
-  for (int trial = 0; trial < 140; ++trial) {
+  for (int trial = 0; trial < 175; ++trial) {
     const int w = 1 + trial % 70, h = 3;
     const HostFrame src = textured(PixelFormat::RGBA, w, h, rng());
     std::uniform_real_distribution<float> unit(0.f, 1.f);
-    const int kind = trial % 4;
+    const int kind = trial % 5;
     const cv::Mat depth = make_depth(w, h, [&](int x, int) {
       switch (kind) {
         case 0: return unit(rng);                                         // noise: folds and holes
         case 1: return 0.3f + 0.4f * std::sin(0.37f * x) + 0.05f * unit(rng);  // smooth: stretches
         case 2: return (x / 7) % 2 ? 0.95f : 0.05f;                        // steps
+        case 4: {
+          const float v[] = {0.f, 1e-40f, 1.f, 0.5f, 3e-39f};
+          return v[rng() % 5];
+        }
         default: {
           const float v = unit(rng);
           return v < 0.1f ? std::nanf("") : 3.f * v - 1.f;                 // outside [0, 1], NaN
         }
       }
     });
-    const WarpParams p = warp_params(5.f + 20.f * unit(rng), unit(rng), kAllViews[trial % 3], HoleFill::None);
+    const WarpParams p = kind == 4 ? warp_params(std::min(25.f, 200.f / w), 0.f, kAllViews[trial % 3], HoleFill::None)
+                                   : warp_params(5.f + 20.f * unit(rng), unit(rng), kAllViews[trial % 3], HoleFill::None);
     const Rendered got = render(p, src, depth, PixelFormat::RGBA);
     const WarpParams sp = warp_sanitize(p);
     const float D = disparity_scale(sp, w);
@@ -311,7 +321,8 @@ TEST(WarpScatter, RenderIsTheLiteralZBuffer) {
             WideKeys::Word best = 0;
             for (int x = 0; x < w; ++x) {
               const WarpSource s = warp_source(depth.ptr<float>(y), x, w, shift, D, sp.convergence);
-              if (warp_covers(s, X)) best = std::max(best, WideKeys::key(warp_hit_at(s, X, w), X));
+              const WarpSpan span = warp_span(s, w);
+              if (span.first <= X && X <= span.last) best = std::max(best, WideKeys::key(warp_hit_at(s, X, w), X));
             }
             want = best ? sample_row(row.data(), w, WideKeys::u(best, X)) : kHoleColour;
           }
