@@ -7,7 +7,8 @@
 //   w(p,q) = space_weight(|p-q|^2) * range_weight(guide(p) - guide(q)),
 //   space_weight(d2) = exp(-d2 / (2 sigma_space^2)),
 //   range_weight(g)  = exp(-g^2 / (2 sigma_range^2)), and for sigma_range == 0:
-//                      1 where g == 0, else 0.
+//                      1 where g == 0, else 0;
+// either weight under kBilateralMinWeight (2^-60) is 0.
 // The centre weight is exactly 1, so the sum never underflows to 0 and the
 // result of finite depth is never NaN. It is computed as depth(p) + sum_q w(p,q) *
 // (depth(q) - depth(p)) / sum_q w(p,q) (bilateral_accumulate): a window of
@@ -199,13 +200,14 @@ inline int bilateral_space_table_size(int radius) { return (2 * radius + 1) * (2
 // without evaluating d/(2 sigma^2), which would be 0/0 when sigma^2
 // underflows to 0.
 //
-// A weight under kBilateralMinWeight counts as 0. Beside the centre's
-// weight 1 it changes no sum of weights (2^-60 is far under the half unit
-// of float's last place at 1, 2^-24), and a product of two table weights
-// is then 0 or at least 2^-120, a normal float: on x86 CPUs a subnormal
-// operand or result costs tens of times a normal one, and strong guide
-// edges (a luma step of 159 to 171 levels at the default sigma_range 12)
-// gave subnormal range weights.
+// A weight under kBilateralMinWeight counts as 0, so that a product of two
+// table weights is 0 or at least 2^-120, a normal float: on x86 CPUs an
+// operation on a subnormal float costs many times a normal one, and
+// strong guide edges (luma steps of 159 to 173 levels at the default
+// sigma_range 12) would give subnormal range weights. The dropped weights
+// (at most 33 x 33 of them, each under 2^-60 of the centre's 1) move a
+// result by less than 2^-48 of the window's depth range, far under
+// float's resolution of depths near 1.
 constexpr float kBilateralMinWeight = 0x1p-60f;
 inline float bilateral_kept_weight(float w) { return w < kBilateralMinWeight ? 0.f : w; }
 inline float bilateral_space_weight(const BilateralParams &p, int dx, int dy) {

@@ -1,12 +1,11 @@
 #include "row_convert.h"
 
 #include <opencv2/core.hpp>
-#include <opencv2/core/hal/intrin.hpp>
 
 namespace p3d {
 namespace {
 
-#if CV_SIMD
+#if P3D_CPU_VECTORS
 // The pixels [0, end) of row y of an 8-bit NV12 or I420 frame, 2L at a
 // time (L = float lanes: L chroma pairs); returns end (even), where the
 // caller's per-pair loop takes over.
@@ -55,7 +54,7 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
 
 void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words) {
   int x = 0;
-#if CV_SIMD
+#if P3D_CPU_VECTORS
   if (f.format == PixelFormat::NV12 || f.format == PixelFormat::I420) x = yuv420_words_vector(f, y, m, words);
 #endif
   for (; x < f.width; x += 2) load_rgba_pair_words(f, x, y, m, words + x);

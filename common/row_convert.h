@@ -1,7 +1,7 @@
 // A row of a frame converted to R'G'B'A words (rgba_word(load_rgba())),
 // for CPU loops that convert every pixel of a row once: the warp's source
 // row. 8-bit Y'CbCr 4:2:0 rows are converted several pixels at a time
-// with OpenCV's universal intrinsics (SSE, AVX2 or NEON from one source),
+// with OpenCV's universal intrinsics (SSE2 on x86-64, NEON on aarch64),
 // in the operation order of chroma_terms() and yuv_rgba(), so the words
 // are the same bits as the per-pixel functions give (IEEE single
 // precision, no fused multiply-add: common/ is built with
@@ -10,7 +10,19 @@
 
 #include <cstdint>
 
+#include <opencv2/core/hal/intrin.hpp>
+
 #include "frame.h"
+
+// Where the CPU loops take OpenCV's vector types: x86-64 (SSE2 and up) and
+// aarch64 (NEON), whose float division is IEEE and which keep subnormals,
+// as the scalar code does. 32-bit ARM's NEON divides by a reciprocal
+// estimate and flushes subnormals, so it takes the scalar loops.
+#if CV_SIMD && (defined(__x86_64__) || defined(__aarch64__))
+#define P3D_CPU_VECTORS 1
+#else
+#define P3D_CPU_VECTORS 0
+#endif
 
 namespace p3d {
 

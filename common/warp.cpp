@@ -14,7 +14,6 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/core/hal/intrin.hpp>
 
 #include "row_convert.h"
 
@@ -112,7 +111,7 @@ struct SpanKeys {
 // x + (X - t) * inv_gap that is 0 is +0.
 int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
   int x = 0;
-#if CV_SIMD
+#if P3D_CPU_VECTORS
   using namespace cv;
   constexpr int kLanes = v_float32::nlanes;
   const v_float32 zero = vx_setall_f32(0.f), one = vx_setall_f32(1.f), half = vx_setall_f32(0.5f);

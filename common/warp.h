@@ -349,7 +349,8 @@ P3D_HD bool warp_covers(const WarpSource &s, int X) {
 // a connected span adds the integers X with t0 <= X < t1, which start at
 // ceil(t0) <= X0 + 1, so the covered set is the run from X0 to
 // max(X0, ceil(t1) - 1), at most 2 + 1 + kMaxStretch targets long
-// (tests/common/test_warp.cpp checks this against warp_covers()).
+// (tests/common/test_warp.cpp checks this against warp_covers() on targets
+// where its float reading is exact).
 struct WarpSpan {
   int first, last;
 };

@@ -33,6 +33,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 out="$top/build-aarch64"
+rm -rf "$out/obj"  # compiled afresh: no stale object of an edited header or a removed source
 mkdir -p "$out/obj"
 cxx=aarch64-linux-gnu-g++
 flags=(-std=c++17 -O2 -ffp-contract=off -Wall -Wextra -pthread -DNDEBUG
@@ -43,7 +44,7 @@ sources=(common/*.cpp tools/support/host_frame.cpp tools/support/metrics.cpp
          tests/support/image_read_raw_only.cpp tests/support/gtest_main.cpp tests/common/*.cpp)
 # Compile in parallel, one object per source.
 printf '%s\n' "${sources[@]}" | xargs -P "$(nproc)" -I{} sh -c \
-  'o="$0/obj/$(echo "{}" | tr / _).o"; [ "$o" -nt "{}" ] || $1 $2 -c "{}" -o "$o"' "$out" "$cxx" "${flags[*]}"
+  'o="$0/obj/$(echo "{}" | tr / _).o"; $1 $2 -c "{}" -o "$o"' "$out" "$cxx" "${flags[*]}"
 $cxx -pthread -o "$out/test_common" "$out"/obj/*.o -lopencv_imgproc -lopencv_core -lgtest
 file "$out/test_common" | grep -q "ARM aarch64" || { echo "check-aarch64: not an aarch64 binary" >&2; exit 1; }
 echo "check-aarch64: running test_common under qemu-aarch64"

@@ -469,17 +469,20 @@ TEST(BilateralSeparable, RadiusZeroInPlaceThreadsAndSanitise) {
 cv::Mat blocky_depth(int w, int h, uint32_t seed) {
   std::mt19937 rng(seed);
   const float specials[] = {0.f, -0.f, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
-  std::vector<float> block((w / 24 + 1) * (h / 3 + 1));
+  // 64 x 36 blocks hold the windows of whole strips up to radius 16
+  // (16 + 2r columns, 2r + 1 rows), so flat strips occur at every radius.
+  const int bw = 64, bh = 36;
+  std::vector<float> block((w / bw + 1) * (h / bh + 1));
   for (float &v : block) v = rng() % 8 == 0 ? specials[rng() % 4] : std::uniform_real_distribution<float>(0.f, 1.f)(rng);
   cv::Mat d(h, w, CV_32FC1);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) d.at<float>(y, x) = block[(y / 3) * (w / 24 + 1) + x / 24];
+    for (int x = 0; x < w; ++x) d.at<float>(y, x) = block[(y / bh) * (w / bw + 1) + x / bw];
   return d;
 }
 
 TEST(BilateralCpu, StripsEqualThePerPixelFunctionsBitForBit) {
   for (const cv::Size sz : {cv::Size(67, 45), cv::Size(1, 1), cv::Size(4, 3), cv::Size(1, 30), cv::Size(30, 1),
-                            cv::Size(48, 20), cv::Size(16, 17), cv::Size(15, 9), cv::Size(203, 31)})
+                            cv::Size(48, 20), cv::Size(16, 17), cv::Size(15, 9), cv::Size(203, 80)})
     for (int r : {0, 1, 5, 16})
       for (BilateralMode mode : {BilateralMode::Exact, BilateralMode::Separable})
         for (bool blocky : {false, true}) {

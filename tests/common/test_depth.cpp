@@ -129,7 +129,9 @@ TEST(DepthFeatures, YuvFeaturesAreNativeChannels) {
 // even block sizes; the adaptive call computes its subset of blocks and
 // leaves the others as they were.
 TEST(DepthFeatures, MeansAreThoseOfEveryPixelsNativeChannels) {
-  std::mt19937 rng(std::random_device{}());
+  const uint32_t seed = std::random_device{}();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
   for (PixelFormat fmt : test::kAllFormats)
     for (int B : {2, 3, 4, 8})
       for (const auto &size : {std::pair<int, int>{37, 21}, {64, 32}, {2, 2}, {1, 5}}) {
@@ -256,9 +258,11 @@ TEST(DepthRegions, MatchesFloodFillOnRandomMazes) {
 // BlockRegions labels strips of block rows in parallel and joins them
 // serially; its labels and each region's hq sum, count and max must be
 // those of a flood fill, whatever the number of threads (and so of
-// strips): grids up to 300 block rows, one thread and the default.
+// strips): grids up to 300 block rows, one thread and at least four.
 TEST(DepthRegions, StatisticsOfEveryRegionWhateverTheThreads) {
-  std::mt19937 rng(std::random_device{}());
+  const uint32_t seed = std::random_device{}();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
   const int threads = cv::getNumThreads();
   for (int trial = 0; trial < 12; ++trial) {
     const int bx = 1 + rng() % 90, by = 1 + rng() % 300;

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <iterator>
 #include <random>
 #include <stdexcept>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -228,11 +230,15 @@ TEST(PackLayouts, WordMeanIsTheMeanOfEveryLane) {
 
 // pack_cpu runs side-by-side-half of a side-by-side pair into packed RGB a
 // row at a time on stored words; every byte of its rows (an RGBx padding
-// byte included) must be what pack_pixel() stored through store_rgba()
-// gives, for every packed format, odd and even view widths (the odd view's
-// last column pairs with itself), eye order and rows of padding.
+// byte included, the poisoned bytes after each row untouched) must be what
+// the per-pixel function stored through store_rgba() / store_rgba16()
+// gives, for every packed format and RGBA64 (16-bit words), odd and even
+// view widths (the odd view's last column pairs with itself), eye order
+// and rows of padding.
 TEST(PackLayouts, SideBySideHalfRowLoopEqualsThePerPixelFunction) {
-  for (PixelFormat f : kPackedFormats)
+  std::vector<PixelFormat> formats(std::begin(kPackedFormats), std::end(kPackedFormats));
+  formats.push_back(PixelFormat::RGBA64);
+  for (PixelFormat f : formats)
     for (int w : {1, 2, 3, 4, 5, 37, 38, 67})
       for (bool swap : {false, true}) {
         HostFrame in(f, 2 * w, 4, 12);
@@ -243,10 +249,18 @@ TEST(PackLayouts, SideBySideHalfRowLoopEqualsThePerPixelFunction) {
         HostFrame want(f, w, 4, 8);
         want.fill(kPoison);
         for (int y = 0; y < 4; ++y)
-          for (int x = 0; x < w; ++x) store_rgba(want.view(), x, y, pack_pixel(p, am, in.view(), x, y));
+          for (int x = 0; x < w; ++x) {
+            if (is_deep(f))
+              store_rgba16(want.view(),
+                           x, y, pack_detail::pack_pixel_for<StereoInput::SideBySide, Rgba16>(p, am, in.view(), x, y));
+            else
+              store_rgba(want.view(), x, y, pack_pixel(p, am, in.view(), x, y));
+          }
+        ASSERT_EQ(out.view().stride[0], want.view().stride[0]);
         for (int y = 0; y < 4; ++y)
           ASSERT_EQ(0, std::memcmp(out.view().plane[0] + static_cast<size_t>(y) * out.view().stride[0],
-                                   want.view().plane[0] + static_cast<size_t>(y) * want.view().stride[0], 4 * w))
+                                   want.view().plane[0] + static_cast<size_t>(y) * want.view().stride[0],
+                                   static_cast<size_t>(out.view().stride[0])))
               << test::format_name(f) << " view width " << w << " swap " << swap << " row " << y;
       }
 }

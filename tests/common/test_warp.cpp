@@ -268,8 +268,6 @@ TEST(WarpStretch, GapUpToMaxStretchIsInterpolatedWiderIsAHole) {
     for (int x = 27; x <= 29; ++x) EXPECT_TRUE(same(view_at(torn.out, 1, x, y), kHoleColour)) << x;
 }
 
-// The shared helpers on the stretched step above: pixel 29 (depth 0.25,
-// t = 27) connected to pixel 30 (depth 0, t = 30).
 // The render (fill none) against the z-buffer read literally off the
 // header: every target X of a row keeps the largest key of the source
 // pixels whose covered run holds it (warp_span(), warp_hit_at()), each
@@ -284,7 +282,9 @@ TEST(WarpStretch, GapUpToMaxStretchIsInterpolatedWiderIsAHole) {
 // convergence 0 with D = 2 (a subnormal gap: an infinite 1 / gap), for
 // every view.
 TEST(WarpScatter, RenderIsTheLiteralZBuffer) {
-  std::mt19937 rng(std::random_device{}());
+  const uint32_t seed = std::random_device{}();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
   for (int trial = 0; trial < 175; ++trial) {
     const int w = 1 + trial % 70, h = 3;
     const HostFrame src = textured(PixelFormat::RGBA, w, h, rng());
@@ -334,6 +334,8 @@ TEST(WarpScatter, RenderIsTheLiteralZBuffer) {
   }
 }
 
+// The shared helpers on the stretched step above: pixel 29 (depth 0.25,
+// t = 27) connected to pixel 30 (depth 0, t = 30).
 TEST(WarpHelpers, StretchedSpanKeys) {
   float depth[64];
   for (int x = 0; x < 64; ++x) depth[x] = x >= 20 && x <= 29 ? 0.25f : 0.f;
