@@ -46,7 +46,7 @@ sources=(common/*.cpp tools/support/host_frame.cpp tools/support/metrics.cpp
 printf '%s\n' "${sources[@]}" | xargs -P "$(nproc)" -I{} sh -c \
   'o="$0/obj/$(echo "{}" | tr / _).o"; $1 $2 -c "{}" -o "$o"' "$out" "$cxx" "${flags[*]}"
 $cxx -pthread -o "$out/test_common" "$out"/obj/*.o -lopencv_imgproc -lopencv_core -lgtest
-file "$out/test_common" | grep -q "ARM aarch64" || { echo "check-aarch64: not an aarch64 binary" >&2; exit 1; }
+aarch64-linux-gnu-readelf -h "$out/test_common" | grep -q "AArch64" || { echo "check-aarch64: not an aarch64 binary" >&2; exit 1; }
 echo "check-aarch64: running test_common under qemu-aarch64"
 # Left out: the one test whose death tests re-execute the binary (gtest's
 # threadsafe style), which qemu-user cannot without binfmt_misc.
