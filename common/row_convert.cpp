@@ -22,7 +22,9 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
   const v_uint32 alpha = vx_setall_u32(0xff000000u);
   // to_u8(): clamped to [0, 255], then v + 0.5 truncated.
   auto level = [&](const v_float32 &v) { return v_reinterpret_as_u32(v_trunc(v_min(v_max(v, zero), top) + half)); };
-  int u_code[L], v_code[L];
+  // The codes widened into aligned ints first: OpenCV's byte-widening
+  // loads read 4 bytes as one int, which is undefined at an odd address.
+  alignas(64) int u_code[L], v_code[L], luma_code[2 * L];
   int x = 0;
   for (; x + 2 * L <= f.width; x += 2 * L) {
     for (int i = 0; i < L; ++i) {  // load_chroma() of pair x / 2 + i
@@ -30,6 +32,7 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
       u_code[i] = cr_plane ? chroma[pair] : chroma[2 * pair];
       v_code[i] = cr_plane ? cr_plane[pair] : chroma[2 * pair + 1];
     }
+    for (int i = 0; i < 2 * L; ++i) luma_code[i] = luma[x + i];
     // chroma_terms(), one lane a pair, then each term twice: a lane a pixel.
     const v_float32 cb = (v_cvt_f32(vx_load(u_code)) - c_offset) * c_scale;
     const v_float32 cr = (v_cvt_f32(vx_load(v_code)) - c_offset) * c_scale;
@@ -39,7 +42,7 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
     v_zip(gv * cr, gv * cr, gv_term[0], gv_term[1]);
     v_zip(bu * cb, bu * cb, b_term[0], b_term[1]);
     for (int h = 0; h < 2; ++h) {  // yuv_rgba() of pixels x + h L ...
-      const v_float32 codes = v_cvt_f32(v_reinterpret_as_s32(vx_load_expand_q(luma + x + h * L)));
+      const v_float32 codes = v_cvt_f32(vx_load(luma_code + h * L));
       const v_float32 yn = (codes - y_offset) * y_scale;
       const v_uint32 r = level(yn + r_term[h]), g = level(yn + gu_term[h] + gv_term[h]), b = level(yn + b_term[h]);
       v_store(words + x + h * L, r | (g << 8) | (b << 16) | alpha);
