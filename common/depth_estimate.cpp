@@ -223,7 +223,7 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   }
   // Step 3's hypotheses depend on the grid alone: kept while it stays.
   const HypothesisGrid grid{params.hypothesis, bx, by, W, H, B};
-  if (!(grid == hq_grid_) || hq_.size() != static_cast<size_t>(bx) * by) {
+  if (!(grid == hq_grid_)) {
     block_hypotheses_cpu(params.hypothesis, bx, by, W, H, B, hq_);
     hq_grid_ = grid;
   }

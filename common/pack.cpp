@@ -218,19 +218,32 @@ void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp,
   }
 }
 
+// The row loops of a side-by-side pair in packed RGB: row_fn(left, right,
+// out) for each output row asked for (only: one flag a row, null: all),
+// with the start of the left and the right view in that input row (the
+// eye order applied) and of the output row; pixel_bytes: 4, or 8 for
+// RGBA64.
+template <class RowFn>
+void side_by_side_rows(const PackParams &p, const FrameView &in, const FrameView &out,
+                       const std::vector<uint8_t> *only, size_t pixel_bytes, const RowFn &row_fn) {
+  const size_t left = pixel_bytes * static_cast<size_t>(pack_detail::view_slot(p, 0) * (in.width / 2));
+  const size_t right = pixel_bytes * static_cast<size_t>(pack_detail::view_slot(p, 1) * (in.width / 2));
+  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      if (only && !(*only)[y]) continue;
+      const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
+      row_fn(row + left, row + right, out.plane[0] + static_cast<size_t>(y) * out.stride[0]);
+    }
+  });
+}
+
 void anaglyph_pair_rows(const PackParams &p, const AnaglyphMatrices &am, const FrameView &in, const FrameView &out,
                         const std::vector<uint8_t> *only) {
   const bool bgr = is_bgr_order(in.format), alpha = has_alpha(in.format);
   auto row_fn = bgr ? (alpha ? anaglyph_pair_row<true, true> : anaglyph_pair_row<true, false>)
                     : (alpha ? anaglyph_pair_row<false, true> : anaglyph_pair_row<false, false>);
-  const size_t left = 4 * static_cast<size_t>(pack_detail::view_slot(p, 0) * (in.width / 2));
-  const size_t right = 4 * static_cast<size_t>(pack_detail::view_slot(p, 1) * (in.width / 2));
-  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      if (only && !(*only)[y]) continue;
-      const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
-      row_fn(am, row + left, row + right, out.plane[0] + static_cast<size_t>(y) * out.stride[0], in.width / 2);
-    }
+  side_by_side_rows(p, in, out, only, 4, [&](const uint8_t *l, const uint8_t *r, uint8_t *o) {
+    row_fn(am, l, r, o, in.width / 2);
   });
 }
 
@@ -266,17 +279,9 @@ template <class Word>
 void half_pair_rows(const PackParams &p, const FrameView &in, const FrameView &out, const std::vector<uint8_t> *only) {
   const int w = in.width / 2, split = half_split(out.width);
   const Word set_bits = has_alpha(in.format) ? Word{0} : Word{0xff} << 24;  // the padding byte of RGBx/BGRx
-  const size_t bytes = sizeof(Word);
-  const size_t view0 = bytes * static_cast<size_t>(pack_detail::view_slot(p, 0) * w);
-  const size_t view1 = bytes * static_cast<size_t>(pack_detail::view_slot(p, 1) * w);
-  cv::parallel_for_(cv::Range(0, out.height), [&](const cv::Range &rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      if (only && !(*only)[y]) continue;
-      const uint8_t *row = in.plane[0] + static_cast<size_t>(y) * in.stride[0];
-      uint8_t *o = out.plane[0] + static_cast<size_t>(y) * out.stride[0];
-      half_pair_row<Word>(row + view0, w, o, split, set_bits);
-      half_pair_row<Word>(row + view1, w, o + bytes * static_cast<size_t>(split), out.width - split, set_bits);
-    }
+  side_by_side_rows(p, in, out, only, sizeof(Word), [&](const uint8_t *l, const uint8_t *r, uint8_t *o) {
+    half_pair_row<Word>(l, w, o, split, set_bits);
+    half_pair_row<Word>(r, w, o + sizeof(Word) * static_cast<size_t>(split), out.width - split, set_bits);
   });
 }
 
