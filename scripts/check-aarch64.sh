@@ -10,14 +10,15 @@
 # amd64 ones the native build needs (installing them removes those), so
 # the elements are not cross-built. The tests read the raw dumps of the
 # test pictures that a native build writes (scripts/build.sh first):
-# the raw reader replaces OpenCV's codecs, as in the GPU suites.
+# the raw reader replaces OpenCV's codecs, as in the GPU suites. The
+# dumps need the pictures in data/ (scripts/get-test-data.sh).
 # Usage: scripts/check-aarch64.sh [native build dir, default build]
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 cd "$top"
 native=${1:-build}
 raw="$native/tests/raw-data"
-[ -f "$raw/aloeL.jpg.p3draw" ] || { echo "check-aarch64: no raw test data in $raw (build natively first)" >&2; exit 1; }
+[ -f "$raw/aloeL.jpg.p3draw" ] || { echo "check-aarch64: no raw test data in $raw (scripts/get-test-data.sh, then build natively)" >&2; exit 1; }
 
 # Cross compiler and qemu, and the arm64 libraries the tests link: these
 # three development packages co-install with their amd64 counterparts.
