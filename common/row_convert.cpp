@@ -6,9 +6,11 @@ namespace p3d {
 namespace {
 
 #if P3D_CPU_VECTORS
-// The pixels [0, end) of row y of an 8-bit NV12 or I420 frame, 2L at a
-// time (L = float lanes: L chroma pairs); returns end (even), where the
-// caller's per-pair loop takes over.
+// The pixels [0, end) of row y of an 8-bit NV12 or I420 frame, 4L at a
+// time (L = float lanes: 2L chroma pairs); returns end (a multiple of 4L),
+// where the caller's per-pair loop takes over. The bytes are widened with
+// vector loads of whole lanes (v_load_expand reads 2L bytes as a vector,
+// never a misaligned int).
 int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words) {
   using namespace cv;
   constexpr int L = v_float32::nlanes;
@@ -20,32 +22,42 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
   const v_float32 rv = vx_setall_f32(m.rv), gu = vx_setall_f32(m.gu), gv = vx_setall_f32(m.gv), bu = vx_setall_f32(m.bu);
   const v_float32 zero = vx_setzero_f32(), top = vx_setall_f32(255.f), half = vx_setall_f32(0.5f);
   const v_uint32 alpha = vx_setall_u32(0xff000000u);
+  const v_uint16 low_byte = vx_setall_u16(0xff);
   // to_u8(): clamped to [0, 255], then v + 0.5 truncated.
   auto level = [&](const v_float32 &v) { return v_reinterpret_as_u32(v_trunc(v_min(v_max(v, zero), top) + half)); };
-  // The codes widened into aligned ints first: OpenCV's byte-widening
-  // loads read 4 bytes as one int, which is undefined at an odd address.
-  alignas(64) int u_code[L], v_code[L], luma_code[2 * L];
+  auto as_float = [](const v_uint32 &v) { return v_cvt_f32(v_reinterpret_as_s32(v)); };
   int x = 0;
-  for (; x + 2 * L <= f.width; x += 2 * L) {
-    for (int i = 0; i < L; ++i) {  // load_chroma() of pair x / 2 + i
-      const int pair = x / 2 + i;
-      u_code[i] = cr_plane ? chroma[pair] : chroma[2 * pair];
-      v_code[i] = cr_plane ? cr_plane[pair] : chroma[2 * pair + 1];
+  for (; x + 4 * L <= f.width; x += 4 * L) {
+    // The codes of the 2L pairs x / 2 ... (load_chroma()): NV12 holds them
+    // interleaved, a 16-bit lane a pair (Cb in its low byte).
+    v_uint16 cb16, cr16;
+    if (cr_plane) {
+      cb16 = vx_load_expand(chroma + x / 2);
+      cr16 = vx_load_expand(cr_plane + x / 2);
+    } else {
+      const v_uint16 pairs = v_reinterpret_as_u16(vx_load(chroma + x));
+      cb16 = pairs & low_byte;
+      cr16 = pairs >> 8;
     }
-    for (int i = 0; i < 2 * L; ++i) luma_code[i] = luma[x + i];
-    // chroma_terms(), one lane a pair, then each term twice: a lane a pixel.
-    const v_float32 cb = (v_cvt_f32(vx_load(u_code)) - c_offset) * c_scale;
-    const v_float32 cr = (v_cvt_f32(vx_load(v_code)) - c_offset) * c_scale;
-    v_float32 r_term[2], gu_term[2], gv_term[2], b_term[2];
-    v_zip(rv * cr, rv * cr, r_term[0], r_term[1]);
-    v_zip(gu * cb, gu * cb, gu_term[0], gu_term[1]);
-    v_zip(gv * cr, gv * cr, gv_term[0], gv_term[1]);
-    v_zip(bu * cb, bu * cb, b_term[0], b_term[1]);
-    for (int h = 0; h < 2; ++h) {  // yuv_rgba() of pixels x + h L ...
-      const v_float32 codes = v_cvt_f32(vx_load(luma_code + h * L));
-      const v_float32 yn = (codes - y_offset) * y_scale;
-      const v_uint32 r = level(yn + r_term[h]), g = level(yn + gu_term[h] + gv_term[h]), b = level(yn + b_term[h]);
-      v_store(words + x + h * L, r | (g << 8) | (b << 16) | alpha);
+    v_uint32 cb32[2], cr32[2];
+    v_expand(cb16, cb32[0], cb32[1]);
+    v_expand(cr16, cr32[0], cr32[1]);
+    for (int g = 0; g < 2; ++g) {  // pairs g L ..., pixels 2 g L ...
+      // chroma_terms(), one lane a pair, then each term twice: a lane a pixel.
+      const v_float32 cb = (as_float(cb32[g]) - c_offset) * c_scale;
+      const v_float32 cr = (as_float(cr32[g]) - c_offset) * c_scale;
+      v_float32 r_term[2], gu_term[2], gv_term[2], b_term[2];
+      v_zip(rv * cr, rv * cr, r_term[0], r_term[1]);
+      v_zip(gu * cb, gu * cb, gu_term[0], gu_term[1]);
+      v_zip(gv * cr, gv * cr, gv_term[0], gv_term[1]);
+      v_zip(bu * cb, bu * cb, b_term[0], b_term[1]);
+      v_uint32 luma32[2];
+      v_expand(vx_load_expand(luma + x + 2 * g * L), luma32[0], luma32[1]);
+      for (int h = 0; h < 2; ++h) {  // yuv_rgba() of pixels x + (2 g + h) L ...
+        const v_float32 yn = (as_float(luma32[h]) - y_offset) * y_scale;
+        const v_uint32 r = level(yn + r_term[h]), gr = level(yn + gu_term[h] + gv_term[h]), b = level(yn + b_term[h]);
+        v_store(words + x + (2 * g + h) * L, r | (gr << 8) | (b << 16) | alpha);
+      }
     }
   }
   vx_cleanup();

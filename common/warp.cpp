@@ -156,6 +156,37 @@ int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
   return x;
 }
 
+// Each source pixel's read depth d[x] = warp_depth(depth[x]) and target
+// t[x] = warp_target(x, d[x], ...) for x in [0, end), several pixels at a
+// time; returns end, where the caller's scalar loop takes over. Same
+// bits: warp_depth() is 0 where d >= 0 fails (NaN, negative) and else
+// min(d, 1) (which keeps -0, as the scalar code does), and the target is
+// the scalar operations in their order, without fused multiply-add.
+int depth_targets_vector(const float *depth, float shift, float D, float convergence, int width, float *d,
+                         float *t) {
+  int x = 0;
+#if P3D_CPU_VECTORS
+  using namespace cv;
+  constexpr int kLanes = v_float32::nlanes;
+  const v_float32 zero = vx_setzero_f32(), one = vx_setall_f32(1.f);
+  const v_float32 vshift = vx_setall_f32(shift), vD = vx_setall_f32(D), conv = vx_setall_f32(convergence);
+  int lane_index[kLanes];
+  for (int i = 0; i < kLanes; ++i) lane_index[i] = i;
+  const v_int32 lanes = vx_load(lane_index);
+  for (; x + kLanes <= width; x += kLanes) {
+    const v_float32 raw = vx_load(depth + x);
+    const v_float32 dv = v_select(raw >= zero, v_min(raw, one), zero);
+    const v_float32 xs = v_cvt_f32(vx_setall_s32(x) + lanes);
+    v_store(d + x, dv);
+    v_store(t + x, xs + vshift * (vD * (dv - conv)));
+  }
+  vx_cleanup();
+#else
+  (void)depth, (void)shift, (void)D, (void)convergence, (void)width, (void)d, (void)t;
+#endif
+  return x;
+}
+
 // Per-row scratch of a row task: the converted source row, every pixel's
 // read depth, target and span keys for the eye being scattered, the
 // z-buffer keys, the Background fill's nearest-right index and the
@@ -182,7 +213,7 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
   std::fill(keys.begin(), keys.end(), Keys::Word{0});
   const float *drow = j.depth.row(y);
   float *d = r.depth.data(), *t = r.target.data();
-  for (int x = 0; x < j.width; ++x) {
+  for (int x = depth_targets_vector(drow, eye.shift, j.D, j.params.convergence, j.width, d, t); x < j.width; ++x) {
     d[x] = warp_depth(drow[x]);
     t[x] = warp_target(x, d[x], eye.shift, j.D, j.params.convergence);
   }
@@ -225,10 +256,12 @@ long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow<P
   const OutputRow<Px> out(j.out, eye.col0, y);
   const WordOf<Px> *row = src.words.data();
   const bool paint = j.params.fill == HoleFill::None;
+  const int W = j.width;  // read once: the output's byte stores may alias j
+  const Keys::Word *key = keys.data();
   long long holes = 0;
-  for (int X = 0; X < j.width; ++X) {
-    if (keys[X] != 0) {
-      out.put(X, sample_word(row, j.width, Keys::u(keys[X], X)));
+  for (int X = 0; X < W; ++X) {
+    if (key[X] != 0) {
+      out.put(X, sample_word(row, W, Keys::u(key[X], X)));
     } else {
       ++holes;
       if (paint) out.put(X, rgba_word(colour_as<Px>(kHoleColour)));
@@ -291,11 +324,15 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &
   std::memset(state, 0, static_cast<size_t>(W));
   std::vector<std::pair<int, int>> &runs = r.runs;  // [first, last] hole of each run
   runs.clear();
+  // The loop's index never has its address taken (emplace_back takes its
+  // arguments by reference), so it stays in a register.
+  const Keys::Word *key = keys.data();
   for (int X = 0; X < W; ++X) {
-    if (keys[X] != 0) continue;
-    const int a = X;
-    while (X + 1 < W && keys[X + 1] == 0) ++X;
-    runs.emplace_back(a, X);
+    if (key[X] != 0) continue;
+    const int first = X;
+    while (X + 1 < W && key[X + 1] == 0) ++X;
+    const int last = X;
+    runs.emplace_back(first, last);
   }
   const int n = static_cast<int>(runs.size());
   // Gap g lies before run g (gap n after the last run); its clean pixels
