@@ -97,6 +97,7 @@ static gboolean gst_pseudo3d_base_stop(GstBaseTransform *trans) {
   release_stage(self);
 #endif
   self->cuda_caps = FALSE;
+  self->latency->reset();
   gst_clear_caps(&self->refused_caps);
   return TRUE;
 }
@@ -223,6 +224,17 @@ static gboolean gst_pseudo3d_base_post_message(GstElement *element, GstMessage *
   return GST_ELEMENT_CLASS(parent_class)->post_message(element, msg);
 }
 
+// Upstream's latency plus what this stage's frames take (processing_latency.h).
+static void add_processing_latency(GstPseudo3DBase *self, GstQuery *query) {
+  gboolean live;
+  GstClockTime min, max;
+  gst_query_parse_latency(query, &live, &min, &max);
+  const GstClockTime own = self->latency->reported();
+  if (GST_CLOCK_TIME_IS_VALID(min)) min += own;
+  if (GST_CLOCK_TIME_IS_VALID(max)) max += own;
+  gst_query_set_latency(query, live, min, max);
+}
+
 static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection direction, GstQuery *query) {
   GstPseudo3DBase *self = GST_PSEUDO3D_BASE(trans);
 #if HAVE_CUDA
@@ -244,6 +256,7 @@ static gboolean gst_pseudo3d_base_query(GstBaseTransform *trans, GstPadDirection
                             GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query);
   if (negotiates) freeze_geometry(self, FALSE);
   if (!answered) return FALSE;
+  if (type == GST_QUERY_LATENCY && direction == GST_PAD_SRC) add_processing_latency(self, query);
 #if HAVE_CUDA
   // With a GPU in use, ask neighbours for CUDA memory first: without it,
   // `cudaupload ! pseudo3d...` would negotiate system memory and run on the CPU.
@@ -316,6 +329,7 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
   self->in_info = in;
   self->out_info = out;
   self->cuda_caps = cuda_caps;
+  self->latency->restart();
 
   const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
   if (cuda_caps && path == GST_PSEUDO3D_PATH_CPU)
@@ -502,7 +516,15 @@ static void gst_pseudo3d_base_before_transform(GstBaseTransform *trans, GstBuffe
 template <typename F>
 static GstFlowReturn guarded(GstPseudo3DBase *self, F &&f) {
   try {
-    return f();
+    const gint64 start = g_get_monotonic_time();
+    const GstFlowReturn ret = f();
+    const gint64 took_us = g_get_monotonic_time() - start;
+    if (ret == GST_FLOW_OK && self->latency->observe(static_cast<uint64_t>(took_us) * 1000u)) {
+      GST_INFO_OBJECT(self, "a frame takes up to %" GST_TIME_FORMAT ": posting a latency message",
+                      GST_TIME_ARGS(self->latency->reported()));
+      gst_element_post_message(GST_ELEMENT(self), gst_message_new_latency(GST_OBJECT(self)));
+    }
+    return ret;
   } catch (const std::bad_alloc &) {
     GST_ELEMENT_ERROR(self, RESOURCE, NO_SPACE_LEFT,
                       ("Out of memory while processing a %dx%d frame", GST_VIDEO_INFO_WIDTH(&self->in_info),
@@ -580,6 +602,8 @@ static void gst_pseudo3d_base_finalize(GObject *object) {
   g_free(self->live_refusal_debug);
   delete self->gpu;
   self->gpu = nullptr;
+  delete self->latency;
+  self->latency = nullptr;
   G_OBJECT_CLASS(parent_class)->finalize(object);
 }
 
@@ -689,6 +713,7 @@ static void gst_pseudo3d_base_init(GstPseudo3DBase *self) {
   self->adaptive = DEFAULT_ADAPTIVE;
   self->reuse_tolerance = 0.f;
   self->gpu = new p3d::gst::GpuContext();
+  self->latency = new p3d::gst::ProcessingLatency();
   gst_video_info_init(&self->in_info);
   gst_video_info_init(&self->out_info);
   // As GstVideoFilter: late frames are dropped before they are processed.

@@ -25,6 +25,7 @@
 #include "enums.h"
 #include "frame.h"
 #include "gpu_context.h"
+#include "processing_latency.h"
 #include "staged_geometry.h"
 
 G_BEGIN_DECLS
@@ -64,6 +65,8 @@ struct _GstPseudo3DBase {
 
   /* private */
   p3d::gst::GpuContext *gpu;
+  /* What a frame takes, added to LATENCY queries (processing_latency.h). */
+  p3d::gst::ProcessingLatency *latency;
   gboolean history_reset_pending; /* object lock */
   gboolean cpu_notice_logged;
   gboolean hidden_in_parent; /* gst_pseudo3d_base_set_hidden_in_parent */

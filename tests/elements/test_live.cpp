@@ -9,6 +9,7 @@
 #include <gst/check/gstharness.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <random>
 #include <string>
@@ -18,6 +19,7 @@
 #include "depth_estimate.h"
 #include "element_helpers.h"
 #include "pack.h"
+#include "processing_latency.h"
 #include "test_data.h"
 
 using namespace p3d;
@@ -566,4 +568,81 @@ TEST(Renegotiation, SizeAndFormatMidStream) {
     gst_buffer_unref(second);
   }
   gst_harness_teardown(h);
+}
+
+// The rule of gst/processing_latency.h: nothing before a measured frame, the
+// first frame after a start not counted, then the second longest of the
+// window plus an eighth, rounded up to a millisecond, growing only when a
+// frame time exceeds what is reported.
+TEST(ProcessingLatency, ReportsTheSecondLongestFrameAndOnlyGrows) {
+  constexpr uint64_t ms = 1000000;
+  p3d::gst::ProcessingLatency l;
+  EXPECT_FALSE(l.observe(90 * ms));  // warm-up: allocations
+  EXPECT_EQ(l.reported(), 0u);
+  EXPECT_TRUE(l.observe(8 * ms));  // one frame: it alone
+  EXPECT_EQ(l.reported(), 9 * ms);  // 8 + 1 = 9
+  EXPECT_FALSE(l.observe(40 * ms));  // a spike: the second longest is 8
+  EXPECT_EQ(l.reported(), 9 * ms);
+  EXPECT_FALSE(l.observe(9 * ms));  // within what is reported
+  EXPECT_TRUE(l.observe(16 * ms));  // second longest 16: 18 ms
+  EXPECT_EQ(l.reported(), 18 * ms);
+  for (int i = 0; i < 2 * p3d::gst::ProcessingLatency::kWindow; ++i) EXPECT_FALSE(l.observe(2 * ms));
+  EXPECT_EQ(l.reported(), 18 * ms);  // never shrinks while running
+  l.restart();  // new caps: warm-up again, the report stays
+  EXPECT_FALSE(l.observe(100 * ms));
+  EXPECT_EQ(l.reported(), 18 * ms);
+  l.reset();  // stopped
+  EXPECT_EQ(l.reported(), 0u);
+  EXPECT_FALSE(l.observe(5 * ms));
+  EXPECT_TRUE(l.observe(5 * ms - 1));
+  EXPECT_EQ(l.reported(), 6 * ms);  // 5 ms - 1 ns plus an eighth, rounded up
+}
+
+// A live pipeline: every stage of pseudo3dconvert posts a LATENCY message
+// once it has measured its frames, and the latency downstream of the
+// converter exceeds upstream's by what the stages report (at least a
+// millisecond each), so that a sink with sync=true waits for the frames
+// instead of finding them late.
+TEST(ProcessingLatency, LiveStagesAddTheirTimeToTheLatencyQuery) {
+  GstElement *pipeline = gst_parse_launch(
+      "videotestsrc is-live=true pattern=snow num-buffers=20 ! video/x-raw,format=I420,width=320,height=240,"
+      "framerate=30/1 ! pseudo3dconvert name=c processing=cpu ! fakesink name=s sync=true",
+      nullptr);
+  ASSERT_NE(pipeline, nullptr);
+  ASSERT_NE(gst_element_set_state(pipeline, GST_STATE_PLAYING), GST_STATE_CHANGE_FAILURE);
+  GstBus *bus = gst_element_get_bus(pipeline);
+  std::vector<std::string> posted;
+  bool eos = false;
+  while (GstMessage *m = gst_bus_timed_pop_filtered(
+             bus, 60 * GST_SECOND, (GstMessageType)(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_LATENCY))) {
+    const GstMessageType type = GST_MESSAGE_TYPE(m);
+    if (type == GST_MESSAGE_LATENCY) posted.emplace_back(GST_OBJECT_NAME(GST_MESSAGE_SRC(m)));
+    if (type == GST_MESSAGE_ERROR) ADD_FAILURE() << message_text(m);
+    eos = type == GST_MESSAGE_EOS;
+    gst_message_unref(m);
+    if (type != GST_MESSAGE_LATENCY) break;
+  }
+  EXPECT_TRUE(eos);
+  gst_object_unref(bus);
+  // The minimum latency at a pad's peer (upstream of the pad).
+  gboolean live = FALSE;
+  auto min_latency = [&](const char *element, const char *pad_name) {
+    GstElement *e = gst_bin_get_by_name(GST_BIN(pipeline), element);
+    GstPad *pad = gst_element_get_static_pad(e, pad_name);
+    GstQuery *q = gst_query_new_latency();
+    GstClockTime min = GST_CLOCK_TIME_NONE;
+    if (gst_pad_peer_query(pad, q)) gst_query_parse_latency(q, &live, &min, nullptr);
+    gst_query_unref(q);
+    gst_object_unref(pad);
+    gst_object_unref(e);
+    return min;
+  };
+  const GstClockTime upstream = min_latency("c", "sink"), downstream = min_latency("s", "sink");
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(pipeline);
+  EXPECT_TRUE(live);
+  for (const char *stage : {"depth", "filter", "warp"})
+    EXPECT_NE(std::find(posted.begin(), posted.end(), stage), posted.end()) << stage << " posted no LATENCY message";
+  ASSERT_TRUE(GST_CLOCK_TIME_IS_VALID(upstream) && GST_CLOCK_TIME_IS_VALID(downstream));
+  EXPECT_GE(downstream, upstream + 3 * GST_MSECOND) << "upstream " << upstream << " downstream " << downstream;
 }

@@ -1,0 +1,49 @@
+// The latency a stage adds to a live pipeline: the time it takes to
+// process a frame. GstBaseTransform answers a LATENCY query with upstream's
+// latency alone, as if a frame took no time; a live sink (sync=true) then
+// renders each frame at its timestamp plus that latency plus its own
+// processing-deadline (20 ms by default), and a stage whose frames take
+// longer makes every frame late, which QoS turns into dropped frames even
+// where the stage keeps up with the frame rate.
+//
+// Each stage measures its frames (observe()) and adds to the query what
+// its frames take (reported()): the second longest of the last kWindow
+// frames (one spike does not count; a single frame while there is only
+// one). It only grows while the stream runs, because every change makes
+// the sinks re-time their frames: when that time exceeds what is
+// reported, the stage reports it plus an eighth (so that jitter does not
+// post a message every few frames), rounded up to a whole millisecond,
+// and posts a LATENCY message, on which the application
+// (gst-launch, playbin) recalculates the pipeline's latency. The first
+// kWarmUp frames after a start or a caps change are not counted: they
+// allocate the stage's buffers. Plain C++ so that a unit test can drive it.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+
+namespace p3d::gst {
+
+class ProcessingLatency {
+ public:
+  static constexpr int kWarmUp = 1, kWindow = 16;
+
+  // One frame's processing time in nanoseconds (streaming thread). Returns
+  // true when reported() grew: post a LATENCY message.
+  bool observe(uint64_t ns);
+  // Nanoseconds to add to the latency (any thread); 0 before a frame was
+  // measured.
+  uint64_t reported() const { return reported_.load(std::memory_order_relaxed); }
+  // New caps: the next frames allocate again; what was reported stays.
+  void restart();
+  // Stopped: nothing reported.
+  void reset();
+
+ private:
+  std::array<uint64_t, kWindow> frames_{};
+  int seen_ = 0, count_ = 0, next_ = 0;
+  std::atomic<uint64_t> reported_{0};
+};
+
+}  // namespace p3d::gst
