@@ -61,23 +61,36 @@ std::vector<uint8_t> row_flags(const std::vector<uint8_t> *rows, int height) {
   return rows ? *rows : std::vector<uint8_t>(static_cast<size_t>(height), 1);
 }
 
-// warp_pack_changed_cpu() inside a rect smaller than the frame.
+// The spans of the rows of rect r, within r and counted from its corner.
+std::vector<ColumnSpan> spans_inside(const std::vector<ColumnSpan> &spans, const PixelRect &r) {
+  std::vector<ColumnSpan> inside(static_cast<size_t>(r.height()));
+  for (int y = r.y0; y < r.y1; ++y) {
+    const ColumnSpan c = spans[y];
+    const int x0 = std::max(c.x0, r.x0), x1 = std::min(c.x1, r.x1);
+    if (x0 < x1) inside[y - r.y0] = ColumnSpan{x0 - r.x0, x1 - r.x0};
+  }
+  return inside;
+}
+
+// warp_pack_changed_cpu() inside a rect smaller than the frame. spans:
+// each row's changed columns (null: all); rows: the same as row flags.
 long long warp_active_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &pair, WarpCpuScratch &scratch,
-                          const std::vector<uint8_t> *rows, const ActiveArea &active, std::vector<uint8_t> *written) {
+                          const std::vector<ColumnSpan> *spans, const std::vector<uint8_t> *rows,
+                          const ActiveArea &active, std::vector<uint8_t> *written) {
   const PixelRect r = active.rect;
   // A letterbox (the full width): the views are rows of the pair itself.
   const bool full_width = r.x0 == 0 && r.x1 == src.width;
   const FrameView target = full_width ? sub_frame(pair, PixelRect{0, r.y0, pair.width, r.y1}) : active.pair;
   if (!full_width && (!target.plane[0] || target.width != 2 * r.width() || target.height != r.height())) return -1;
-  std::vector<uint8_t> sub_rows;
-  if (rows) sub_rows.assign(rows->begin() + r.y0, rows->begin() + r.y1);
+  std::vector<ColumnSpan> sub_spans;
+  if (spans) sub_spans = spans_inside(*spans, r);
   const WarpParams active_params = active_warp_params(params, src.width, r.width());
   const long long holes = warp_render_cpu(active_params, sub_frame(src, r), m, sub_image(depth, r), target, scratch,
-                                          rows ? &sub_rows : nullptr);
+                                          spans ? &sub_spans : nullptr);
   if (holes < 0) return holes;
   const std::vector<uint8_t> sub_written =
-      rows ? warp_rows_written(active_params, r.width(), sub_rows) : row_flags(nullptr, r.height());
+      spans ? warp_rows_written(active_params, r.width(), sub_spans) : row_flags(nullptr, r.height());
   if (!full_width) place_active_pair_cpu(target, r, pair, &sub_written);
   views_outside_cpu(src, m, r, pair, rows);
   *written = row_flags(rows, src.height);
@@ -93,6 +106,7 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
                                 const ActiveArea *active) {
   const bool pair_is_dst = pair.plane[0] == dst.plane[0];
   if (!pair_is_dst && !pack_args_valid(pack, pair, dst)) return -1;
+  const std::vector<ColumnSpan> spans = changes ? changes->row_spans() : std::vector<ColumnSpan>();
   const std::vector<uint8_t> rows = changes ? changes->rows() : std::vector<uint8_t>();
   const bool cropped = active && active->rect != whole_picture(src.width, src.height);
   if (cropped && (!warp_frames_fit(src, depth, pair) || active->rect.empty() ||
@@ -100,14 +114,15 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
     return -1;
   std::vector<uint8_t> written;
   const long long holes =
-      cropped ? warp_active_cpu(params, src, m, depth, pair, scratch, changes ? &rows : nullptr, *active, &written)
-              : warp_render_cpu(params, src, m, depth, pair, scratch, changes ? &rows : nullptr);
+      cropped ? warp_active_cpu(params, src, m, depth, pair, scratch, changes ? &spans : nullptr,
+                                changes ? &rows : nullptr, *active, &written)
+              : warp_render_cpu(params, src, m, depth, pair, scratch, changes ? &spans : nullptr);
   if (holes < 0 || pair_is_dst) return holes;
   if (!changes) {
     pack_cpu(pack, pair, dst);
     return holes;
   }
-  if (!cropped) written = warp_rows_written(params, src.width, rows);
+  if (!cropped) written = warp_rows_written(params, src.width, spans);
   const std::vector<uint8_t> out_rows = pack_rows_reading(pack, pair.width, pair.height, written);
   pack_cpu(pack, pair, dst, &out_rows);
   return holes;

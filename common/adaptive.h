@@ -23,7 +23,7 @@ namespace p3d {
 // busy_on_cpu).
 class StageInputs {
  public:
-  // whole_rows: the stage redoes whole rows of tiles (the warp, the pack),
+  // whole_rows: the stage redoes whole rows of tiles (the pack),
   // so a frame that changed a tile in every row is busy for it; else busy
   // is ChangeBackOff::busy_on_cpu of the share of tiles changed.
   explicit StageInputs(bool whole_rows = false) : whole_rows_(whole_rows) {}

@@ -81,6 +81,23 @@ std::vector<uint8_t> ChangeMap::rows() const {
   return rows;
 }
 
+std::vector<ColumnSpan> ChangeMap::row_spans() const {
+  std::vector<ColumnSpan> spans(static_cast<size_t>(height_));
+  for (int ty = 0; ty < tiles_y_; ++ty) {
+    int first = tiles_x_, last = -1;
+    for (int tx = 0; tx < tiles_x_; ++tx)
+      if (tile(tx, ty)) {
+        first = std::min(first, tx);
+        last = tx;
+      }
+    if (last < 0) continue;
+    const PixelRect r = tile_pixels(first, ty, width_, height_);
+    const ColumnSpan span{r.x0, tile_pixels(last, ty, width_, height_).x1};
+    std::fill(spans.begin() + r.y0, spans.begin() + r.y1, span);
+  }
+  return spans;
+}
+
 std::vector<PixelRect> ChangeMap::runs() const {
   std::vector<PixelRect> runs;
   for (int ty = 0; ty < tiles_y_; ++ty)

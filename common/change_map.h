@@ -24,6 +24,12 @@ namespace p3d {
 // flags of a 4K picture (120 x 68) cost nothing to walk.
 constexpr int kChangeTile = 32;
 
+// The changed columns [x0, x1) of one row of pixels (empty: x0 >= x1).
+struct ColumnSpan {
+  int x0 = 0, x1 = 0;
+  bool empty() const { return x0 >= x1; }
+};
+
 class ChangeMap {
  public:
   ChangeMap() = default;
@@ -62,6 +68,9 @@ class ChangeMap {
   ChangeMap cropped(PixelRect r) const;
   // The pixel rows of the changed tiles: one flag a row (height()).
   std::vector<uint8_t> rows() const;
+  // Each pixel row's changed columns (height() spans): from the first
+  // changed tile of its row of tiles to the last, clipped to the picture.
+  std::vector<ColumnSpan> row_spans() const;
   // The changed tiles as rectangles of pixels: in each row of tiles, the
   // maximal runs of changed tiles, clipped to the picture; a run with the
   // columns of one in the row of tiles above extends that rectangle down.

@@ -1,17 +1,19 @@
 #include "row_convert.h"
 
+#include <algorithm>
+
 #include <opencv2/core.hpp>
 
 namespace p3d {
 namespace {
 
 #if P3D_CPU_VECTORS
-// The pixels [0, end) of row y of an 8-bit NV12 or I420 frame, 4L at a
-// time (L = float lanes: 2L chroma pairs); returns end (a multiple of 4L),
-// where the caller's per-pair loop takes over. The bytes are widened with
+// The pixels [x0, end) of row y of an 8-bit NV12 or I420 frame (x0
+// even), 4L at a time (L = float lanes: 2L chroma pairs); end <= x1, where
+// the caller's per-pair loop takes over. The bytes are widened with
 // vector loads of whole lanes (v_load_expand reads 2L bytes as a vector,
 // never a misaligned int).
-int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words) {
+int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, int x0, int x1, uint32_t *words) {
   using namespace cv;
   constexpr int L = v_float32::nlanes;
   const uint8_t *luma = f.plane[0] + static_cast<size_t>(y) * f.stride[0];
@@ -26,8 +28,8 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
   // to_u8(): clamped to [0, 255], then v + 0.5 truncated.
   auto level = [&](const v_float32 &v) { return v_reinterpret_as_u32(v_trunc(v_min(v_max(v, zero), top) + half)); };
   auto as_float = [](const v_uint32 &v) { return v_cvt_f32(v_reinterpret_as_s32(v)); };
-  int x = 0;
-  for (; x + 4 * L <= f.width; x += 4 * L) {
+  int x = x0;
+  for (; x + 4 * L <= x1; x += 4 * L) {
     // The codes of the 2L pairs x / 2 ... (load_chroma()): NV12 holds them
     // interleaved, a 16-bit lane a pair (Cb in its low byte).
     v_uint16 cb16, cr16;
@@ -67,12 +69,13 @@ int yuv420_words_vector(const FrameView &f, int y, const YuvToRgb &m, uint32_t *
 
 }  // namespace
 
-void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words) {
-  int x = 0;
+void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words, int x0, int x1) {
+  int x = x0 & ~1;  // whole 4:2:0 pairs
+  x1 = std::min(x1, f.width);
 #if P3D_CPU_VECTORS
-  if (f.format == PixelFormat::NV12 || f.format == PixelFormat::I420) x = yuv420_words_vector(f, y, m, words);
+  if (f.format == PixelFormat::NV12 || f.format == PixelFormat::I420) x = yuv420_words_vector(f, y, m, x, x1, words);
 #endif
-  for (; x < f.width; x += 2) load_rgba_pair_words(f, x, y, m, words + x);
+  for (; x < x1; x += 2) load_rgba_pair_words(f, x, y, m, words + x);
 }
 
 }  // namespace p3d

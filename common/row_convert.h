@@ -26,7 +26,12 @@
 
 namespace p3d {
 
-// words[x] = rgba_word(load_rgba(f, x, y, m)) for every x of row y.
-void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words);
+// words[x] = rgba_word(load_rgba(f, x, y, m)) for the x of row y in
+// [x0, x1) (widened to whole 4:2:0 pairs: x0 rounded down to even, the
+// pair of x1 - 1 whole; x1 at most the width).
+void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words, int x0, int x1);
+inline void rgba_words_of_row(const FrameView &f, int y, const YuvToRgb &m, uint32_t *words) {
+  rgba_words_of_row(f, y, m, words, 0, f.width);
+}
 
 }  // namespace p3d

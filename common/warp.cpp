@@ -7,6 +7,7 @@
 #include "warp.h"
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <cstring>
 #include <type_traits>
@@ -53,11 +54,12 @@ template <class Px>
 struct SourceRow {
   std::vector<WordOf<Px>> words;
   explicit SourceRow(int width) : words(static_cast<size_t>(width)) {}
-  void load(const WarpJob &j, int y) {
+  // The words of the pixels [x0, x1) (whole pairs; rgba_words_of_row()).
+  void load(const WarpJob &j, int y, int x0, int x1) {
     if constexpr (std::is_same_v<Px, Rgba>) {
-      rgba_words_of_row(j.src, y, j.m, words.data());
+      rgba_words_of_row(j.src, y, j.m, words.data(), x0, x1);
     } else {
-      for (int x = 0; x < j.width; x += 2) load_rgba_pair_words(j.src, x, y, j.m, words.data() + x);
+      for (int x = x0 & ~1; x < x1; x += 2) load_rgba_pair_words(j.src, x, y, j.m, words.data() + x);
     }
   }
 };
@@ -94,10 +96,11 @@ struct SpanKeys {
       : first(width), count(width), depth0(width), u0(width), depth1(width), u1(width) {}
 };
 
-// SpanKeys of the source pixels [0, end) of a row from their read depths
-// d and targets t, several pixels at a time with OpenCV's universal
-// intrinsics; returns end, where the caller takes over with the scalar
-// helpers (the last pixel, which has no neighbour, and the remainder).
+// SpanKeys of the source pixels [x0, end) of a row `width` wide from their
+// read depths d and targets t (indexed by x), several pixels at a time
+// with OpenCV's universal intrinsics; end <= x1, where the caller takes
+// over with the scalar helpers (the last pixel, which has no neighbour,
+// and the remainder).
 // Each lane computes what warp_link(), warp_span() and warp_hit_at()
 // compute, in their operation order: IEEE single precision, no fused
 // multiply-add, so the same bits (tests/common/test_warp.cpp compares the
@@ -109,8 +112,8 @@ struct SpanKeys {
 // beside a subnormal t(x) < 0 makes (t(x+1) = (x+1) + s p(x+1) is 0 or at
 // least 2^-25 in size), a span that holds no integer target; and a sum
 // x + (X - t) * inv_gap that is 0 is +0.
-int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
-  int x = 0;
+int span_keys_vector(const float *d, const float *t, int x0, int x1, int width, SpanKeys &k) {
+  int x = x0;
 #if P3D_CPU_VECTORS
   using namespace cv;
   constexpr int kLanes = v_float32::nlanes;
@@ -121,7 +124,8 @@ int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
   int lane_index[kLanes];
   for (int i = 0; i < kLanes; ++i) lane_index[i] = i;
   const v_int32 lanes = vx_load(lane_index);
-  for (; x + kLanes < width; x += kLanes) {  // every lane has a right neighbour
+  // Every lane has a right neighbour (x + kLanes < width) and is asked for.
+  for (; x + kLanes <= x1 && x + kLanes < width; x += kLanes) {
     const v_float32 d0 = vx_load(d + x), t0 = vx_load(t + x), d1 = vx_load(d + x + 1), t1 = vx_load(t + x + 1);
     const v_float32 xs = v_cvt_f32(vx_setall_s32(x) + lanes);
     // warp_link
@@ -151,20 +155,20 @@ int span_keys_vector(const float *d, const float *t, int width, SpanKeys &k) {
   }
   vx_cleanup();
 #else
-  (void)d, (void)t, (void)width, (void)k;
+  (void)d, (void)t, (void)x1, (void)width, (void)k;
 #endif
   return x;
 }
 
 // Each source pixel's read depth d[x] = warp_depth(depth[x]) and target
-// t[x] = warp_target(x, d[x], ...) for x in [0, end), several pixels at a
-// time; returns end, where the caller's scalar loop takes over. Same
+// t[x] = warp_target(x, d[x], ...) for x in [x0, end), several pixels at
+// a time; end <= x1, where the caller's scalar loop takes over. Same
 // bits: warp_depth() is 0 where d >= 0 fails (NaN, negative) and else
 // min(d, 1) (which keeps -0, as the scalar code does), and the target is
 // the scalar operations in their order, without fused multiply-add.
-int depth_targets_vector(const float *depth, float shift, float D, float convergence, int width, float *d,
+int depth_targets_vector(const float *depth, float shift, float D, float convergence, int x0, int x1, float *d,
                          float *t) {
-  int x = 0;
+  int x = x0;
 #if P3D_CPU_VECTORS
   using namespace cv;
   constexpr int kLanes = v_float32::nlanes;
@@ -173,7 +177,7 @@ int depth_targets_vector(const float *depth, float shift, float D, float converg
   int lane_index[kLanes];
   for (int i = 0; i < kLanes; ++i) lane_index[i] = i;
   const v_int32 lanes = vx_load(lane_index);
-  for (; x + kLanes <= width; x += kLanes) {
+  for (; x + kLanes <= x1; x += kLanes) {
     const v_float32 raw = vx_load(depth + x);
     const v_float32 dv = v_select(raw >= zero, v_min(raw, one), zero);
     const v_float32 xs = v_cvt_f32(vx_setall_s32(x) + lanes);
@@ -182,7 +186,7 @@ int depth_targets_vector(const float *depth, float shift, float D, float converg
   }
   vx_cleanup();
 #else
-  (void)depth, (void)shift, (void)D, (void)convergence, (void)width, (void)d, (void)t;
+  (void)depth, (void)shift, (void)D, (void)convergence, (void)x1, (void)d, (void)t;
 #endif
   return x;
 }
@@ -204,16 +208,44 @@ struct RowScratch {
       : src(width), depth(width), target(width), keys(width), spans(width), right(width), right_clean(smooth ? width : 0) {}
 };
 
-// Z-buffer of row y: keys[X] = the largest key any source pixel offers X.
+// The part of one eye's row a call renders: the targets [a, b) get their
+// keys, colours and (BackgroundSmooth, Background) fill anchors; the
+// sources [sa, sb) are every pixel whose span can reach them, and the keys
+// of [ka, kb), every target those sources reach, are cleared first. A
+// whole row is all three [0, W).
+struct RowWindow {
+  int a, b, sa, sb, ka, kb;
+};
+RowWindow whole_row(int width) { return RowWindow{0, width, 0, width, 0, width}; }
+
+// How far a source pixel's span reaches from it, in whole pixels: its
+// target t(x) is within |s| D of x, its footprint half a pixel around it
+// and a connected span ends before t(x+1) < t(x) + 1 + kMaxStretch.
+int span_reach(const Eye &eye, float D) {
+  const float w = (eye.shift < 0.f ? -eye.shift : eye.shift) * D;
+  return static_cast<int>(std::ceil(w)) + 2 + static_cast<int>(kMaxStretch);
+}
+
+// The window of targets [a, b) of a row `width` wide, for an eye whose
+// spans reach `reach` pixels.
+RowWindow row_window(int a, int b, int reach, int width) {
+  const int sa = std::max(0, a - reach), sb = std::min(width, b + reach);
+  return RowWindow{a, b, sa, sb, std::max(0, sa - reach), std::min(width, sb + reach)};
+}
+
+// Z-buffer of the targets w.a..w.b of row y: keys[X] = the largest key any
+// source pixel offers X (keys outside [w.ka, w.kb) are not touched).
 // Each pixel's depth and target are computed once (warp_source would
 // compute them for x and again for x + 1) and linked with warp_link.
 template <class Px>
-void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
+void scatter_row(const WarpJob &j, const Eye &eye, int y, const RowWindow &w, RowScratch<Px> &r) {
   std::vector<Keys::Word> &keys = r.keys;
-  std::fill(keys.begin(), keys.end(), Keys::Word{0});
+  std::fill(keys.begin() + w.ka, keys.begin() + w.kb, Keys::Word{0});
   const float *drow = j.depth.row(y);
   float *d = r.depth.data(), *t = r.target.data();
-  for (int x = depth_targets_vector(drow, eye.shift, j.D, j.params.convergence, j.width, d, t); x < j.width; ++x) {
+  const int read_end = std::min(w.sb + 1, j.width);  // a source links with its right neighbour
+  for (int x = depth_targets_vector(drow, eye.shift, j.D, j.params.convergence, w.sa, read_end, d, t); x < read_end;
+       ++x) {
     d[x] = warp_depth(drow[x]);
     t[x] = warp_target(x, d[x], eye.shift, j.D, j.params.convergence);
   }
@@ -222,8 +254,8 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
     return warp_link(x, d[x], t[x], has_next ? d[x + 1] : d[x], has_next ? t[x + 1] : t[x], has_next);
   };
   SpanKeys &k = r.spans;
-  const int vector_end = span_keys_vector(d, t, j.width, k);
-  for (int x = vector_end; x < j.width; ++x) {
+  const int vector_end = span_keys_vector(d, t, w.sa, w.sb, j.width, k);
+  for (int x = vector_end; x < w.sb; ++x) {
     const WarpSource s = source(x);
     const WarpSpan span = warp_span(s, j.width);
     k.first[x] = span.first;
@@ -235,7 +267,7 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
     k.u1[x] = h1.u;
   }
   // The z-buffer's max; the rare longer spans take their further targets here.
-  for (int x = 0; x < j.width; ++x) {
+  for (int x = w.sa; x < w.sb; ++x) {
     const int X = k.first[x], n = k.count[x];
     if (n <= 0) continue;
     keys[X] = std::max(keys[X], Keys::key(WarpHit{k.depth0[x], k.u0[x]}, X));
@@ -251,7 +283,7 @@ void scatter_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r) {
 // holes get kHoleColour for fill=None and are left for the fill otherwise.
 // Returns the row's hole count.
 template <class Px>
-long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow<Px> &src,
+long long resolve_row(const WarpJob &j, const Eye &eye, int y, const RowWindow &w, const SourceRow<Px> &src,
                       const std::vector<Keys::Word> &keys) {
   const OutputRow<Px> out(j.out, eye.col0, y);
   const WordOf<Px> *row = src.words.data();
@@ -259,7 +291,7 @@ long long resolve_row(const WarpJob &j, const Eye &eye, int y, const SourceRow<P
   const int W = j.width;  // read once: the output's byte stores may alias j
   const Keys::Word *key = keys.data();
   long long holes = 0;
-  for (int X = 0; X < W; ++X) {
+  for (int X = w.a; X < w.b; ++X) {
     if (key[X] != 0) {
       out.put(X, sample_word(row, W, Keys::u(key[X], X)));
     } else {
@@ -314,20 +346,24 @@ struct EyeScratch {
 // count as no hole), so a hole's nearest clean pixel on either side is an
 // end of the nearest gap on that side that has any; its nearest non-hole
 // is the pixel beside its run. The work follows the holes, not the row.
+// Only the pixels [w.a, w.b) are written, as if they were the whole row:
+// the same states and anchors as the whole row's where w.a is 0 or a
+// clean pixel and w.b is the width or follows one (warp_eyes).
 template <class Px>
-void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &r, EyeScratch<Px> &s) {
-  const int W = j.width, K = kSmoothClean;
+void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, const RowWindow &w, RowScratch<Px> &r,
+                       EyeScratch<Px> &s) {
+  const int W = w.b, K = kSmoothClean;
   const std::vector<Keys::Word> &keys = r.keys;
-  const size_t base = static_cast<size_t>(y) * W;
+  const size_t base = static_cast<size_t>(y) * j.width;
   uint8_t *state = s.state + base;
   Px *anchor = s.anchor + base;
-  std::memset(state, 0, static_cast<size_t>(W));
+  std::memset(state + w.a, 0, static_cast<size_t>(w.b - w.a));
   std::vector<std::pair<int, int>> &runs = r.runs;  // [first, last] hole of each run
   runs.clear();
   // The loop's index never has its address taken (emplace_back takes its
   // arguments by reference), so it stays in a register.
   const Keys::Word *key = keys.data();
-  for (int X = 0; X < W; ++X) {
+  for (int X = w.a; X < W; ++X) {
     if (key[X] != 0) continue;
     const int first = X;
     while (X + 1 < W && key[X + 1] == 0) ++X;
@@ -337,7 +373,7 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &
   const int n = static_cast<int>(runs.size());
   // Gap g lies before run g (gap n after the last run); its clean pixels
   // are [clean_lo(g), clean_hi(g)], empty when lo > hi.
-  auto clean_lo = [&](int g) { return g == 0 ? 0 : runs[g - 1].second + 1 + K; };
+  auto clean_lo = [&](int g) { return g == 0 ? w.a : runs[g - 1].second + 1 + K; };
   auto clean_hi = [&](int g) { return g == n ? W - 1 : runs[g].first - 1 - K; };
   std::vector<int> &right_clean = r.right_clean;  // per run: the nearest clean pixel right of it, -1: none
   for (int g = n, next = -1; g >= 1; --g) {
@@ -348,7 +384,7 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &
   for (int i = 0; i < n; ++i) {
     if (clean_lo(i) <= clean_hi(i)) left_clean = clean_hi(i);
     const int a = runs[i].first, b = runs[i].second;
-    const int xl = smooth_side(left_clean, a - 1), xr = smooth_side(right_clean[i], b + 1 < W ? b + 1 : -1);
+    const int xl = smooth_side(left_clean, a > w.a ? a - 1 : -1), xr = smooth_side(right_clean[i], b + 1 < W ? b + 1 : -1);
     const unsigned int depth_l = key_depth_at<Keys>(keys.data(), xl), depth_r = key_depth_at<Keys>(keys.data(), xr);
     for (int X = a; X <= b; ++X) {
       const int pick = background_source(X, xl, depth_l, xr, depth_r);
@@ -362,15 +398,58 @@ void smooth_anchor_row(const WarpJob &j, const Eye &eye, int y, RowScratch<Px> &
   }
 }
 
+// The nearest clean pixel (smooth_is_clean of the states' hole mask) at or
+// left of `from`, -1: none; at or right of `from`, -1: none.
+int clean_at_or_left(const uint8_t *state, int from, int width) {
+  for (int X = std::min(from, width - 1); X >= 0; --X)
+    if (smooth_is_clean(state, X, width)) return X;
+  return -1;
+}
+int clean_at_or_right(const uint8_t *state, int from, int width) {
+  for (int X = std::max(from, 0); X < width; ++X)
+    if (smooth_is_clean(state, X, width)) return X;
+  return -1;
+}
+
+// The window of eye e's row y that a change of the source columns
+// [c.x0, c.x1) (its pixels or its depth) makes the warp render again.
+// Sources [c.x0 - 2, c.x1 + 1) can change their hits (a pixel's span reads
+// its right neighbour's depth, a hit's colour the words around its u), and
+// those reach the targets T within span_reach() of them. BackgroundSmooth's
+// anchors of a hole come from the row's runs of holes and clean pixels on
+// either side, so the window grows to a clean pixel left and right of T
+// that T cannot touch (kSmoothClean away from it, read from the states of
+// the previous frame, which are this frame's outside T): the holes between
+// find their anchors inside, the others keep theirs. Background's nearest
+// non-holes are found along the whole row, NeighborAverage fills across
+// rows: both take whole rows.
+template <class Px>
+RowWindow changed_window(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &s, int y, ColumnSpan c) {
+  const int W = j.width, reach = span_reach(eye, j.D);
+  const HoleFill fill = j.params.fill;
+  if (fill == HoleFill::Background || fill == HoleFill::NeighborAverage) return whole_row(W);
+  int a = std::max(0, c.x0 - 2 - reach), b = std::min(W, c.x1 + 1 + reach);
+  if (fill == HoleFill::BackgroundSmooth) {
+    const uint8_t *state = s.state + static_cast<size_t>(y) * W;
+    const int left = clean_at_or_left(state, a - kSmoothClean - 1, W);
+    const int right = clean_at_or_right(state, b + kSmoothClean, W);
+    a = left < 0 ? 0 : left;
+    b = right < 0 ? W : right + 1;
+  }
+  return row_window(a, b, reach, W);
+}
+
 // Warps both eyes row by row (a row task converts its source row once);
 // an eye with shift 0 is the source row copied. scratch[e] receives eye e's
 // hole mask when its mask is sized, and its BackgroundSmooth states and
 // anchors for that fill (sized W x H by the caller).
-// holes[e]: eye e's hole count.
-// rows: the rows to warp (one flag a row), null: all.
+// holes[e]: eye e's hole count (of the windows rendered).
+// changed: each row's changed columns, null: every row whole. windows[e]
+// (H entries, when changed is given) receives the targets of eye e each
+// row rendered again (empty: none).
 template <class Px>
 void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch<Px> *scratch, long long holes[2],
-               const std::vector<uint8_t> *rows_wanted) {
+               const std::vector<ColumnSpan> *changed, std::vector<ColumnSpan> *windows) {
   std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
     RowScratch<Px> row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
@@ -378,21 +457,37 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch<Px> *scratch, lon
     const std::vector<Keys::Word> &keys = row.keys;
     long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
-      if (rows_wanted && !(*rows_wanted)[y]) continue;
-      row.src.load(j, y);
+      RowWindow w[2];
+      int load0 = 0, load1 = j.width;  // the source words the windows read
+      if (changed) {
+        const ColumnSpan c = (*changed)[y];
+        if (c.empty()) continue;
+        load0 = j.width, load1 = 0;
+        for (int e = 0; e < 2; ++e) {
+          // A copied eye is the changed columns themselves.
+          w[e] = eyes[e].shift == 0.f ? RowWindow{c.x0, c.x1, c.x0, c.x1, c.x0, c.x1}
+                                      : changed_window(j, eyes[e], scratch[e], y, c);
+          load0 = std::min(load0, std::max(0, w[e].sa - 1));
+          load1 = std::max(load1, std::min(j.width, w[e].sb + 2));
+          windows[e][y] = ColumnSpan{w[e].a, w[e].b};
+        }
+      } else {
+        w[0] = w[1] = whole_row(j.width);
+      }
+      row.src.load(j, y, load0, load1);
       for (int e = 0; e < 2; ++e) {
         const Eye &eye = eyes[e];
         if (eye.shift == 0.f) {
           const OutputRow<Px> out(j.out, eye.col0, y);
-          for (int x = 0; x < j.width; ++x) out.put(x, src.words[x]);
+          for (int x = w[e].a; x < w[e].b; ++x) out.put(x, src.words[x]);
           continue;
         }
-        scatter_row(j, eye, y, row);
-        const long long h = resolve_row(j, eye, y, src, keys);
+        scatter_row(j, eye, y, w[e], row);
+        const long long h = resolve_row(j, eye, y, w[e], src, keys);
         local[e] += h;
         if (h > 0 && j.params.fill == HoleFill::Background) background_fill_row<Px>(j, eye, y, keys, row.right);
         EyeScratch<Px> &s = scratch[e];
-        if (j.params.fill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye, y, row, s);
+        if (j.params.fill == HoleFill::BackgroundSmooth) smooth_anchor_row(j, eye, y, w[e], row, s);
         if (s.mask.empty()) continue;
         const size_t base = static_cast<size_t>(y) * j.width;
         for (int X = 0; X < j.width; ++X) s.mask[base + X] = keys[X] == 0;
@@ -416,6 +511,7 @@ struct ColumnWindow {
   using Sum = typename SmoothSumFor<Px>::Type;
   int lo, hi;
   Sum s;
+  int row = -2;  // the row V was last taken at: a column left out of a row starts afresh
 };
 
 // The first column at or after X whose state is a hole (W: none), eight
@@ -430,27 +526,36 @@ inline int next_hole(const uint8_t *row, int X, int W) {
   return X;
 }
 
+// The holes of the columns fill[y] of rows y0..y1 (fill: null, every
+// column) get their fill. V is needed within Rx of them, and a run of holes
+// is cut at the edges of those columns: the mean at t reads only V within
+// Rx of t, which lies inside.
 template <class Px>
 void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int R, int Rx, int y0, int y1,
-                 std::vector<ColumnWindow<Px>> &win, std::vector<typename ColumnWindow<Px>::Sum> &V,
-                 std::vector<typename ColumnWindow<Px>::Sum> &prefix) {
+                 const std::vector<ColumnSpan> *fill, std::vector<ColumnWindow<Px>> &win,
+                 std::vector<typename ColumnWindow<Px>::Sum> &V, std::vector<typename ColumnWindow<Px>::Sum> &prefix) {
   using Sum = typename ColumnWindow<Px>::Sum;
   const int W = j.width, H = j.height;
   const uint8_t *state = es.state;
   const Px *anchor = es.anchor;
   auto at = [W](int y, int X) { return static_cast<size_t>(y) * W + X; };
+  for (auto &w : win) w.row = -2;
   for (int y = y0; y < y1; ++y) {
+    const ColumnSpan out = fill ? (*fill)[y] : ColumnSpan{0, W};
+    if (out.empty()) continue;
+    const int v0 = std::max(0, out.x0 - Rx), v1 = std::min(W, out.x1 + Rx);  // the columns of V
     const uint8_t *row = state + at(y, 0);
     bool any = false;
-    for (int X = next_hole(row, 0, W); X < W; X = next_hole(row, X + 1, W)) {
+    for (int X = next_hole(row, v0, v1); X < v1; X = next_hole(row, X + 1, v1)) {
       any = true;
       ColumnWindow<Px> &w = win[X];
-      if (y == y0 || !state[at(y - 1, X)]) {  // a new run, or the band's first row: lo = the run's start
+      if (w.row != y - 1 || !state[at(y - 1, X)]) {  // a new run, or new to the sweep: lo = the run's start
         w.lo = y;
         while (w.lo > 0 && w.lo > y - R && state[at(w.lo - 1, X)]) --w.lo;
         w.hi = w.lo - 1;
         w.s = Sum{0, 0, 0, 0, 0};
       }
+      w.row = y;
       while (w.hi < y + R && w.hi + 1 < H && state[at(w.hi + 1, X)]) {
         ++w.hi;
         if (state[at(w.hi, X)] == kSmoothAnchor) smooth_add(w.s, anchor[at(w.hi, X)]);
@@ -463,16 +568,17 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int
       V[X] = w.s;
     }
     if (!any) continue;
-    // Every hole becomes the mean of V over its row run within +-Rx.
-    for (int X = next_hole(row, 0, W); X < W; X = next_hole(row, X, W)) {
-      const int a = X;  // the run is columns a..b
+    // Every hole of the columns asked for becomes the mean of V over its
+    // row run within +-Rx.
+    for (int X = next_hole(row, v0, v1); X < v1; X = next_hole(row, X, v1)) {
+      const int a = X;  // the run is columns a..b (cut at v0 and v1)
       prefix[0] = Sum{0, 0, 0, 0, 0};
-      for (; X < W && row[X]; ++X) {
+      for (; X < v1 && row[X]; ++X) {
         prefix[X - a + 1] = prefix[X - a];
         smooth_add(prefix[X - a + 1], V[X]);
       }
       const int b = X - 1;
-      for (int t = a; t <= b; ++t) {
+      for (int t = std::max(a, out.x0); t <= std::min(b, out.x1 - 1); ++t) {
         const Sum &hi = prefix[std::min(b, t + Rx) - a + 1], &lo = prefix[std::max(a, t - Rx) - a];
         store_pixel(j.out, eye.col0 + t, y, smooth_mean(smooth_window(hi, lo)));
       }
@@ -480,10 +586,28 @@ void smooth_band(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &es, int
   }
 }
 
-// rows: the rows to fill (one flag a row), null: all.
+// The columns each row's fill must redo when the rows' windows of targets
+// (warp_eyes) were rendered again: a hole's fill reads the anchors of its
+// column within R rows and the sums of its row run within Rx columns.
+std::vector<ColumnSpan> smooth_fill_spans(const std::vector<ColumnSpan> &windows, int R, int Rx, int width) {
+  const int H = static_cast<int>(windows.size());
+  std::vector<ColumnSpan> fill(windows.size(), ColumnSpan{width, 0});
+  for (int y = 0; y < H; ++y) {
+    const ColumnSpan w = windows[y];
+    if (w.empty()) continue;
+    const int x0 = std::max(0, w.x0 - Rx), x1 = std::min(width, w.x1 + Rx);
+    for (int q = std::max(0, y - R); q <= std::min(H - 1, y + R); ++q) {
+      fill[q].x0 = std::min(fill[q].x0, x0);
+      fill[q].x1 = std::max(fill[q].x1, x1);
+    }
+  }
+  return fill;
+}
+
+// fill: the columns of each row to fill (smooth_fill_spans), null: all.
 template <class Px>
 void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch<Px> &s,
-                            const std::vector<uint8_t> *rows) {
+                            const std::vector<ColumnSpan> *fill) {
   const int R = smooth_fill_radius(eye.shift, j.D), Rx = smooth_fill_radius_x(R);
   // Bands of at least 2R rows, so that finding a run's start at a band's
   // first row (up to R rows up, holes only) stays a small share of the
@@ -493,19 +617,20 @@ void background_smooth_fill(const WarpJob &j, const Eye &eye, const EyeScratch<P
   const int band = std::max(32, 2 * R);
   std::vector<std::pair<int, int>> bands;
   for (int y = 0; y < j.height;) {
-    if (rows && !(*rows)[y]) {
+    if (fill && (*fill)[y].empty()) {
       ++y;
       continue;
     }
     int end = y;
-    while (end < j.height && (!rows || (*rows)[end])) ++end;
+    while (end < j.height && (!fill || !(*fill)[end].empty())) ++end;
     for (; y < end; y += band) bands.emplace_back(y, std::min(end, y + band));
     y = end;
   }
   cv::parallel_for_(cv::Range(0, static_cast<int>(bands.size())), [&](const cv::Range &r) {
     std::vector<ColumnWindow<Px>> win(j.width);
     std::vector<typename ColumnWindow<Px>::Sum> V(j.width), prefix(static_cast<size_t>(j.width) + 1);
-    for (int b = r.start; b < r.end; ++b) smooth_band(j, eye, s, R, Rx, bands[b].first, bands[b].second, win, V, prefix);
+    for (int b = r.start; b < r.end; ++b)
+      smooth_band(j, eye, s, R, Rx, bands[b].first, bands[b].second, fill, win, V, prefix);
   });
 }
 
@@ -556,8 +681,10 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   return warp_render_cpu(params, src, m, depth, out, scratch);
 }
 
-std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<uint8_t> &rows) {
+std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<ColumnSpan> &changed) {
   const WarpParams p = warp_sanitize(params);
+  std::vector<uint8_t> rows(changed.size());
+  for (size_t y = 0; y < changed.size(); ++y) rows[y] = !changed[y].empty();
   const bool any = std::find(rows.begin(), rows.end(), 1) != rows.end();
   if (!any) return rows;
   if (p.fill == HoleFill::NeighborAverage) return std::vector<uint8_t>(rows.size(), 1);
@@ -588,7 +715,7 @@ std::vector<Rgba> &anchor_plane(WarpCpuScratch &planes, int e, const Rgba *) { r
 std::vector<Rgba16> &anchor_plane(WarpCpuScratch &planes, int e, const Rgba16 *) { return planes.smooth_anchor16[e]; }
 
 template <class Px>
-long long render(WarpJob &j, WarpCpuScratch &planes, const std::vector<uint8_t> *rows) {
+long long render(WarpJob &j, WarpCpuScratch &planes, const std::vector<ColumnSpan> *changed) {
   const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
   const bool average = j.params.fill == HoleFill::NeighborAverage;
   const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
@@ -607,17 +734,27 @@ long long render(WarpJob &j, WarpCpuScratch &planes, const std::vector<uint8_t> 
       scratch[e].anchor = anchors.data();
     }
   }
-  // NeighborAverage reaches across the picture: a changed row warps all.
-  if (rows && average && std::find(rows->begin(), rows->end(), 1) != rows->end()) rows = nullptr;
+  // NeighborAverage reaches across the picture: a change warps all.
+  if (changed && average &&
+      std::any_of(changed->begin(), changed->end(), [](const ColumnSpan &c) { return !c.empty(); }))
+    changed = nullptr;
   long long holes[2] = {0, 0};
-  warp_eyes<Px>(j, eyes, scratch, holes, rows);
-  // The smooth fill of a row reads the rows within R: it runs on the rows
-  // the changed ones reach, whatever their own hole counts.
-  const std::vector<uint8_t> fill_rows = rows ? warp_rows_written(j.params, j.width, *rows) : std::vector<uint8_t>();
+  std::vector<ColumnSpan> windows[2];
+  if (changed)
+    for (auto &w : windows) w.assign(changed->size(), ColumnSpan{});
+  warp_eyes<Px>(j, eyes, scratch, holes, changed, windows);
   for (int e = 0; e < 2; ++e) {
     if (average && holes[e] > 0) neighbour_average_fill<Px>(j, eyes[e], scratch[e].mask, holes[e]);
-    if (smooth && eyes[e].shift != 0.f && (holes[e] > 0 || rows))
-      background_smooth_fill<Px>(j, eyes[e], scratch[e], rows ? &fill_rows : nullptr);
+    if (!smooth || eyes[e].shift == 0.f) continue;
+    if (!changed) {
+      if (holes[e] > 0) background_smooth_fill<Px>(j, eyes[e], scratch[e], nullptr);
+      continue;
+    }
+    // The fill of a hole reads the anchors within R rows and Rx columns: it
+    // runs where the windows reach, whatever their own hole counts.
+    const int R = smooth_fill_radius(eyes[e].shift, j.D);
+    const std::vector<ColumnSpan> fill = smooth_fill_spans(windows[e], R, smooth_fill_radius_x(R), j.width);
+    background_smooth_fill<Px>(j, eyes[e], scratch[e], &fill);
   }
   return holes[0] + holes[1];
 }
@@ -626,12 +763,15 @@ long long render(WarpJob &j, WarpCpuScratch &planes, const std::vector<uint8_t> 
 
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &planes,
-                          const std::vector<uint8_t> *rows) {
+                          const std::vector<ColumnSpan> *changed) {
   if (!warp_frames_fit(src, depth, out) || !params_fit(src.format, m)) return -1;
-  if (rows && static_cast<int>(rows->size()) != src.height) return -1;
+  if (changed && static_cast<int>(changed->size()) != src.height) return -1;
+  if (changed)
+    for (const ColumnSpan &c : *changed)
+      if (!c.empty() && (c.x0 < 0 || c.x1 > src.width)) return -1;
   WarpJob j{warp_sanitize(params), src, m, depth, out, 0.f, src.width, src.height};
   j.D = disparity_scale(j.params, j.width);
-  return is_deep(out.format) ? render<Rgba16>(j, planes, rows) : render<Rgba>(j, planes, rows);
+  return is_deep(out.format) ? render<Rgba16>(j, planes, changed) : render<Rgba>(j, planes, changed);
 }
 
 }  // namespace p3d

@@ -106,8 +106,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "frame.h"
+#include "change_map.h"
 #include "enum_name.h"
+#include "frame.h"
 
 namespace p3d {
 
@@ -557,21 +558,26 @@ struct WarpCpuScratch {
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch);
 
-// The adaptive warp: the rows flagged in `rows` (one flag a source row,
-// null: all) are the rows whose source or depth changed since the
-// previous call with this scratch, the same parameters and the same frame
-// geometry; `out` holds that call's output. The flagged rows are warped
-// again and the fill runs over the rows they reach (warp_rows_written());
-// every other pixel of out and of scratch is left as it is, which is what
-// a call over all rows would write there. Returns the holes of the warped
-// rows, or -1 as above (also when rows does not have a flag a row).
+// The adaptive warp: changed[y] (one span a source row, null: every row
+// whole) holds the columns of row y whose source or depth changed since
+// the previous call with this scratch, the same parameters and the same
+// frame geometry; `out` holds that call's output. In each changed row the
+// warp renders again the targets those columns can reach (their spans'
+// reach, and for BackgroundSmooth out to a clean pixel on either side
+// that the change cannot touch; Background and NeighborAverage: the whole
+// row, NeighborAverage every row), and the fill runs over what those
+// reach (BackgroundSmooth: R rows and Rx columns more); every other pixel
+// of out and of scratch is left as it is, which is what a call over
+// everything would write there. Returns the holes of the rendered
+// targets, or -1 as above (also when changed has not one span a row or a
+// span leaves the picture).
 long long warp_render_cpu(const WarpParams &params, const FrameView &src, const YuvToRgb &m,
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch,
-                          const std::vector<uint8_t> *rows);
+                          const std::vector<ColumnSpan> *changed);
 // The output rows of both views that the adaptive warp rewrites when the
-// flagged source rows changed: BackgroundSmooth reaches smooth_fill_radius()
+// spans `changed` changed: BackgroundSmooth reaches smooth_fill_radius()
 // rows up and down, NeighborAverage the whole picture, the other fills the
 // row itself.
-std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<uint8_t> &rows);
+std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<ColumnSpan> &changed);
 
 }  // namespace p3d

@@ -73,7 +73,7 @@ enum {
 struct PackState {
   p3d::gst::InputHistory input{true};  // the pack redoes whole rows
   p3d::gst::KeptParams<p3d::PackParams> params;
-  p3d::gst::OutputHistory output;
+  p3d::gst::OutputHistory output{true};  // the pack redoes whole rows
 #if HAVE_CUDA
   // adaptive on CUDA memory (cuda/change_gpu.h).
   p3d::gst::WholeOutputGpu adaptive_gpu;

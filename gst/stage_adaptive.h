@@ -54,18 +54,23 @@ class InputHistory {
 // hangs a pool with a fixed number of buffers.)
 class OutputHistory {
  public:
+  // whole_rows: the stage redoes whole rows of tiles (the pack), so a frame
+  // that changed a tile in every row leaves nothing of its output to keep;
+  // else (the warp) only a frame that changed every tile.
+  explicit OutputHistory(bool whole_rows = false) : whole_rows_(whole_rows) {}
   // Copies the previous output into `out` (mapped, of `info`); false when
   // there is none of that size and format.
   bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;
   // After a frame: keeps a copy of `out` (mapped, of `info`) where it
   // changed (whole, or `changes` has a tile). Not after a frame that
-  // changed every row of tiles, the stream's first apart: its successor
-  // likely does too and would not read it (a frame that changes less
-  // after such a run is computed whole).
+  // changed every tile (whole_rows: every row of tiles), the stream's
+  // first apart: its successor likely does too and would not read it (a
+  // frame that changes less after such a run is computed whole).
   void update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole);
   void reset() { valid_ = seen_ = false; }
 
  private:
+  bool whole_rows_;
   bool valid_ = false, seen_ = false;
   GstVideoInfo info_;
   std::vector<uint8_t> planes_[GST_VIDEO_MAX_PLANES];

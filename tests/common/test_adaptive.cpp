@@ -1261,14 +1261,34 @@ class WarpPackRun {
   const YuvToRgb m_;
 };
 
-::testing::AssertionResult run_warp_sequence(const WarpPackCase &c, uint32_t seed) {
+// A depth map of narrow near and far stripes in blocks of rows: holes
+// everywhere, at every distance from each other.
+cv::Mat hole_rich_depth(int w, int h, std::mt19937 &rng) {
+  cv::Mat d(h, w, CV_32FC1);
+  for (int y0 = 0; y0 < h;) {
+    const int y1 = std::min(h, y0 + uniform(rng, 1, 12));
+    for (int x0 = 0; x0 < w;) {
+      const int x1 = std::min(w, x0 + uniform(rng, 1, 14));
+      d(cv::Rect(x0, y0, x1 - x0, y1 - y0)).setTo(cv::Scalar(uniform(rng, 0, 1) ? 1.f : 0.f));
+      x0 = x1;
+    }
+    y0 = y1;
+  }
+  return d;
+}
+
+// Frames of W x H (default: 97 x 67) whose source and depth change in a
+// few rects each frame; every frame's output is compared with the full
+// computation. hole_rich: the depth of hole_rich_depth() instead of a few
+// near rects.
+::testing::AssertionResult run_warp_sequence(const WarpPackCase &c, uint32_t seed, int W = 97, int H = 67,
+                                             int frames = 7, bool hole_rich = false) {
   std::mt19937 rng(seed);
-  const int W = 97, H = 67;
   HostFrame src(c.src_format, W, H, 3);
   src.fill_random(rng());
-  cv::Mat depth = warp_depth_map(W, H, rng);
+  cv::Mat depth = hole_rich ? hole_rich_depth(W, H, rng) : warp_depth_map(W, H, rng);
   WarpPackRun run(c, W, H);
-  for (int frame = 0; frame < 7; ++frame) {
+  for (int frame = 0; frame < frames; ++frame) {
     const char *what = "first";
     if (frame > 0) {
       switch (uniform(rng, 0, 5)) {
@@ -1284,7 +1304,13 @@ class WarpPackRun {
         case 3:
           what = "depth";
           depth = depth.clone();
-          for (int k = uniform(rng, 1, 3); k > 0; --k) new_depth(depth, rect_in_tile(rng, W, H, 20), rng);
+          for (int k = uniform(rng, 1, 3); k > 0; --k) {
+            const PixelRect r = rect_in_tile(rng, W, H, 20);
+            if (hole_rich)  // new stripes: holes appear and go
+              hole_rich_depth(r.width(), r.height(), rng).copyTo(depth(cv::Rect(r.x0, r.y0, r.width(), r.height())));
+            else
+              new_depth(depth, r, rng);
+          }
           break;
         default:
           what = "source and depth";
@@ -1386,6 +1412,34 @@ TEST(AdaptiveWarpPack, ChangedTilesGiveTheFullWarpAndPackInsideBars) {
         c.active = rects[index % 3];
         SCOPED_TRACE(warp_case_text(c) + " rect " + rect_text(c.active));
         EXPECT_TRUE(run_warp_sequence(c, seed + index));
+      }
+}
+
+// Rows much wider than the spans' reach: the warp renders again only the
+// columns a change reaches (warp_render_cpu, ColumnSpan), out to a clean
+// pixel on either side for BackgroundSmooth, whose fill then runs over the
+// rows and columns those reach. Depth of narrow stripes puts holes and
+// their runs at every distance from the windows' edges; changes in one
+// tile at a time, frame after frame, some making and removing holes.
+TEST(AdaptiveWarpPack, ColumnWindowsOfWideRowsGiveTheFullWarp) {
+  uint32_t seed = 4100;
+  int index = 0;
+  for (const HoleFill fill : kAllFills)
+    for (const StereoView view : kAllViews)
+      for (const PackLayout layout : {PackLayout::SideBySide, PackLayout::SideBySideHalf, PackLayout::Anaglyph}) {
+        WarpPackCase c = sweep_case(fill, view, layout, false, index++);
+        if (copied_eye_smooth(fill, view)) continue;
+        // 2 % and 5 %: the fill's Rx (R / 4) is within kSmoothClean; 16 %
+        // on 640 columns: beyond it.
+        for (const float disparity : {2.f, 5.f}) {
+          c.warp.max_disparity = disparity;
+          SCOPED_TRACE(warp_case_text(c));
+          EXPECT_TRUE(run_warp_sequence(c, seed + index, 420, 70, 10, true));
+          EXPECT_TRUE(run_warp_sequence(c, seed + 1000 + index, 333, 40, 10, false));
+        }
+        c.warp.max_disparity = 16.f;
+        SCOPED_TRACE(warp_case_text(c));
+        EXPECT_TRUE(run_warp_sequence(c, seed + 2000 + index, 640, 48, 8, true));
       }
 }
 

@@ -70,7 +70,7 @@ struct SceneResult {
   Series off, on;
   AdaptiveChain::Shares changed;  // means over the timed frames
   bool compared = true;  // false: the on chain is meant to differ (measure_crop)
-  bool gpu = false;      // the GPU chains (the rows and filter/warp shares are not counted)
+  bool gpu = false;      // the GPU chains (the spans and filter/warp shares are not counted)
   int identical_frames = 0;
   int first_mismatch = -1;  // frame number, -1: none
   std::string mismatch_at;
@@ -145,14 +145,14 @@ std::vector<FrameView> views_of(const std::vector<HostFrame> &frames) {
   return v;
 }
 
-// The chains' shares of changed tiles and rows (AdaptiveChain::shares);
+// The chains' shares of changed tiles and spans (AdaptiveChain::shares);
 // the GPU chain reports none, so its input share is FrameHistory's.
 void add_shares(SceneResult *r, const AdaptiveChain &adaptive) {
   const AdaptiveChain::Shares &s = adaptive.shares();
   r->changed.input += s.input;
   r->changed.filter += s.filter;
   r->changed.warp += s.warp;
-  r->changed.warp_rows += s.warp_rows;
+  r->changed.warp_spans += s.warp_spans;
 }
 #ifdef P3D_BENCH_GPU
 void add_shares(SceneResult *, const GpuSceneChain &) {}
@@ -190,7 +190,7 @@ SceneResult measure(const std::vector<HostFrame> &frames, const std::vector<Fram
     run_round(views, &r, make_full, make_adaptive, [](const auto &, const auto &, size_t) {});
   if (differing > 0) r.psnr_mean = psnr_sum / differing;
   const double timed = std::max(1, r.frames - 1);
-  for (double *share : {&r.changed.input, &r.changed.filter, &r.changed.warp, &r.changed.warp_rows}) *share /= timed;
+  for (double *share : {&r.changed.input, &r.changed.filter, &r.changed.warp, &r.changed.warp_spans}) *share /= timed;
   return r;
 }
 
@@ -259,7 +259,7 @@ SceneResult measure_crop(const StageParams &p, const std::vector<HostFrame> &fra
 
 void print_header() {
   std::printf("%-9s %-9s %4s %7s %6s %7s %8s %7s %8s %7s %5s %13s  %-20s %-20s\n", "scene", "size", "tol", "changed",
-              "rows", "off med", "off mean", "on med", "on mean", "on/off", "same", "PSNR mean/min",
+              "spans", "off med", "off mean", "on med", "on mean", "on/off", "same", "PSNR mean/min",
               "off ms depth/filt/warp", "on ms depth/filt/warp");
   std::fflush(stdout);
 }
@@ -276,7 +276,7 @@ void print_row(const SceneResult &r) {
   std::snprintf(size, sizeof size, "%dx%d", r.size.width, r.size.height);
   if (!r.identical()) std::snprintf(psnr_text, sizeof psnr_text, "%.1f/%.1f", r.psnr_mean, r.psnr_min);
   std::printf("%-9s %-9s %4g %6.1f%% %5.1f%% %7.1f %8.1f %7.1f %8.1f %6.1f%% %5s %13s  %-20s %-20s\n", r.scene.c_str(),
-              size, r.tolerance, 100.0 * r.changed.input, 100.0 * r.changed.warp_rows, r.off.median(), r.off.mean(),
+              size, r.tolerance, 100.0 * r.changed.input, 100.0 * r.changed.warp_spans, r.off.median(), r.off.mean(),
               r.on.median(), r.on.mean(), r.ratio(),
               !r.compared ? "n/a" : r.identical() ? "yes" : "no", psnr_text, stages_text(r.off).c_str(),
               stages_text(r.on).c_str());
@@ -309,7 +309,7 @@ void emit(const SceneResult &r, const StageParams &p, const SceneRunInfo &info, 
   j.num("tolerance", r.tolerance).integer("frames", r.frames).integer("timed_frames", r.frames - 1);
   j.integer("rounds", r.rounds);
   j.num("changed_tiles", r.changed.input).num("filter_tiles", r.changed.filter).num("warp_tiles", r.changed.warp);
-  j.num("warp_rows", r.changed.warp_rows);
+  j.num("warp_spans", r.changed.warp_spans);
   j.num("off_median_ms", r.off.median()).num("off_mean_ms", r.off.mean());
   j.num("on_median_ms", r.on.median()).num("on_mean_ms", r.on.mean()).num("ratio_pct", r.ratio());
   j.str("on", r.compared ? "adaptive=true" : "crop-bars=auto");
@@ -335,7 +335,8 @@ int run_scenes(const SceneOptions &o, const StageParams &p, PixelFormat format, 
                const SceneRunInfo &info, std::ostream &out) {
   std::printf("scene mode: the %s chain (depth, filter, warp + pack), adaptive off and on in turn frame by frame;\n"
               "%d frames a sequence, the first the warm-up; ms a frame, the shortest of %d round(s).\n"
-              "changed: input tiles that differ from the frame before; rows: source rows the warp renders again;\n"
+              "changed: input tiles that differ from the frame before; spans: source pixels in the columns of\n"
+              "each row the warp is given as changed;\n"
               "on/off: mean on / mean off; same: every output byte equal to adaptive=false's\n"
               "letterbox: on is crop-bars=auto, off crop-bars=off, both adaptive=false (changed: n/a)\n",
               o.gpu ? "GPU" : "CPU", o.frames, o.rounds);

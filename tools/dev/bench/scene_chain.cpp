@@ -134,9 +134,12 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
   ms->filter = sw.lap();
   warp(src, filtered, &warp_changes);
   ms->warp = sw.lap();
-  const std::vector<uint8_t> rows = warp_changes.rows();
+  double span_pixels = 0;
+  for (const ColumnSpan &c : warp_changes.row_spans())
+    if (!c.empty()) span_pixels += c.x1 - c.x0;
+  const double pixels = static_cast<double>(warp_changes.width()) * warp_changes.height();
   shares_ = {input.fraction(), filter_changes.fraction(), warp_changes.fraction(),
-             rows.empty() ? 0.0 : static_cast<double>(std::count(rows.begin(), rows.end(), 1)) / rows.size()};
+             pixels > 0 ? span_pixels / pixels : 0.0};
 }
 
 // gstpseudo3ddepth.cpp process_ip: the bars counted (again only where the
@@ -218,8 +221,9 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
 }
 
 // gstpseudo3dwarp.cpp render_cpu: a new output buffer that starts as a copy
-// of the previous output (unless every tile changed), the rows a change
-// reaches warped and packed again, and the output copied when it changed.
+// of the previous output (unless every tile changed), the columns a change
+// reaches warped and their rows packed again, and the output copied when
+// it changed.
 // Backing off: the whole frame, nothing kept.
 void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *changes) {
   const bool compare = warp_inputs_.begin(true);
@@ -228,7 +232,7 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
     const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
     *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
     warp_depth_ = depth;
-    whole = !have_output_ || changes->all_rows() || warp_rect_ != rect_;
+    whole = !have_output_ || changes->all() || warp_rect_ != rect_;
   } else {
     warp_depth_.reset();
     have_output_ = seen_ = false;
@@ -244,7 +248,7 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
   if (compare) {  // gst/stage_adaptive.cpp OutputHistory::update.
     const bool first = !seen_;
     seen_ = true;
-    if (changes->all_rows() && !first) {
+    if (changes->all() && !first) {
       have_output_ = false;
     } else if (whole || changes->any()) {
       copy_frame(out_, kept_);

@@ -108,10 +108,10 @@ class AdaptiveChain {
   const HostFrame &output() const { return out_; }
   // The last frame's shares of the picture that the stages took as
   // changed (1 on a whole frame): the depth stage's tiles (the input), the
-  // filter's and the warp's tiles (input or depth), and the source rows the
-  // warp rendered again.
+  // filter's and the warp's tiles (input or depth), and the source pixels
+  // in the columns of each row the warp was given as changed (ColumnSpan).
   struct Shares {
-    double input = 0, filter = 0, warp = 0, warp_rows = 0;
+    double input = 0, filter = 0, warp = 0, warp_spans = 0;
   };
   const Shares &shares() const { return shares_; }
 
@@ -144,7 +144,7 @@ class AdaptiveChain {
   // pseudo3dwarp: its inputs, the output buffer and the copy of the
   // previous output the element keeps (gst/stage_adaptive.h OutputHistory),
   // the pair and the warp's state.
-  StageInputs warp_inputs_{true};
+  StageInputs warp_inputs_;
   Plane warp_depth_;
   WarpTarget target_;
   HostFrame out_, kept_;  // the new output buffer; the element's copy of the previous output
