@@ -38,19 +38,33 @@ ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> de
 bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView &guide, ImageView<const float> depth,
                                   ImageView<const float> prev_out, ImageView<float> out, const ChangeMap *changes,
                                   BilateralScratch &scratch) {
-  const PixelRect whole{0, 0, depth.width, depth.height};
-  const bool keep = changes && prev_out.width == depth.width && prev_out.height == depth.height && !prev_out.empty();
-  const int reach = bilateral_reach(params, depth.width, depth.height);
-  const ChangeMap dirty = keep ? changes->dilated(reach, reach) : ChangeMap();
-  if (keep && !dirty.any()) return false;
-  // Where most tiles changed, one pass over the picture costs less than
+  const int W = depth.width, H = depth.height;
+  const PixelRect whole{0, 0, W, H};
+  const bool keep = changes && prev_out.width == W && prev_out.height == H && !prev_out.empty();
+  if (keep && !changes->any()) return false;
+  // The changed tiles' runs, each grown by the filter's reach in pixels
+  // (not rounded up to whole tiles: a cursor's tile costs its window, not
+  // its eight neighbours); rects may overlap, which computes a pixel twice
+  // to the same bits.
+  std::vector<PixelRect> dirty;
+  double area = 0;
+  if (keep) {
+    const int reach = bilateral_reach(params, W, H);
+    for (const PixelRect &r : changes->runs()) {
+      const PixelRect g{std::max(0, r.x0 - reach), std::max(0, r.y0 - reach), std::min(W, r.x1 + reach),
+                        std::min(H, r.y1 + reach)};
+      dirty.push_back(g);
+      area += static_cast<double>(g.width()) * g.height();
+    }
+  }
+  // Where most of the picture changed, one pass over it costs less than
   // the rectangles (each reads a margin of its reach) and the copy.
-  if (!keep || dirty.fraction() > kWholeFilterShare) {
+  if (!keep || area > kWholeFilterShare * W * H) {
     bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
     return true;
   }
   copy_plane_rect(prev_out, out, whole);
-  bilateral_filter_cpu(params, guide, depth, out, dirty.runs(), scratch);
+  bilateral_filter_cpu(params, guide, depth, out, dirty, scratch);
   return true;
 }
 

@@ -54,7 +54,7 @@ class StageInputs {
   ChangeBackOff backoff_;
 };
 
-// The filter of the tiles within bilateral_reach() of a changed one.
+// The filter of the pixels within bilateral_reach() of a changed tile.
 // changes: the tiles whose guide or depth changed since the call that
 // wrote prev_out (null: prev_out is unknown or other parameters made it).
 // Returns false when the change reaches no tile: out is left untouched and
