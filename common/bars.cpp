@@ -6,6 +6,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "row_convert.h"
+
 namespace p3d {
 
 namespace {
@@ -58,63 +60,52 @@ namespace {
 
 // Pixels [x0, x1) of row y of the source into both views of the pair:
 // load_rgba's bytes as store_rgba writes them (load_rgba16's for an RGBA64
-// pair), two pixels a chroma sample. Word: the pair's pixel word
-// (uint32_t, or uint64_t for RGBA64).
+// pair). Word: the pair's pixel word (uint32_t, or uint64_t for RGBA64);
+// words: the row's words, width() of them (rgba_words_of_row() fills
+// those of 8-bit pairs, several pixels at a time).
 template <class Word>
-void source_into_views(const FrameView &src, const YuvToRgb &m, int y, int x0, int x1, const FrameView &pair) {
+void source_into_views(const FrameView &src, const YuvToRgb &m, int y, int x0, int x1, const FrameView &pair,
+                       Word *words) {
+  if (x0 >= x1) return;
   constexpr size_t kBytes = sizeof(Word);
   uint8_t *left = pair.plane[0] + static_cast<size_t>(y) * pair.stride[0];
   uint8_t *right = left + kBytes * static_cast<size_t>(src.width);
-  const bool bgr = is_bgr_order(pair.format);
-  auto put = [&](int x, Word w) {
-    if constexpr (kBytes == 4) {
-      if (bgr) w = swap_rb_word(w);
-    }
-    std::memcpy(left + kBytes * static_cast<size_t>(x), &w, kBytes);
-    std::memcpy(right + kBytes * static_cast<size_t>(x), &w, kBytes);
-  };
-  auto one = [&](int x) {
-    if constexpr (kBytes == 4)
-      put(x, rgba_word(load_rgba(src, x, y, m)));
-    else
-      put(x, rgba_word(load_rgba16(src, x, y, m)));
-  };
-  int x = x0;
-  if (x < x1 && x % 2) {  // an odd start: one pixel
-    one(x);
-    ++x;
+  if constexpr (kBytes == 4) {
+    rgba_words_of_row(src, y, m, words, x0, x1);
+    if (is_bgr_order(pair.format))
+      for (int x = x0; x < x1; ++x) words[x] = swap_rb_word(words[x]);
+  } else {
+    for (int x = x0 & ~1; x < x1; x += 2) load_rgba_pair_words(src, x, y, m, words + x);
   }
-  for (; x + 1 < x1; x += 2) {
-    Word w[2] = {0, 0};
-    load_rgba_pair_words(src, x, y, m, w);
-    put(x, w[0]);
-    put(x + 1, w[1]);
-  }
-  if (x < x1) one(x);
+  std::memcpy(left + kBytes * static_cast<size_t>(x0), words + x0, kBytes * static_cast<size_t>(x1 - x0));
+  std::memcpy(right + kBytes * static_cast<size_t>(x0), words + x0, kBytes * static_cast<size_t>(x1 - x0));
 }
 
-void source_into_views(const FrameView &src, const YuvToRgb &m, int y, int x0, int x1, const FrameView &pair) {
-  if (pair.format == PixelFormat::RGBA64)
-    source_into_views<uint64_t>(src, m, y, x0, x1, pair);
-  else
-    source_into_views<uint32_t>(src, m, y, x0, x1, pair);
+template <class Word>
+void views_outside(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
+                   const std::vector<uint8_t> *rows) {
+  cv::parallel_for_(cv::Range(0, src.height), [&](const cv::Range &range) {
+    std::vector<Word> words(static_cast<size_t>(src.width) + 1);  // + 1: a pair's second word past an odd width
+    for (int y = range.start; y < range.end; ++y) {
+      if (rows && !(*rows)[y]) continue;
+      if (y < active.y0 || y >= active.y1) {
+        source_into_views(src, m, y, 0, src.width, pair, words.data());
+        continue;
+      }
+      source_into_views(src, m, y, 0, active.x0, pair, words.data());
+      source_into_views(src, m, y, active.x1, src.width, pair, words.data());
+    }
+  });
 }
 
 }  // namespace
 
 void views_outside_cpu(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
                        const std::vector<uint8_t> *rows) {
-  cv::parallel_for_(cv::Range(0, src.height), [&](const cv::Range &range) {
-    for (int y = range.start; y < range.end; ++y) {
-      if (rows && !(*rows)[y]) continue;
-      if (y < active.y0 || y >= active.y1) {
-        source_into_views(src, m, y, 0, src.width, pair);
-        continue;
-      }
-      source_into_views(src, m, y, 0, active.x0, pair);
-      source_into_views(src, m, y, active.x1, src.width, pair);
-    }
-  });
+  if (pair.format == PixelFormat::RGBA64)
+    views_outside<uint64_t>(src, m, active, pair, rows);
+  else
+    views_outside<uint32_t>(src, m, active, pair, rows);
 }
 
 void place_active_pair_cpu(const FrameView &active_pair, PixelRect active, const FrameView &pair,
