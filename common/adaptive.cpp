@@ -6,7 +6,11 @@
 namespace p3d {
 
 namespace {
-constexpr double kWholeFilterShare = 0.75;
+// The grown rects' summed area (a share of the picture) above which the
+// filter runs over the whole picture: a rect's row pass also covers the
+// rows its reach reads, and each rect is a pass of its own (camera video
+// at reuse-tolerance 2 measured no faster in rects above about half).
+constexpr double kWholeFilterShare = 0.5;
 }  // namespace
 
 bool StageInputs::begin(bool adaptive) {
@@ -57,7 +61,7 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
       area += static_cast<double>(g.width()) * g.height();
     }
   }
-  // Where most of the picture changed, one pass over it costs less than
+  // Where much of the picture changed, one pass over it costs less than
   // the rectangles (each reads a margin of its reach) and the copy.
   if (!keep || area > kWholeFilterShare * W * H) {
     bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
