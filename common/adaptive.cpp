@@ -11,7 +11,20 @@ namespace {
 // rows its reach reads, and each rect is a pass of its own (camera video
 // at reuse-tolerance 2 measured no faster in rects above about half).
 constexpr double kWholeFilterShare = 0.5;
+// And the number of rects above which it does: each rect's passes are
+// parallel loops of their own (camera video at 4K, hundreds of scattered
+// runs, took longer in rects than whole).
+constexpr size_t kMaxFilterRects = 32;
+
 }  // namespace
+
+bool busy_for(ChangeReach reach, const ChangeMap &changes) {
+  switch (reach) {
+    case ChangeReach::Rows: return changes.all_rows();
+    case ChangeReach::Spans: return changes.span_share() > kWholeWarpShare;
+    default: return ChangeBackOff::busy_on_cpu(changes.fraction());
+  }
+}
 
 bool StageInputs::begin(bool adaptive) {
   if (!adaptive) {
@@ -35,7 +48,7 @@ ChangeMap StageInputs::compare(const FrameView &frame, ImageView<const float> de
       changes.merge(compare_planes(prev_depth, depth));
     }
   }
-  if (compared_) backoff_.observe(whole_rows_ ? changes.all_rows() : ChangeBackOff::busy_on_cpu(changes.fraction()));
+  if (compared_) backoff_.observe(busy_for(reach_, changes));
   return changes;
 }
 
@@ -63,7 +76,7 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
   }
   // Where much of the picture changed, one pass over it costs less than
   // the rectangles (each reads a margin of its reach) and the copy.
-  if (!keep || area > kWholeFilterShare * W * H) {
+  if (!keep || area > kWholeFilterShare * W * H || dirty.size() > kMaxFilterRects) {
     bilateral_filter_cpu(params, guide, depth, out, {whole}, scratch);
     return true;
   }
@@ -124,6 +137,9 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
                                 const ActiveArea *active) {
   const bool pair_is_dst = pair.plane[0] == dst.plane[0];
   if (!pair_is_dst && !pack_args_valid(pack, pair, dst)) return -1;
+  // Busy spans: their windows, widened by the reach, cover nearly every
+  // row whole, and the whole warp costs less than their bookkeeping.
+  if (changes && busy_for(ChangeReach::Spans, *changes)) changes = nullptr;
   const std::vector<ColumnSpan> spans = changes ? changes->row_spans() : std::vector<ColumnSpan>();
   const std::vector<uint8_t> rows = changes ? changes->rows() : std::vector<uint8_t>();
   const bool cropped = active && active->rect != whole_picture(src.width, src.height);

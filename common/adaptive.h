@@ -17,16 +17,25 @@
 
 namespace p3d {
 
+// How much of a stage's work a change makes it redo, which decides when a
+// frame is busy for it (computed whole, it costs about what the changes
+// would): Tiles, the changed tiles and their reach (the depth, the filter:
+// busy beyond ChangeBackOff::busy_on_cpu's share); Rows, whole rows of
+// tiles (the pack: a change in every row); Spans, in each row of tiles the
+// columns from its first changed tile to its last, widened by the warp's
+// reach (the warp: spans over more than kWholeWarpShare of the picture).
+enum class ChangeReach { Tiles, Rows, Spans };
+constexpr double kWholeWarpShare = 0.6;
+bool busy_for(ChangeReach reach, const ChangeMap &changes);
+
 // A stage's inputs of the previous frame: the frame's bytes (a copy) and
 // the depth map, which the caller holds on to (the stages never write a
 // map once they hand it on); and the stage's back-off (ChangeBackOff,
 // busy_on_cpu).
 class StageInputs {
  public:
-  // whole_rows: the stage redoes whole rows of tiles (the pack),
-  // so a frame that changed a tile in every row is busy for it; else busy
-  // is ChangeBackOff::busy_on_cpu of the share of tiles changed.
-  explicit StageInputs(bool whole_rows = false) : whole_rows_(whole_rows) {}
+  // reach: what the stage redoes of a change (busy_for).
+  explicit StageInputs(ChangeReach reach = ChangeReach::Tiles) : reach_(reach) {}
   // Before a frame: whether it is compared (adaptive and not backing off).
   // When not, the history is dropped and the stage computes the frame
   // whole, dropping what it kept too.
@@ -49,7 +58,7 @@ class StageInputs {
 
  private:
   FrameHistory frame_;
-  bool whole_rows_;
+  ChangeReach reach_;
   bool compared_ = false;
   ChangeBackOff backoff_;
 };

@@ -71,6 +71,8 @@ class ChangeMap {
   // Each pixel row's changed columns (height() spans): from the first
   // changed tile of its row of tiles to the last, clipped to the picture.
   std::vector<ColumnSpan> row_spans() const;
+  // The share of the picture's pixels inside row_spans().
+  double span_share() const;
   // The changed tiles as rectangles of pixels: in each row of tiles, the
   // maximal runs of changed tiles, clipped to the picture; a run with the
   // columns of one in the row of tiles above extends that rectangle down.
@@ -136,10 +138,10 @@ P3D_HD bool tile_over_tolerance(unsigned long long diff, unsigned long long samp
 // tile changed and is not observed; the one after it tells whether the
 // scene calmed down. Busy on the CPU: more than kBusyShare of the tiles
 // changed (busy_on_cpu), where a stage's saving is small beside the
-// comparison and the copies into the histories, or, for a stage that redoes
-// whole rows of tiles, a change in every row (common/adaptive.h
-// StageInputs); a partly changed frame there saves more than it costs, so
-// the stage goes on comparing. The pause doubles while the frames stay busy, from
+// comparison and the copies into the histories, or what busy_for() says
+// for a stage whose work follows the change otherwise (common/adaptive.h:
+// whole rows, the warp's spans); a partly changed frame there saves more
+// than it costs, so the stage goes on comparing. The pause doubles while the frames stay busy, from
 // kBackOffFrames up to kBackOffMax, so that a film pays a comparison
 // every few seconds and a scene that stops is found within that. Whole
 // frames are what adaptive=false computes: the output stays exact.

@@ -71,9 +71,9 @@ enum {
 // adaptive (stage_adaptive.h), streaming thread: the previous frame's
 // input, parameters and output.
 struct PackState {
-  p3d::gst::InputHistory input{true};  // the pack redoes whole rows
+  p3d::gst::InputHistory input{p3d::ChangeReach::Rows};  // the pack redoes whole rows
   p3d::gst::KeptParams<p3d::PackParams> params;
-  p3d::gst::OutputHistory output{true};  // the pack redoes whole rows
+  p3d::gst::OutputHistory output{p3d::ChangeReach::Rows};
 #if HAVE_CUDA
   // adaptive on CUDA memory (cuda/change_gpu.h).
   p3d::gst::WholeOutputGpu adaptive_gpu;
@@ -236,7 +236,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   if (compare) {
     changes = state->input.compare(src, nullptr, adaptive.tolerance);
     // A change in every row of tiles: nothing of the previous output survives.
-    whole = state->params.changed(params) || changes.all_rows() || !state->output.copy_into(&base->out_info, out);
+    whole = state->params.changed(params) || p3d::busy_for(p3d::ChangeReach::Rows, changes) || !state->output.copy_into(&base->out_info, out);
   } else {
     state->params.reset();
     state->output.reset();

@@ -75,9 +75,9 @@ struct WarpState {
   p3d::WarpCpuScratch cpu;  // the CPU path's planes, reused frame to frame (streaming thread only)
   // adaptive (stage_adaptive.h), streaming thread: the previous frame's
   // inputs, parameters and output.
-  p3d::gst::InputHistory inputs;  // the warp redoes the columns a change reaches
+  p3d::gst::InputHistory inputs{p3d::ChangeReach::Spans};  // the warp redoes the columns a change reaches
   p3d::gst::KeptParams<std::tuple<p3d::WarpParams, p3d::PackParams, p3d::YuvToRgb, p3d::PixelRect>> params;
-  p3d::gst::OutputHistory output;
+  p3d::gst::OutputHistory output{p3d::ChangeReach::Spans};
   // The views of a picture narrower than the frame (pillarbox bars), kept
   // from frame to frame like the pair buffer.
   std::vector<uint8_t> active_pair;
@@ -172,8 +172,8 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   const bool compare = state->inputs.begin(adaptive.on);
   if (compare) {
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
-    // A change in every tile: nothing of the previous output survives.
-    whole = state->params.changed({params, pack, yuv, rect}) || changes.all() ||
+    // A busy change: the whole frame costs less than keeping the rest.
+    whole = state->params.changed({params, pack, yuv, rect}) || p3d::busy_for(p3d::ChangeReach::Spans, changes) ||
             !state->output.copy_into(&base->out_info, out);
   } else {
     state->params.reset();

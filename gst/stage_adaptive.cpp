@@ -114,7 +114,7 @@ bool OutputHistory::copy_into(const GstVideoInfo *info, GstVideoFrame *out) cons
 void OutputHistory::update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole) {
   const bool first = !seen_;
   seen_ = true;
-  if ((whole_rows_ ? changes.all_rows() : changes.all()) && !first) {
+  if (busy_for(reach_, changes) && !first) {
     valid_ = false;
     return;
   }

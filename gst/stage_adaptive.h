@@ -33,8 +33,8 @@ AdaptiveSettings adaptive_settings(GstPseudo3DBase *self);
 // once attached).
 class InputHistory {
  public:
-  // whole_rows: as StageInputs'.
-  explicit InputHistory(bool whole_rows = false) : inputs_(whole_rows) {}
+  // reach: as StageInputs'.
+  explicit InputHistory(ChangeReach reach = ChangeReach::Tiles) : inputs_(reach) {}
   // StageInputs::begin: false when the frame is computed whole, uncompared.
   bool begin(bool adaptive);
   // The tiles in which this frame or its depth (a host plane; null: the
@@ -54,23 +54,21 @@ class InputHistory {
 // hangs a pool with a fixed number of buffers.)
 class OutputHistory {
  public:
-  // whole_rows: the stage redoes whole rows of tiles (the pack), so a frame
-  // that changed a tile in every row leaves nothing of its output to keep;
-  // else (the warp) only a frame that changed every tile.
-  explicit OutputHistory(bool whole_rows = false) : whole_rows_(whole_rows) {}
+  // reach: what the stage redoes of a change; a frame busy for it
+  // (busy_for) leaves nothing of its output worth keeping.
+  explicit OutputHistory(ChangeReach reach) : reach_(reach) {}
   // Copies the previous output into `out` (mapped, of `info`); false when
   // there is none of that size and format.
   bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;
   // After a frame: keeps a copy of `out` (mapped, of `info`) where it
-  // changed (whole, or `changes` has a tile). Not after a frame that
-  // changed every tile (whole_rows: every row of tiles), the stream's
-  // first apart: its successor likely does too and would not read it (a
-  // frame that changes less after such a run is computed whole).
+  // changed (whole, or `changes` has a tile). Not after a busy frame, the
+  // stream's first apart: its successor likely is too and would not read
+  // it (a frame that changes less after such a run is computed whole).
   void update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole);
   void reset() { valid_ = seen_ = false; }
 
  private:
-  bool whole_rows_;
+  ChangeReach reach_;
   bool valid_ = false, seen_ = false;
   GstVideoInfo info_;
   std::vector<uint8_t> planes_[GST_VIDEO_MAX_PLANES];

@@ -331,12 +331,28 @@ TEST(AdaptiveChangeMap, RowsAndRunsOnOddSizes) {
         const ChangeMap m = random_map(sz.width, sz.height, rng, p);
         SCOPED_TRACE(tiles_text(m));
         const std::vector<uint8_t> rows = m.rows();
+        const std::vector<ColumnSpan> spans = m.row_spans();
         ASSERT_EQ(static_cast<int>(rows.size()), sz.height);
+        ASSERT_EQ(static_cast<int>(spans.size()), sz.height);
+        double span_pixels = 0;
         for (int y = 0; y < sz.height; ++y) {
           bool any = false;
-          for (int tx = 0; tx < m.tiles_x(); ++tx) any = any || m.tile(tx, y / kChangeTile);
+          int first = sz.width, end = 0;  // the changed pixels' columns of row y
+          for (int x = 0; x < sz.width; ++x)
+            if (m.tile(x / kChangeTile, y / kChangeTile)) {
+              any = true;
+              first = std::min(first, x);
+              end = x + 1;
+            }
           EXPECT_EQ(rows[y] != 0, any) << "row " << y;
+          EXPECT_EQ(spans[y].empty(), !any) << "row " << y;
+          if (any) {
+            EXPECT_EQ(spans[y].x0, first) << "row " << y;
+            EXPECT_EQ(spans[y].x1, end) << "row " << y;
+            span_pixels += end - first;
+          }
         }
+        EXPECT_DOUBLE_EQ(m.span_share(), span_pixels / (static_cast<double>(sz.width) * sz.height));
         const std::vector<PixelRect> runs = m.runs();
         ChangeMap covered(sz.width, sz.height, false);
         int tiles = 0;
@@ -702,7 +718,7 @@ TEST(AdaptiveStageInputs, BacksOffAfterABusyFrameOnly) {
 
   // A stage that redoes whole rows of tiles: one tile in each row changed
   // (2 of 8) is busy for it, and not for the others.
-  StageInputs rows(true), tiles;
+  StageInputs rows(ChangeReach::Rows), tiles;
   for (StageInputs *s : {&rows, &tiles})
     for (int k = 0; k < 2; ++k) {
       ASSERT_TRUE(s->begin(true));
@@ -715,6 +731,22 @@ TEST(AdaptiveStageInputs, BacksOffAfterABusyFrameOnly) {
   }
   EXPECT_FALSE(rows.begin(true)) << "a change in every row of tiles";
   EXPECT_TRUE(tiles.begin(true)) << "a quarter of the tiles";
+
+  // The warp's spans: a column of tiles (a quarter of the picture) is not
+  // busy; a tile at each end of every row spans it all and is.
+  for (const bool ends : {false, true}) {
+    StageInputs spans(ChangeReach::Spans);
+    for (int k = 0; k < 2; ++k) {
+      ASSERT_TRUE(spans.begin(true));
+      spans.compare(f.view(), {}, {}, 0.f);
+    }
+    scribble(f, PixelRect{ends ? 0 : 32, 0, ends ? 1 : 64, 64}, rng);
+    if (ends) scribble(f, PixelRect{127, 0, 128, 64}, rng);
+    ASSERT_TRUE(spans.begin(true));
+    const ChangeMap c = spans.compare(f.view(), {}, {}, 0.f);
+    EXPECT_EQ(busy_for(ChangeReach::Spans, c), ends) << c.span_share();
+    EXPECT_EQ(spans.begin(true), !ends);
+  }
 }
 
 // ---- depth estimator -----------------------------------------------------------------

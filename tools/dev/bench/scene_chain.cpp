@@ -221,7 +221,7 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
 }
 
 // gstpseudo3dwarp.cpp render_cpu: a new output buffer that starts as a copy
-// of the previous output (unless every tile changed), the columns a change
+// of the previous output (unless the change is busy), the columns a change
 // reaches warped and their rows packed again, and the output copied when
 // it changed.
 // Backing off: the whole frame, nothing kept.
@@ -232,7 +232,7 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
     const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
     *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
     warp_depth_ = depth;
-    whole = !have_output_ || changes->all() || warp_rect_ != rect_;
+    whole = !have_output_ || busy_for(ChangeReach::Spans, *changes) || warp_rect_ != rect_;
   } else {
     warp_depth_.reset();
     have_output_ = seen_ = false;
@@ -248,7 +248,7 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
   if (compare) {  // gst/stage_adaptive.cpp OutputHistory::update.
     const bool first = !seen_;
     seen_ = true;
-    if (changes->all() && !first) {
+    if (busy_for(ChangeReach::Spans, *changes) && !first) {
       have_output_ = false;
     } else if (whole || changes->any()) {
       copy_frame(out_, kept_);

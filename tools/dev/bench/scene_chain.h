@@ -144,7 +144,7 @@ class AdaptiveChain {
   // pseudo3dwarp: its inputs, the output buffer and the copy of the
   // previous output the element keeps (gst/stage_adaptive.h OutputHistory),
   // the pair and the warp's state.
-  StageInputs warp_inputs_;
+  StageInputs warp_inputs_{ChangeReach::Spans};
   Plane warp_depth_;
   WarpTarget target_;
   HostFrame out_, kept_;  // the new output buffer; the element's copy of the previous output
