@@ -25,7 +25,7 @@ namespace p3d {
 // columns from its first changed tile to its last, widened by the warp's
 // reach (the warp: spans over more than kWholeWarpShare of the picture).
 enum class ChangeReach { Tiles, Rows, Spans };
-constexpr double kWholeWarpShare = 0.6;
+constexpr double kWholeWarpShare = 0.9;
 bool busy_for(ChangeReach reach, const ChangeMap &changes);
 
 // A stage's inputs of the previous frame: the frame's bytes (a copy) and
