@@ -26,6 +26,11 @@ bool busy_for(ChangeReach reach, const ChangeMap &changes) {
   }
 }
 
+ChangeReach warp_change_reach(const WarpParams &params) {
+  const HoleFill fill = warp_sanitize(params).fill;
+  return fill == HoleFill::BackgroundSmooth || fill == HoleFill::None ? ChangeReach::Spans : ChangeReach::Rows;
+}
+
 bool StageInputs::begin(bool adaptive) {
   if (!adaptive) {
     reset();
@@ -139,7 +144,7 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
   if (!pair_is_dst && !pack_args_valid(pack, pair, dst)) return -1;
   // Busy spans: their windows, widened by the reach, cover nearly every
   // row whole, and the whole warp costs less than their bookkeeping.
-  if (changes && busy_for(ChangeReach::Spans, *changes)) changes = nullptr;
+  if (changes && busy_for(warp_change_reach(params), *changes)) changes = nullptr;
   const std::vector<ColumnSpan> spans = changes ? changes->row_spans() : std::vector<ColumnSpan>();
   const std::vector<uint8_t> rows = changes ? changes->rows() : std::vector<uint8_t>();
   const bool cropped = active && active->rect != whole_picture(src.width, src.height);

@@ -27,6 +27,11 @@ namespace p3d {
 enum class ChangeReach { Tiles, Rows, Spans };
 constexpr double kWholeWarpShare = 0.9;
 bool busy_for(ChangeReach reach, const ChangeMap &changes);
+// The warp's reach with these parameters: Spans where it renders column
+// windows (BackgroundSmooth, None), Rows where it renders whole rows
+// (Background; NeighborAverage renders the whole frame on any change,
+// which only a change in every row makes worth it).
+ChangeReach warp_change_reach(const WarpParams &params);
 
 // A stage's inputs of the previous frame: the frame's bytes (a copy) and
 // the depth map, which the caller holds on to (the stages never write a
@@ -36,6 +41,9 @@ class StageInputs {
  public:
   // reach: what the stage redoes of a change (busy_for).
   explicit StageInputs(ChangeReach reach = ChangeReach::Tiles) : reach_(reach) {}
+  // A stage whose reach follows its parameters (the warp's fill) sets it
+  // before compare().
+  void set_reach(ChangeReach reach) { reach_ = reach; }
   // Before a frame: whether it is compared (adaptive and not backing off).
   // When not, the history is dropped and the stage computes the frame
   // whole, dropping what it kept too.
@@ -73,8 +81,9 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
                                   ImageView<const float> prev_out, ImageView<float> out, const ChangeMap *changes,
                                   BilateralScratch &scratch);
 
-// The warp and the pack of the rows that a changed source or depth row
-// reaches. changes: the tiles whose source or depth changed since the
+// The warp and the pack of what a changed source or depth reaches
+// (warp_render_cpu's windows, the rows they write). changes: the tiles
+// whose source or depth changed since the
 // previous call (null: everything is computed); dst then holds that
 // call's output, and pair (the frame the views are rendered into: dst
 // itself where the layout is the pair, else a buffer kept between calls)

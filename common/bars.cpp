@@ -85,7 +85,7 @@ template <class Word>
 void views_outside(const FrameView &src, const YuvToRgb &m, PixelRect active, const FrameView &pair,
                    const std::vector<uint8_t> *rows) {
   cv::parallel_for_(cv::Range(0, src.height), [&](const cv::Range &range) {
-    std::vector<Word> words(static_cast<size_t>(src.width) + 1);  // + 1: a pair's second word past an odd width
+    std::vector<Word> words(static_cast<size_t>(src.width));
     for (int y = range.start; y < range.end; ++y) {
       if (rows && !(*rows)[y]) continue;
       if (y < active.y0 || y >= active.y1) {

@@ -719,8 +719,10 @@ long long render(WarpJob &j, WarpCpuScratch &planes, const std::vector<ColumnSpa
   const Eye eyes[2] = {{warp_eye_shift(j.params, j.D, 0), 0}, {warp_eye_shift(j.params, j.D, 1), j.width}};
   const bool average = j.params.fill == HoleFill::NeighborAverage;
   const bool smooth = j.params.fill == HoleFill::BackgroundSmooth;
-  // Every smooth state is written each frame and anchors are read only where
-  // a state names one, so reused planes need no clearing.
+  // A whole frame writes every smooth state, an adaptive one the states of
+  // its windows (the planes hold the previous call's elsewhere, which
+  // changed_window reads), and anchors are read only where a state names
+  // one, so reused planes need no clearing.
   EyeScratch<Px> scratch[2];
   const size_t n = static_cast<size_t>(j.width) * j.height;
   for (int e = 0; e < 2; ++e) {

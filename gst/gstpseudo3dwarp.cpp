@@ -155,9 +155,10 @@ static gboolean frame_boundary(GstPseudo3DBase *base) {
          p3d::gst::StereoPacking::Boundary::Renegotiate;
 }
 
-// The CPU path. With adaptive the rows whose source or depth changed are
-// warped again, the fill runs over the rows they reach and the pack over
-// the output rows those reach; the rest is the previous output.
+// The CPU path. With adaptive the columns that a changed source or depth
+// reaches are warped again (warp_pack_changed_cpu), the fill runs over
+// what those reach and the pack over the output rows they touch; the rest
+// is the previous output.
 static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p3d::FrameView &src,
                                 const p3d::WarpParams &params, const p3d::PackParams &pack, const p3d::YuvToRgb &yuv,
                                 p3d::PixelRect rect, const p3d::gst::AdaptiveSettings &adaptive, GstVideoFrame *out) {
@@ -169,11 +170,15 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   bool whole = true;
   // While frames keep changing, uncompared (ChangeBackOff): the history
   // is dropped, and so is the output kept.
+  // What the warp redoes of a change follows its fill (warp_change_reach).
+  const p3d::ChangeReach reach = p3d::warp_change_reach(params);
+  state->inputs.set_reach(reach);
+  state->output.set_reach(reach);
   const bool compare = state->inputs.begin(adaptive.on);
   if (compare) {
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
     // A busy change: the whole frame costs less than keeping the rest.
-    whole = state->params.changed({params, pack, yuv, rect}) || p3d::busy_for(p3d::ChangeReach::Spans, changes) ||
+    whole = state->params.changed({params, pack, yuv, rect}) || p3d::busy_for(reach, changes) ||
             !state->output.copy_into(&base->out_info, out);
   } else {
     state->params.reset();

@@ -13,8 +13,8 @@
 // the sinks re-time their frames: when that time exceeds what is
 // reported, the stage reports it plus an eighth (so that jitter does not
 // post a message every few frames), rounded up to a whole millisecond,
-// and posts a LATENCY message, on which the application
-// (gst-launch, playbin) recalculates the pipeline's latency. The first
+// and posts a LATENCY message, on which the application recalculates the
+// pipeline's latency (gst_bin_recalculate_latency, as gst-launch does). The first
 // kWarmUp frames after a start or a caps change are not counted: they
 // allocate the stage's buffers. Plain C++ so that a unit test can drive it.
 #pragma once

@@ -35,6 +35,7 @@ class InputHistory {
  public:
   // reach: as StageInputs'.
   explicit InputHistory(ChangeReach reach = ChangeReach::Tiles) : inputs_(reach) {}
+  void set_reach(ChangeReach reach) { inputs_.set_reach(reach); }
   // StageInputs::begin: false when the frame is computed whole, uncompared.
   bool begin(bool adaptive);
   // The tiles in which this frame or its depth (a host plane; null: the
@@ -57,6 +58,7 @@ class OutputHistory {
   // reach: what the stage redoes of a change; a frame busy for it
   // (busy_for) leaves nothing of its output worth keeping.
   explicit OutputHistory(ChangeReach reach) : reach_(reach) {}
+  void set_reach(ChangeReach reach) { reach_ = reach; }
   // Copies the previous output into `out` (mapped, of `info`); false when
   // there is none of that size and format.
   bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;

@@ -749,6 +749,21 @@ TEST(AdaptiveStageInputs, BacksOffAfterABusyFrameOnly) {
   }
 }
 
+// The warp's reach follows its fill: windows for BackgroundSmooth and None,
+// whole rows for Background and NeighborAverage; a change in the middle
+// column of tiles in every row is busy only for the latter.
+TEST(AdaptiveStageInputs, WarpReachFollowsTheFill) {
+  ChangeMap middle(128, 64, false);
+  for (int ty = 0; ty < middle.tiles_y(); ++ty) middle.mark(1, ty);
+  for (const HoleFill fill : kAllFills) {
+    WarpParams p;
+    p.fill = fill;
+    const bool windows = fill == HoleFill::BackgroundSmooth || fill == HoleFill::None;
+    EXPECT_EQ(warp_change_reach(p), windows ? ChangeReach::Spans : ChangeReach::Rows) << enum_nick(kHoleFillNames, fill);
+    EXPECT_EQ(busy_for(warp_change_reach(p), middle), !windows) << enum_nick(kHoleFillNames, fill);
+  }
+}
+
 // ---- depth estimator -----------------------------------------------------------------
 
 // A picture of flat rectangles on a gradient with light noise: regions for

@@ -226,13 +226,15 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
 // it changed.
 // Backing off: the whole frame, nothing kept.
 void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *changes) {
+  const ChangeReach reach = warp_change_reach(p_.warp);
+  warp_inputs_.set_reach(reach);
   const bool compare = warp_inputs_.begin(true);
   bool whole = true;
   if (compare) {
     const ImageView<const float> prev_depth = warp_depth_ ? const_view(*warp_depth_) : ImageView<const float>();
     *changes = warp_inputs_.compare(src, const_view(*depth), prev_depth, tolerance_);
     warp_depth_ = depth;
-    whole = !have_output_ || busy_for(ChangeReach::Spans, *changes) || warp_rect_ != rect_;
+    whole = !have_output_ || busy_for(reach, *changes) || warp_rect_ != rect_;
   } else {
     warp_depth_.reset();
     have_output_ = seen_ = false;
@@ -248,7 +250,7 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
   if (compare) {  // gst/stage_adaptive.cpp OutputHistory::update.
     const bool first = !seen_;
     seen_ = true;
-    if (busy_for(ChangeReach::Spans, *changes) && !first) {
+    if (busy_for(reach, *changes) && !first) {
       have_output_ = false;
     } else if (whole || changes->any()) {
       copy_frame(out_, kept_);
