@@ -100,17 +100,8 @@ std::vector<ColumnSpan> ChangeMap::row_spans() const {
 
 double ChangeMap::span_share() const {
   double pixels = 0;
-  for (int ty = 0; ty < tiles_y_; ++ty) {
-    int first = tiles_x_, last = -1;
-    for (int tx = 0; tx < tiles_x_; ++tx)
-      if (tile(tx, ty)) {
-        first = std::min(first, tx);
-        last = tx;
-      }
-    if (last < 0) continue;
-    const PixelRect a = tile_pixels(first, ty, width_, height_), b = tile_pixels(last, ty, width_, height_);
-    pixels += static_cast<double>(b.x1 - a.x0) * (a.y1 - a.y0);
-  }
+  for (const ColumnSpan &c : row_spans())
+    if (!c.empty()) pixels += c.x1 - c.x0;
   return width_ > 0 && height_ > 0 ? pixels / (static_cast<double>(width_) * height_) : 0.0;
 }
 

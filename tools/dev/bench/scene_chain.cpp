@@ -134,12 +134,7 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
   ms->filter = sw.lap();
   warp(src, filtered, &warp_changes);
   ms->warp = sw.lap();
-  double span_pixels = 0;
-  for (const ColumnSpan &c : warp_changes.row_spans())
-    if (!c.empty()) span_pixels += c.x1 - c.x0;
-  const double pixels = static_cast<double>(warp_changes.width()) * warp_changes.height();
-  shares_ = {input.fraction(), filter_changes.fraction(), warp_changes.fraction(),
-             pixels > 0 ? span_pixels / pixels : 0.0};
+  shares_ = {input.fraction(), filter_changes.fraction(), warp_changes.fraction(), warp_changes.span_share()};
 }
 
 // gstpseudo3ddepth.cpp process_ip: the bars counted (again only where the
