@@ -229,6 +229,7 @@ static void add_processing_latency(GstPseudo3DBase *self, GstQuery *query) {
   gboolean live;
   GstClockTime min, max;
   gst_query_parse_latency(query, &live, &min, &max);
+  self->latency->set_live(live);
   const GstClockTime own = self->latency->reported();
   if (GST_CLOCK_TIME_IS_VALID(min)) min += own;
   if (GST_CLOCK_TIME_IS_VALID(max)) max += own;
@@ -519,7 +520,8 @@ static GstFlowReturn guarded(GstPseudo3DBase *self, F &&f) {
     const gint64 start = g_get_monotonic_time();
     const GstFlowReturn ret = f();
     const gint64 took_us = g_get_monotonic_time() - start;
-    if (ret == GST_FLOW_OK && self->latency->observe(static_cast<uint64_t>(took_us) * 1000u)) {
+    if (ret == GST_FLOW_OK && self->latency->observe(static_cast<uint64_t>(took_us) * 1000u) &&
+        self->latency->live()) {
       GST_INFO_OBJECT(self, "a frame takes up to %" GST_TIME_FORMAT ": posting a latency message",
                       GST_TIME_ARGS(self->latency->reported()));
       gst_element_post_message(GST_ELEMENT(self), gst_message_new_latency(GST_OBJECT(self)));

@@ -40,6 +40,7 @@ void ProcessingLatency::restart() {
 void ProcessingLatency::reset() {
   restart();
   reported_.store(0, std::memory_order_relaxed);
+  live_.store(false, std::memory_order_relaxed);
 }
 
 }  // namespace p3d::gst

@@ -13,10 +13,11 @@
 // the sinks re-time their frames: when that time exceeds what is
 // reported, the stage reports it plus an eighth (so that jitter does not
 // post a message every few frames), rounded up to a whole millisecond,
-// and posts a LATENCY message, on which the application recalculates the
-// pipeline's latency (gst_bin_recalculate_latency, as gst-launch does). The first
-// kWarmUp frames after a start or a caps change are not counted: they
-// allocate the stage's buffers. Plain C++ so that a unit test can drive it.
+// and, in a live pipeline, posts a LATENCY message, on which the
+// application recalculates the pipeline's latency
+// (gst_bin_recalculate_latency, as gst-launch does). The first kWarmUp
+// frames after a start or a caps change are not counted: they allocate
+// the stage's buffers. Plain C++ so that a unit test can drive it.
 #pragma once
 
 #include <array>
@@ -35,6 +36,11 @@ class ProcessingLatency {
   // Nanoseconds to add to the latency (any thread); 0 before a frame was
   // measured.
   uint64_t reported() const { return reported_.load(std::memory_order_relaxed); }
+  // Whether the last LATENCY query found the pipeline live (any thread): a
+  // LATENCY message means nothing to a pipeline that is not, so the stage
+  // posts none there.
+  void set_live(bool live) { live_.store(live, std::memory_order_relaxed); }
+  bool live() const { return live_.load(std::memory_order_relaxed); }
   // New caps: the next frames allocate again; what was reported stays.
   void restart();
   // Stopped: nothing reported.
@@ -44,6 +50,7 @@ class ProcessingLatency {
   std::array<uint64_t, kWindow> frames_{};
   int seen_ = 0, count_ = 0, next_ = 0;
   std::atomic<uint64_t> reported_{0};
+  std::atomic<bool> live_{false};
 };
 
 }  // namespace p3d::gst

@@ -591,11 +591,45 @@ TEST(ProcessingLatency, ReportsTheSecondLongestFrameAndOnlyGrows) {
   l.restart();  // new caps: warm-up again, the report stays
   EXPECT_FALSE(l.observe(100 * ms));
   EXPECT_EQ(l.reported(), 18 * ms);
+  l.set_live(true);
+  EXPECT_TRUE(l.live());
   l.reset();  // stopped
   EXPECT_EQ(l.reported(), 0u);
+  EXPECT_FALSE(l.live());
   EXPECT_FALSE(l.observe(5 * ms));
   EXPECT_TRUE(l.observe(5 * ms - 1));
   EXPECT_EQ(l.reported(), 6 * ms);  // 5 ms - 1 ns plus an eighth, rounded up
+}
+
+// Not live: the stages post no LATENCY message (it would only make the
+// application recalculate a latency nothing waits for).
+TEST(ProcessingLatency, StagesPostNoMessageWhenNotLive) {
+  GstElement *pipeline = gst_parse_launch(
+      "videotestsrc pattern=snow num-buffers=20 ! video/x-raw,format=I420,width=320,height=240,framerate=30/1 ! "
+      "pseudo3dconvert processing=cpu ! fakesink sync=true",
+      nullptr);
+  ASSERT_NE(pipeline, nullptr);
+  ASSERT_NE(gst_element_set_state(pipeline, GST_STATE_PLAYING), GST_STATE_CHANGE_FAILURE);
+  GstBus *bus = gst_element_get_bus(pipeline);
+  int from_stages = 0;
+  bool eos = false;
+  while (GstMessage *m = gst_bus_timed_pop_filtered(
+             bus, 60 * GST_SECOND, (GstMessageType)(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_LATENCY))) {
+    const GstMessageType type = GST_MESSAGE_TYPE(m);
+    if (type == GST_MESSAGE_LATENCY) {
+      const std::string src = GST_OBJECT_NAME(GST_MESSAGE_SRC(m));
+      from_stages += src == "depth" || src == "filter" || src == "warp";
+    }
+    if (type == GST_MESSAGE_ERROR) ADD_FAILURE() << message_text(m);
+    eos = type == GST_MESSAGE_EOS;
+    gst_message_unref(m);
+    if (type != GST_MESSAGE_LATENCY) break;
+  }
+  EXPECT_TRUE(eos);
+  EXPECT_EQ(from_stages, 0);
+  gst_object_unref(bus);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(pipeline);
 }
 
 // A live pipeline: every stage of pseudo3dconvert posts a LATENCY message
