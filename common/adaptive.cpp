@@ -73,8 +73,7 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
   if (keep) {
     const int reach = bilateral_reach(params, W, H);
     for (const PixelRect &r : changes->runs()) {
-      const PixelRect g{std::max(0, r.x0 - reach), std::max(0, r.y0 - reach), std::min(W, r.x1 + reach),
-                        std::min(H, r.y1 + reach)};
+      const PixelRect g = grown(r, reach, W, H);
       dirty.push_back(g);
       area += static_cast<double>(g.width()) * g.height();
     }

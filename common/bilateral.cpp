@@ -99,11 +99,6 @@ inline void for_each_strip(int x0, int x1, const StripFn &strip) {
   for (int x = x0; x < x1; x += kStrip) strip(x + kStrip <= x1 ? x : x1 - kStrip);
 }
 
-// r grown by `by` pixels on every side, clipped to a w x h picture.
-PixelRect grown(const PixelRect &r, int by, int w, int h) {
-  return PixelRect{std::max(0, r.x0 - by), std::max(0, r.y0 - by), std::min(w, r.x1 + by), std::min(h, r.y1 + by)};
-}
-
 // The filter at full resolution of sanitised parameters p (scale 1) on the
 // guide's luma (CV_8UC1), for the output pixels of `where` only; it reads
 // luma and depth_in within p.radius of them. depth_in does not alias

@@ -66,6 +66,11 @@ struct PixelRect {
   P3D_HD int height() const { return y1 - y0; }
 };
 P3D_HD PixelRect whole_picture(int width, int height) { return PixelRect{0, 0, width, height}; }
+// r grown by `by` pixels on every side, clipped to a width x height picture.
+P3D_HD PixelRect grown(const PixelRect &r, int by, int width, int height) {
+  return PixelRect{r.x0 - by > 0 ? r.x0 - by : 0, r.y0 - by > 0 ? r.y0 - by : 0,
+                   r.x1 + by < width ? r.x1 + by : width, r.y1 + by < height ? r.y1 + by : height};
+}
 P3D_HD bool operator==(const PixelRect &a, const PixelRect &b) {
   return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1;
 }
