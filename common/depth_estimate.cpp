@@ -5,7 +5,145 @@
 
 #include <opencv2/core.hpp>
 
+#include "row_convert.h"
+
 namespace p3d {
+
+namespace {
+
+// acc[x] += row[x] for n bytes, 16-bit sums (a block row adds at most 64
+// rows of 255).
+void add_row(uint16_t *acc, const uint8_t *row, int n) {
+  int x = 0;
+#if P3D_CPU_VECTORS
+  using namespace cv;
+  constexpr int L = v_uint8::nlanes;
+  for (; x + L <= n; x += L) {
+    v_uint16 lo, hi;
+    v_expand(vx_load(row + x), lo, hi);
+    v_store(acc + x, vx_load(acc + x) + lo);
+    v_store(acc + x + L / 2, vx_load(acc + x + L / 2) + hi);
+  }
+#endif
+  for (; x < n; ++x) acc[x] = static_cast<uint16_t>(acc[x] + row[x]);
+}
+
+// out[x - x0] = col[step * (x / 2)] for pixel columns [x0, x1): a 4:2:0
+// chroma sample's column sum for each pixel column that reads it (step 2
+// for NV12's interleaved pairs).
+void chroma_per_pixel(const uint16_t *col, int step, int x0, int x1, uint16_t *out) {
+  for (int x = x0; x < x1; ++x) out[x - x0] = col[step * (x / 2)];
+}
+
+// sums[i] = the sum of in[i B .. i B + B) for the n whole blocks of a row.
+void block_sums(const uint16_t *in, int B, int n, uint32_t *sums) {
+  int i = 0;
+#if P3D_CPU_VECTORS
+  using namespace cv;
+  constexpr int L = v_uint16::nlanes;
+  if (B == 2 || B == 4) {  // a block then adds at most 16 samples of 255: 16-bit sums
+    for (; i + L <= n; i += L) {
+      v_uint16 s;
+      if (B == 2) {
+        v_uint16 a, b;
+        v_load_deinterleave(in + 2 * i, a, b);
+        s = a + b;
+      } else {
+        v_uint16 a, b, c, d;
+        v_load_deinterleave(in + 4 * i, a, b, c, d);
+        s = a + b + c + d;
+      }
+      v_uint32 lo, hi;
+      v_expand(s, lo, hi);
+      v_store(sums + i, lo);
+      v_store(sums + i + L / 2, hi);
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    uint32_t s = 0;
+    for (int x = i * B; x < i * B + B; ++x) s += in[x];
+    sums[i] = s;
+  }
+}
+
+// One row of blocks of an 8-bit frame (blocks [i0, i1) of block row j),
+// the sums of step 1 taken from column sums: every plane's rows of the
+// block row are added up per byte column (a 4:2:0 chroma row once for each
+// pixel row that reads it), each channel's sums set out per pixel column,
+// then each block adds its columns. The same integers as summing
+// load_native3() pixel by pixel.
+void block_row_features_8bit(const FrameView &frame, int B, int j, int i0, int i1, const std::vector<uint8_t> *only,
+                             std::vector<uint16_t> (&cols)[3], std::vector<uint16_t> (&pixel)[3],
+                             std::vector<uint32_t> (&sums)[3], float *f) {
+  const int W = frame.width, H = frame.height, rows = block_extent(j, B, H);
+  const int bx = blocks_along(W, B), c0 = i0 * B, c1 = std::min(W, i1 * B), n = c1 - c0;
+  const bool rgb = is_packed_rgb(frame.format), nv12 = is_semi_planar(frame.format);
+  const int planes = rgb ? 1 : nv12 ? 2 : 3;
+  for (int p = 0; p < planes; ++p) {
+    // Byte columns of plane p that pixels [c0, c1) read.
+    const int b0 = rgb ? 4 * c0 : p == 0 ? c0 : nv12 ? 2 * (c0 / 2) : c0 / 2;
+    const int b1 = rgb ? 4 * c1 : p == 0 ? c1 : nv12 ? 2 * ((c1 - 1) / 2) + 2 : (c1 - 1) / 2 + 1;
+    cols[p].assign(static_cast<size_t>(b1), 0);
+    for (int y = j * B; y < j * B + rows; ++y) {
+      const int r = p == 0 ? y : y / 2;
+      add_row(cols[p].data() + b0, frame.plane[p] + static_cast<size_t>(r) * frame.stride[p] + b0, b1 - b0);
+    }
+  }
+  // Channel c's column sums for pixel columns [c0, c1).
+  const uint16_t *channel[3];
+  for (std::vector<uint16_t> &v : pixel) v.resize(static_cast<size_t>(n));
+  if (rgb) {
+    const int red = is_bgr_order(frame.format) ? 2 : 0;
+    const uint16_t *c = cols[0].data();
+    for (int x = c0; x < c1; ++x) {
+      pixel[0][x - c0] = c[4 * x + red];
+      pixel[1][x - c0] = c[4 * x + 1];
+      pixel[2][x - c0] = c[4 * x + 2 - red];
+    }
+    for (int c = 0; c < 3; ++c) channel[c] = pixel[c].data();
+  } else {
+    channel[0] = cols[0].data() + c0;
+    chroma_per_pixel(cols[1].data(), nv12 ? 2 : 1, c0, c1, pixel[1].data());
+    chroma_per_pixel(nv12 ? cols[1].data() + 1 : cols[2].data(), nv12 ? 2 : 1, c0, c1, pixel[2].data());
+    channel[1] = pixel[1].data();
+    channel[2] = pixel[2].data();
+  }
+  // The sums: whole blocks, then a partial last one.
+  const int whole = std::min(i1, W / B) - i0;
+  for (int c = 0; c < 3; ++c) {
+    sums[c].resize(static_cast<size_t>(i1 - i0));
+    block_sums(channel[c], B, whole, sums[c].data());
+    if (whole < i1 - i0) {
+      uint32_t s = 0;
+      for (int x = whole * B; x < n; ++x) s += channel[c][x];
+      sums[c][static_cast<size_t>(whole)] = s;
+    }
+  }
+  // The means: whole blocks several at a time (a float division is IEEE in
+  // either form), the row's partial last block alone.
+  int i = i0;
+#if P3D_CPU_VECTORS
+  if (!only) {
+    using namespace cv;
+    constexpr int L = v_float32::nlanes;
+    const v_float32 count = vx_setall_f32(static_cast<float>(B * rows));
+    for (; i + L <= i0 + whole; i += L) {
+      v_float32 m[3];
+      for (int c = 0; c < 3; ++c)
+        m[c] = v_cvt_f32(v_reinterpret_as_s32(vx_load(sums[c].data() + (i - i0)))) / count;
+      v_store_interleave(f + 3 * i, m[0], m[1], m[2]);
+    }
+  }
+#endif
+  for (; i < i1; ++i) {
+    if (only && !(*only)[static_cast<size_t>(j) * bx + i]) continue;
+    const int count = block_extent(i, B, W) * rows;
+    for (int c = 0; c < 3; ++c) f[i * 3 + c] = block_mean(sums[c][i - i0], count);
+  }
+}
+
+}  // namespace
 
 void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features,
                         const std::vector<uint8_t> *only) {
@@ -16,25 +154,40 @@ void block_features_cpu(const FrameView &frame, int block_size, std::vector<floa
   }
   const int bx = blocks_along(W, B), by = blocks_along(H, B);
   features.resize(static_cast<size_t>(bx) * by * 3);
+  const bool column_sums = !is_deep(frame.format) && B <= 64;
   // One task per block row: every block's pixels are then summed by one
   // thread, in integers, so the result does not depend on the split.
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
+    std::vector<uint16_t> cols[3];
+    std::vector<uint16_t> pixel[3];
+    std::vector<uint32_t> sums[3];
     for (int j = range.start; j < range.end; ++j) {
       const int rows = block_extent(j, B, H);
       float *f = &features[static_cast<size_t>(j) * bx * 3];
-      for (int i = 0; i < bx; ++i) {
+      int i0 = 0, i1 = bx;  // the blocks to sum: all, or from the first flagged to the last
+      if (only) {
+        const uint8_t *flags = only->data() + static_cast<size_t>(j) * bx;
+        while (i0 < bx && !flags[i0]) ++i0;
+        while (i1 > i0 && !flags[i1 - 1]) --i1;
+        if (i0 == i1) continue;
+      }
+      if (column_sums) {
+        block_row_features_8bit(frame, B, j, i0, i1, only, cols, pixel, sums, f);
+        continue;
+      }
+      for (int i = i0; i < i1; ++i) {
         if (only && !(*only)[static_cast<size_t>(j) * bx + i]) continue;
-        const int cols = block_extent(i, B, W);
+        const int cols_i = block_extent(i, B, W);
         uint32_t sum[3] = {0, 0, 0};
         for (int y = j * B; y < j * B + rows; ++y)
-          for (int x = i * B; x < i * B + cols; ++x) {
+          for (int x = i * B; x < i * B + cols_i; ++x) {
             int c[3];
             load_native3(frame, x, y, c);
             sum[0] += c[0];
             sum[1] += c[1];
             sum[2] += c[2];
           }
-        for (int c = 0; c < 3; ++c) f[i * 3 + c] = block_mean(sum[c], cols * rows);
+        for (int c = 0; c < 3; ++c) f[i * 3 + c] = block_mean(sum[c], cols_i * rows);
       }
     }
   });
@@ -226,8 +379,11 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   if (!(grid == hq_grid_)) {
     block_hypotheses_cpu(params.hypothesis, bx, by, W, H, B, hq_);
     hq_grid_ = grid;
+    regions_.forget();  // its tiles' statistics are of the old hypotheses
   }
-  regions_.label(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), hq_.data());
+  // Adaptive calls relabel only the tiles whose smoothed features changed.
+  regions_.label(smoothed_, bx, by, params.edge_threshold, !is_packed_rgb(frame.format), hq_.data(),
+                 changes != nullptr);
   const std::vector<int> &labels = regions_.labels();
 
   const size_t n = static_cast<size_t>(bx) * by;
@@ -237,10 +393,14 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
     for (int j = range.start; j < range.end; ++j) {
       bool changed = false;
+      int region = -1;  // a row's blocks come in runs of one region: its depth once a run
+      float r = 0.f;
       for (size_t k = static_cast<size_t>(j) * bx; k < static_cast<size_t>(j + 1) * bx; ++k) {
-        const int r = labels[k];
-        const float fresh =
-            block_depth_value(params, regions_.sum(r), regions_.count(r), regions_.max(r), hq_[k]);  // step 4
+        if (labels[k] != region) {
+          region = labels[k];
+          r = region_depth(params.ground_contact, regions_.sum(region), regions_.count(region), regions_.max(region));
+        }
+        const float fresh = block_depth_from_region(params, r, hq_[k]);  // step 4
         const float out = temporal_output(decision, block_depth_[k], fresh, params.temporal_smoothing);
         changed = changed || std::memcmp(&out, &block_depth_[k], sizeof out) != 0;
         block_depth_[k] = out;

@@ -18,7 +18,7 @@
 //     since the block last moved, so that camera noise does not flip edges).
 //     Regions are the connected components of that graph. A component's label
 //     is the smallest block index (by * blocks_x + bx) in it, so any correct
-//     connected-components algorithm (union-find in parallel strips on the
+//     connected-components algorithm (union-find in parallel tiles on the
 //     CPU, common/block_regions.h; parallel union-find on the GPU) gives
 //     identical labels.
 //  3. Hypothesis. h(block) = hypothesis evaluated at the block's centre
@@ -48,9 +48,10 @@
 //     of block_size is a size change of the block grid, so also a cut.)
 //     Steps 1-4 run on every frame, reused or not, so labels() always
 //     describe the current frame; an adaptive call (estimate_blocks() with
-//     a ChangeMap) sums step 1 only over the blocks a changed tile touches
-//     and leaves steps 2-4 out on a reused frame, whose output does not
-//     depend on them: the same block depths.
+//     a ChangeMap) sums step 1 only over the blocks a changed tile touches,
+//     labels again only the tiles of blocks whose smoothed features changed
+//     (BlockRegions keeps the others), and leaves steps 2-4 out on a reused
+//     frame, whose output does not depend on them: the same block depths.
 //  6. Expansion. Every pixel takes its block's depth (piecewise constant; the
 //     cross-bilateral filter aligns the block edges with image edges later).
 // Depth convention: 0 = farthest, 1 = nearest.
@@ -191,12 +192,16 @@ P3D_HD float region_depth(float ground_contact, uint64_t region_sum, uint32_t re
   return ground_contact * r_near + (1.f - ground_contact) * r_mean;
 }
 
+// Step 4: a block's depth from its region's depth r and its own hq.
+P3D_HD float block_depth_from_region(const DepthParams &p, float r, uint32_t hq) {
+  const float h_q = static_cast<float>(hq) / 65535.f;
+  return p.region_weight * r + (1.f - p.region_weight) * h_q;
+}
+
 // Step 4: a block's depth from its region's statistics and its own hq.
 P3D_HD float block_depth_value(const DepthParams &p, uint64_t region_sum, uint32_t region_count, uint32_t region_max,
                                uint32_t hq) {
-  const float r = region_depth(p.ground_contact, region_sum, region_count, region_max);
-  const float h_q = static_cast<float>(hq) / 65535.f;
-  return p.region_weight * r + (1.f - p.region_weight) * h_q;
+  return block_depth_from_region(p, region_depth(p.ground_contact, region_sum, region_count, region_max), hq);
 }
 
 // Step 5, the mean |difference|. A float sum would depend on the summation

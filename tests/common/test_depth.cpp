@@ -126,15 +126,15 @@ TEST(DepthFeatures, YuvFeaturesAreNativeChannels) {
 
 // Step 1: every block's means are those of load_native3() summed over its
 // pixels, for every format, odd and even sizes (partial blocks), odd and
-// even block sizes; the adaptive call computes its subset of blocks and
-// leaves the others as they were.
+// even block sizes, rows of many vectors; the adaptive call computes its
+// subset of blocks and leaves the others as they were.
 TEST(DepthFeatures, MeansAreThoseOfEveryPixelsNativeChannels) {
   const uint32_t seed = std::random_device{}();
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
   std::mt19937 rng(seed);
   for (PixelFormat fmt : test::kAllFormats)
-    for (int B : {2, 3, 4, 8})
-      for (const auto &size : {std::pair<int, int>{37, 21}, {64, 32}, {2, 2}, {1, 5}}) {
+    for (int B : {2, 3, 4, 5, 8, 64})
+      for (const auto &size : {std::pair<int, int>{37, 21}, {64, 32}, {2, 2}, {1, 5}, {131, 67}}) {
         HostFrame f(fmt, size.first, size.second, kPad);
         f.fill_random(rng());
         const FrameView v = f.view();
@@ -255,10 +255,28 @@ TEST(DepthRegions, MatchesFloodFillOnRandomMazes) {
   }
 }
 
-// BlockRegions labels strips of block rows in parallel and joins them
-// serially; its labels and each region's hq sum, count and max must be
-// those of a flood fill, whatever the number of threads (and so of
-// strips): grids up to 300 block rows, one thread and at least four.
+// Each region's statistics as a flood fill gives them, checked against
+// BlockRegions at every region's label.
+void expect_region_stats(const BlockRegions &regions, const std::vector<int> &want, const std::vector<uint32_t> &hq,
+                         const std::string &where) {
+  std::vector<uint64_t> sum(want.size(), 0);
+  std::vector<uint32_t> count(want.size(), 0), max(want.size(), 0);
+  for (size_t k = 0; k < want.size(); ++k) {
+    sum[want[k]] += hq[k];
+    ++count[want[k]];
+    max[want[k]] = std::max(max[want[k]], hq[k]);
+  }
+  for (size_t k = 0; k < want.size(); ++k) {
+    if (want[k] != static_cast<int>(k)) continue;
+    ASSERT_TRUE(regions.sum(k) == sum[k] && regions.count(k) == count[k] && regions.max(k) == max[k])
+        << "region " << k << ", " << where;
+  }
+}
+
+// BlockRegions labels tiles of blocks in parallel and joins them serially;
+// its labels and each region's hq sum, count and max must be those of a
+// flood fill, whatever the number of threads: grids of up to 6 x 19 tiles,
+// one thread and at least four.
 TEST(DepthRegions, StatisticsOfEveryRegionWhateverTheThreads) {
   const uint32_t seed = std::random_device{}();
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
@@ -274,25 +292,64 @@ TEST(DepthRegions, StatisticsOfEveryRegionWhateverTheThreads) {
       hq.push_back(rng() % 65536);
     }
     const std::vector<int> want = flood_labels(feat, bx, by, 24.f);
-    std::vector<uint64_t> sum(want.size(), 0);
-    std::vector<uint32_t> count(want.size(), 0), max(want.size(), 0);
-    for (size_t k = 0; k < want.size(); ++k) {
-      sum[want[k]] += hq[k];
-      ++count[want[k]];
-      max[want[k]] = std::max(max[want[k]], hq[k]);
-    }
     for (int t : {1, std::max(threads, 4)}) {
       cv::setNumThreads(t);
       BlockRegions regions;
       regions.label(feat, bx, by, 24.f, false, hq.data());
-      ASSERT_EQ(regions.labels(), want) << bx << "x" << by << ", " << t << " threads";
-      for (size_t k = 0; k < want.size(); ++k) {
-        if (want[k] != static_cast<int>(k)) continue;
-        ASSERT_TRUE(regions.sum(k) == sum[k] && regions.count(k) == count[k] && regions.max(k) == max[k])
-            << "region " << k << " of " << bx << "x" << by << ", " << t << " threads";
-      }
+      const std::string where = std::to_string(bx) + "x" + std::to_string(by) + ", " + std::to_string(t) + " threads";
+      ASSERT_EQ(regions.labels(), want) << where;
+      expect_region_stats(regions, want, hq, where);
     }
     cv::setNumThreads(threads);
+  }
+}
+
+// Incremental calls label again only the tiles whose features changed and
+// join the tiles again. After edits of small rects (which merge and split
+// regions that reach across the grid) the labels and statistics must be a
+// flood fill's, exactly the changed tiles labelled, and a new threshold
+// must label every tile.
+TEST(DepthRegions, IncrementalLabellingIsAFreshOne) {
+  const uint32_t seed = std::random_device{}();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  constexpr int TW = BlockRegions::kTileW, TH = BlockRegions::kTileH;
+  for (int trial = 0; trial < 6; ++trial) {
+    const int bx = 20 + rng() % 140, by = 10 + rng() % 90;
+    const int tiles_x = (bx + TW - 1) / TW, tiles = tiles_x * ((by + TH - 1) / TH);
+    std::vector<float> feat;
+    std::vector<uint32_t> hq;
+    auto colour = [&](size_t k, float v) {
+      feat[3 * k] = v;
+      feat[3 * k + 1] = v * 0.5f;
+      feat[3 * k + 2] = 3.f;
+    };
+    feat.resize(3 * static_cast<size_t>(bx) * by);
+    for (size_t k = 0; k < static_cast<size_t>(bx) * by; ++k) {
+      colour(k, (rng() % 100) < 59 ? 20.f : 220.f);
+      hq.push_back(rng() % 65536);
+    }
+    BlockRegions regions;
+    regions.label(feat, bx, by, 24.f, false, hq.data(), true);
+    for (int step = 0; step < 20; ++step) {
+      const std::string where = std::to_string(bx) + "x" + std::to_string(by) + ", step " + std::to_string(step);
+      std::vector<uint8_t> changed(static_cast<size_t>(tiles), 0);
+      const int w = 1 + rng() % 6, h = 1 + rng() % 6, x0 = rng() % bx, y0 = rng() % by;
+      for (int y = y0; y < std::min(by, y0 + h); ++y)
+        for (int x = x0; x < std::min(bx, x0 + w); ++x) {
+          const size_t k = static_cast<size_t>(y) * bx + x;
+          const float v = (rng() % 100) < 59 ? 20.f : 220.f;
+          if (feat[3 * k] != v) changed[(y / TH) * tiles_x + x / TW] = 1;
+          colour(k, v);
+        }
+      const float threshold = step == 13 ? 30.f : 24.f;  // one step with another threshold
+      regions.label(feat, bx, by, threshold, false, hq.data(), true);
+      const std::vector<int> want = flood_labels(feat, bx, by, threshold);
+      ASSERT_EQ(regions.labels(), want) << where;
+      expect_region_stats(regions, want, hq, where);
+      const int expected = step == 13 || step == 14 ? tiles : static_cast<int>(std::count(changed.begin(), changed.end(), 1));
+      ASSERT_EQ(regions.tiles_labelled(), expected) << where;
+    }
   }
 }
 
