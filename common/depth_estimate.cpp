@@ -327,9 +327,25 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   const bool all_touched =
       incremental ? std::find(touched.begin(), touched.end(), 0) == touched.end() : !changes || changes->all();
   bool features_current = changes != nullptr;
+  // Incremental: the reference differs from features_ only in the rows a
+  // change touched since it was taken (ref_behind_), so those rows are
+  // the copy; after a whole sum any row may.
+  if (incremental) {
+    ref_behind_.resize(by, 1);
+    for (int j = 0; j < by; ++j) ref_behind_[j] |= row_touched[j];
+  } else {
+    ref_behind_.assign(by, 1);
+  }
   if (decision != TemporalDecision::Reuse) {
-    if (changes && !all_touched) {
+    if (incremental && !all_touched && ref_features_.size() == features_.size()) {
+      for (int j = 0; j < by; ++j)
+        if (ref_behind_[j])
+          std::copy(features_.begin() + j * row_values, features_.begin() + (j + 1) * row_values,
+                    ref_features_.begin() + j * row_values);
+      std::fill(ref_behind_.begin(), ref_behind_.end(), 0);
+    } else if (changes && !all_touched) {
       ref_features_ = features_;
+      ref_behind_.assign(by, 0);
     } else {
       ref_features_.swap(features_);
       features_current = false;

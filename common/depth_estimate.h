@@ -278,6 +278,7 @@ class DepthEstimatorCpu {
   int bx_ = 0, by_ = 0, block_ = 0, width_ = 0, height_ = 0;
   std::vector<float> features_;      // 3 per block, this frame
   std::vector<float> ref_features_;  // 3 per block, last computed frame
+  std::vector<uint8_t> ref_behind_;  // block rows where features_ may differ from ref_features_
   std::vector<float> smoothed_;      // 3 per block, step 2's s
   std::vector<uint64_t> row_diff_;   // step 5's fixed-point sum, per block row
   // The grid step 3's hypotheses were computed for.
