@@ -36,24 +36,34 @@ void count_row(const FrameView &f, int y, int luma_threshold, uint32_t *row, uin
 
 }  // namespace
 
-// Bands of rows in parallel, each with column counts of its own, added up
-// at the end (integers: the order does not matter).
-void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *counts) {
-  counts->rows.assign(static_cast<size_t>(frame.height), 0);
-  counts->cols.assign(static_cast<size_t>(frame.width), 0);
-  constexpr int kBandRows = 64;
-  const int bands = (frame.height + kBandRows - 1) / kBandRows;
-  std::vector<std::vector<uint32_t>> band_cols(static_cast<size_t>(bands));
+// Bands of kChangeTile rows in parallel, each with column counts of its
+// own, added up at the end (integers: the order does not matter). Given
+// the changes since the frame the counts hold, only the bands with a
+// changed tile are counted again; the others' rows and column counts are
+// that frame's, so the sums are this frame's.
+void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *counts, const ChangeMap *changes) {
+  const size_t W = static_cast<size_t>(frame.width), H = static_cast<size_t>(frame.height);
+  const int bands = change_tiles(frame.height);
+  const bool some = changes && changes->width() == frame.width && changes->height() == frame.height &&
+                    counts->rows.size() == H && counts->cols.size() == W && counts->band_cols.size() == bands * W;
+  if (!some) {
+    counts->rows.assign(H, 0);
+    counts->band_cols.assign(bands * W, 0);
+  }
   cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range &range) {
     for (int b = range.start; b < range.end; ++b) {
-      std::vector<uint32_t> &cols = band_cols[static_cast<size_t>(b)];
-      cols.assign(static_cast<size_t>(frame.width), 0);
-      for (int y = b * kBandRows; y < std::min(frame.height, (b + 1) * kBandRows); ++y)
-        count_row(frame, y, luma_threshold, &counts->rows[static_cast<size_t>(y)], cols.data());
+      if (some && !changes->row_changed(b)) continue;
+      uint32_t *cols = counts->band_cols.data() + b * W;
+      std::fill(cols, cols + W, 0u);
+      for (int y = b * kChangeTile; y < std::min(frame.height, (b + 1) * kChangeTile); ++y)
+        count_row(frame, y, luma_threshold, &counts->rows[static_cast<size_t>(y)], cols);
     }
   });
-  for (const std::vector<uint32_t> &cols : band_cols)
-    for (int x = 0; x < frame.width; ++x) counts->cols[static_cast<size_t>(x)] += cols[static_cast<size_t>(x)];
+  counts->cols.assign(W, 0);
+  for (int b = 0; b < bands; ++b) {
+    const uint32_t *cols = counts->band_cols.data() + b * W;
+    for (size_t x = 0; x < W; ++x) counts->cols[x] += cols[x];
+  }
 }
 
 namespace {

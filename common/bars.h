@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "bilateral.h"
+#include "change_map.h"
 #include "depth_estimate.h"
 #include "frame.h"
 #include "warp.h"
@@ -63,10 +64,17 @@ P3D_HD bool bar_pixel_bright(const FrameView &f, int x, int y, int luma_threshol
 }
 
 // Bright pixels of each row (height values) and of each column (width).
+// band_cols: bar_counts_cpu's column counts of each band of kChangeTile
+// rows, kept so that a frame recounts only the bands that changed.
 struct BarCounts {
-  std::vector<uint32_t> rows, cols;
+  std::vector<uint32_t> rows, cols, band_cols;
 };
-void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *counts);
+// changes: the tiles that changed since the frame `counts` holds (from
+// this function), null: every row is counted. With a reuse tolerance the
+// bands of tiles under it keep the counts of the frame they were counted
+// on, as the stages keep their other results there.
+void bar_counts_cpu(const FrameView &frame, int luma_threshold, BarCounts *counts,
+                    const ChangeMap *changes = nullptr);
 
 // The picture's bounding rect, its top left corner moved onto kBarAlign
 // cells; empty when no row has picture.

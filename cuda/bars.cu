@@ -43,6 +43,7 @@ bool BarCountsGpu::take(BarCounts *counts, CudaStatus *status) {
   }
   counts->rows.assign(host_, host_ + height_);
   counts->cols.assign(host_ + height_, host_ + height_ + width_);
+  counts->band_cols.clear();  // not bar_counts_cpu's: its next call counts every band
   return true;
 }
 

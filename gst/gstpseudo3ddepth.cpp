@@ -74,6 +74,7 @@ struct DepthState {
   // in (the estimator's history is of that picture).
   p3d::BarTracker bars;
   p3d::BarCounts counts;
+  bool counts_current = false;  // counts holds the last frame's, counted on the CPU
   p3d::PixelRect estimated_rect;
 #if HAVE_CUDA
   p3d::BarCountsGpu bar_counts_gpu;
@@ -160,6 +161,7 @@ static p3d::DepthParams frame_params(GstPseudo3DDepth *self) {
     self->state->history.reset();
     self->state->last_plane.reset();
     self->state->bars.reset();
+    self->state->counts_current = false;
   }
   GST_OBJECT_LOCK(self);
   const p3d::DepthParams p = self->params;
@@ -177,14 +179,20 @@ static bool crop_bars(GstPseudo3DDepth *self) {
 
 // With crop-bars=auto: this frame's bar counts, into the tracker. On the
 // GPU the counts come back before the depth is queued (a wait for one small
-// kernel and a copy of a few kilobytes). unchanged: the frame's bytes are
-// the previous frame's (adaptive), whose counts are taken again.
+// kernel and a copy of a few kilobytes). changes: the tiles that changed
+// since the previous frame (adaptive, system memory; null: unknown); when
+// that frame was counted here too, only the changed bands are counted
+// again, and an unchanged frame takes its counts again.
 static GstFlowReturn observe_bars(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::FrameView &view,
-                                  bool unchanged) {
+                                  const p3d::ChangeMap *changes) {
   GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
   DepthState *state = self->state;
-  if (unchanged && state->counts.rows.size() == static_cast<size_t>(view.height) &&
+  const bool counted_last = state->counts_current;
+  state->counts_current = false;
+  if (!counted_last) changes = nullptr;
+  if (changes && !changes->any() && state->counts.rows.size() == static_cast<size_t>(view.height) &&
       state->counts.cols.size() == static_cast<size_t>(view.width)) {
+    state->counts_current = true;
     state->bars.observe(state->counts);
     return GST_FLOW_OK;
   }
@@ -198,7 +206,8 @@ static GstFlowReturn observe_bars(GstPseudo3DDepth *self, GstPseudo3DPath path, 
 #else
   (void)path;
 #endif
-  p3d::bar_counts_cpu(view, luma_threshold, &state->counts);
+  p3d::bar_counts_cpu(view, luma_threshold, &state->counts, changes);
+  state->counts_current = true;
   state->bars.observe(state->counts);
   return GST_FLOW_OK;
 }
@@ -262,7 +271,8 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   const bool adaptive_cpu = path == GST_PSEUDO3D_PATH_CPU && state->history.begin(adaptive.on);
   p3d::ChangeMap changes;
   if (adaptive_cpu) changes = state->history.compare(view, nullptr, adaptive.tolerance);
-  if (crop && observe_bars(self, path, view, adaptive_cpu && !changes.any()) != GST_FLOW_OK) return GST_FLOW_ERROR;
+  if (!crop) state->counts_current = false;  // the counts fall behind the history
+  if (crop && observe_bars(self, path, view, adaptive_cpu ? &changes : nullptr) != GST_FLOW_OK) return GST_FLOW_ERROR;
   bool moved = false;
   const p3d::PixelRect rect = frame_rect(self, path, params, view, crop, &moved);
   const p3d::FrameView active = p3d::sub_frame(view, rect);
@@ -378,6 +388,7 @@ static void release(GstPseudo3DBase *base) {
   state->history.reset();
   state->last_plane.reset();
   state->bars.reset();
+  state->counts_current = false;
   state->estimated_rect = p3d::PixelRect();
   state->cpu = p3d::DepthEstimatorCpu();
 #if HAVE_CUDA

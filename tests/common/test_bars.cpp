@@ -20,6 +20,7 @@
 //    pillarbox (rendered apart and placed), every fill; the pack then
 //    packs that pair. The adaptive warp with a rect is in
 //    test_adaptive.cpp.
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -86,6 +87,47 @@ TEST(BarCounts, CountThePixelsOverTheBarLevel) {
       EXPECT_EQ(c.rows, rows) << "full range " << full_range;
       EXPECT_EQ(c.cols, cols) << "full range " << full_range;
     }
+  }
+}
+
+// Counting again only the bands with a changed tile, from the counts of
+// the frame before, gives the counts of the whole frame: random tiles of a
+// letterboxed frame turned black or bright, frame after frame, and a frame
+// of another size (counted whole).
+TEST(BarCounts, ChangedBandsGiveTheWholeFramesCounts) {
+  const uint32_t seed = std::random_device{}();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  for (const PixelFormat format : {PixelFormat::I420, PixelFormat::NV12, PixelFormat::BGRA}) {
+    SCOPED_TRACE(test::format_name(format));
+    const int w = 150, h = 101;
+    HostFrame f = letterboxed(format, w, h, PixelRect{0, 14, w, 87}, 40, rng());
+    const int threshold = bar_luma_threshold(YuvToRgb());
+    BarCounts kept;
+    bar_counts_cpu(f.view(), threshold, &kept);
+    for (int step = 0; step < 12; ++step) {
+      HostFrame next = letterboxed(format, w, h, PixelRect{0, 14, w, 87}, 40, rng());
+      ChangeMap changes(w, h, false);
+      const FrameView from = next.view(), to = f.view();
+      for (int k = 0; k < 3; ++k) {  // a few tiles of the new frame into the old one
+        const int tx = rng() % changes.tiles_x(), ty = rng() % changes.tiles_y();
+        const PixelRect r = tile_pixels(tx, ty, w, h);
+        for (int p = 0; p < frame_plane_count(format); ++p) {
+          const PlaneBox b = plane_box(format, p, r);
+          for (int y = b.r0; y < b.r1; ++y)
+            std::memcpy(to.plane[p] + y * to.stride[p] + b.b0, from.plane[p] + y * from.stride[p] + b.b0, b.b1 - b.b0);
+        }
+        changes.mark(tx, ty);
+      }
+      bar_counts_cpu(f.view(), threshold, &kept, &changes);
+      const BarCounts whole = counts_of(f);
+      ASSERT_EQ(kept.rows, whole.rows) << "step " << step;
+      ASSERT_EQ(kept.cols, whole.cols) << "step " << step;
+    }
+    HostFrame other = letterboxed(format, w + 10, h, PixelRect{0, 14, w + 10, 87}, 40, rng());
+    const ChangeMap none(w + 10, h, false);
+    bar_counts_cpu(other.view(), threshold, &kept, &none);  // other sizes: counted whole
+    EXPECT_EQ(kept.cols, counts_of(other).cols);
   }
 }
 

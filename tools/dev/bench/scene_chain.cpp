@@ -145,7 +145,8 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
 AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *changes) {
   const bool compare = depth_inputs_.begin(true);
   *changes = compare ? depth_inputs_.compare(src, {}, {}, tolerance_) : ChangeMap(src.width, src.height, true);
-  if (changes->any() || counts_.rows.empty()) bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_);
+  if (changes->any() || counts_.rows.empty())
+    bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_, compare ? changes : nullptr);
   bars_.observe(counts_);
   const PixelRect rect = bars_.active(src.width, src.height);
   if (rect != rect_) {
