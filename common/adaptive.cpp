@@ -2,6 +2,9 @@
 #include "adaptive.h"
 
 #include <algorithm>
+#include <cstring>
+
+#include <opencv2/core.hpp>
 
 namespace p3d {
 
@@ -135,10 +138,52 @@ long long warp_active_cpu(const WarpParams &params, const FrameView &src, const 
 
 }  // namespace
 
+void copy_flagged_rows(const FrameView &from, const FrameView &to, const std::vector<uint8_t> &rows, bool flagged) {
+  const bool yuv = !is_packed_rgb(to.format);
+  const int n = static_cast<int>(rows.size());
+  for (int p = 0; p < frame_plane_count(to.format); ++p) {
+    int row_bytes = 0, plane_rows = 0;
+    frame_plane_size(to.format, to.width, to.height, p, &row_bytes, &plane_rows);
+    const bool chroma = yuv && p > 0;
+    cv::parallel_for_(cv::Range(0, plane_rows), [&](const cv::Range &range) {
+      for (int y = range.start; y < range.end; ++y) {
+        const bool f = chroma ? rows[2 * y] || (2 * y + 1 < n && rows[2 * y + 1]) : rows[y] != 0;
+        if (f != flagged) continue;
+        std::memcpy(to.plane[p] + static_cast<size_t>(y) * to.stride[p],
+                    from.plane[p] + static_cast<size_t>(y) * from.stride[p], static_cast<size_t>(row_bytes));
+      }
+    });
+  }
+}
+
+namespace {
+
+// What the pack rewrites of a 4:2:0 output: whole 2 x 2 blocks, so a
+// flagged row takes its pair with it.
+std::vector<uint8_t> whole_pairs(std::vector<uint8_t> rows, PixelFormat f) {
+  if (is_packed_rgb(f)) return rows;
+  for (size_t y = 0; y + 1 < rows.size(); y += 2) rows[y] = rows[y + 1] = rows[y] || rows[y + 1];
+  return rows;
+}
+
+// The pack of the output rows flagged in `rows`, the others taken from the
+// kept previous output when there is one.
+void pack_rows_over(const PackParams &pack, const FrameView &in, const FrameView &dst, std::vector<uint8_t> rows,
+                    KeptOutput *kept) {
+  if (kept && kept->previous) {
+    rows = whole_pairs(std::move(rows), dst.format);
+    copy_flagged_rows(*kept->previous, dst, rows, false);
+  }
+  pack_cpu(pack, in, dst, &rows);
+  if (kept) kept->written = std::move(rows);
+}
+
+}  // namespace
+
 long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack, const FrameView &src,
                                 const YuvToRgb &m, ImageView<const float> depth, const FrameView &pair,
                                 const FrameView &dst, WarpCpuScratch &scratch, const ChangeMap *changes,
-                                const ActiveArea *active) {
+                                const ActiveArea *active, KeptOutput *kept) {
   const bool pair_is_dst = pair.plane[0] == dst.plane[0];
   if (!pair_is_dst && !pack_args_valid(pack, pair, dst)) return -1;
   // Busy spans: their windows, widened by the reach, cover nearly every
@@ -150,30 +195,38 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
   if (cropped && (!warp_frames_fit(src, depth, pair) || active->rect.empty() ||
                   active->rect.x1 > src.width || active->rect.y1 > src.height))
     return -1;
+  if (kept) kept->written.assign(static_cast<size_t>(dst.height), 1);
+  // Rendered into dst itself, the views are written in windows of rows:
+  // every row starts as the previous output.
+  if (changes && pair_is_dst && kept && kept->previous) copy_flagged_rows(*kept->previous, dst, kept->written, true);
   std::vector<uint8_t> written;
   const long long holes =
       cropped ? warp_active_cpu(params, src, m, depth, pair, scratch, changes ? &spans : nullptr,
                                 changes ? &rows : nullptr, *active, &written)
               : warp_render_cpu(params, src, m, depth, pair, scratch, changes ? &spans : nullptr);
-  if (holes < 0 || pair_is_dst) return holes;
+  if (holes < 0) return holes;
+  if (changes && !cropped) written = warp_rows_written(params, src.width, spans);
+  if (pair_is_dst) {
+    if (changes && kept) kept->written = whole_pairs(written, dst.format);
+    return holes;
+  }
   if (!changes) {
     pack_cpu(pack, pair, dst);
     return holes;
   }
-  if (!cropped) written = warp_rows_written(params, src.width, spans);
-  const std::vector<uint8_t> out_rows = pack_rows_reading(pack, pair.width, pair.height, written);
-  pack_cpu(pack, pair, dst, &out_rows);
+  pack_rows_over(pack, pair, dst, pack_rows_reading(pack, pair.width, pair.height, written), kept);
   return holes;
 }
 
-bool pack_changed_cpu(const PackParams &params, const FrameView &in, const FrameView &dst, const ChangeMap *changes) {
+bool pack_changed_cpu(const PackParams &params, const FrameView &in, const FrameView &dst, const ChangeMap *changes,
+                      KeptOutput *kept) {
   if (!pack_args_valid(params, in, dst)) return false;
+  if (kept) kept->written.assign(static_cast<size_t>(dst.height), 1);
   if (!changes) {
     pack_cpu(params, in, dst);
     return true;
   }
-  const std::vector<uint8_t> rows = pack_rows_reading(params, in.width, in.height, changes->rows());
-  pack_cpu(params, in, dst, &rows);
+  pack_rows_over(params, in, dst, pack_rows_reading(params, in.width, in.height, changes->rows()), kept);
   return true;
 }
 

@@ -81,25 +81,42 @@ bool bilateral_filter_changed_cpu(const BilateralParams &params, const FrameView
                                   ImageView<const float> prev_out, ImageView<float> out, const ChangeMap *changes,
                                   BilateralScratch &scratch);
 
+// Where a changed frame's output starts from: the previous output, kept
+// by the caller (dst's format and size), and the rows the call wrote.
+// The rows it does not rewrite whole are copied from `previous`, so only
+// `written` (one flag a row of dst: 4:2:0 rows in pairs, with their chroma
+// row) can differ from it, which is all the caller's copy needs again.
+struct KeptOutput {
+  const FrameView *previous = nullptr;
+  std::vector<uint8_t> written;
+};
+
 // The warp and the pack of what a changed source or depth reaches
 // (warp_render_cpu's windows, the rows they write). changes: the tiles
 // whose source or depth changed since the
 // previous call (null: everything is computed); dst then holds that
-// call's output, and pair (the frame the views are rendered into: dst
-// itself where the layout is the pair, else a buffer kept between calls)
-// its pair. Returns warp_render_cpu()'s hole count, or -1 when the frames
-// do not fit (nothing written).
+// call's output, or kept->previous does, and pair (the frame the views
+// are rendered into: dst itself where the layout is the pair, else a
+// buffer kept between calls) its pair. Returns warp_render_cpu()'s hole
+// count, or -1 when the frames do not fit (nothing written).
 //
 // active: the views rendered inside a rect only (bars.h, ActiveArea).
 long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack, const FrameView &src,
                                 const YuvToRgb &m, ImageView<const float> depth, const FrameView &pair,
                                 const FrameView &dst, WarpCpuScratch &scratch, const ChangeMap *changes,
-                                const ActiveArea *active = nullptr);
+                                const ActiveArea *active = nullptr, KeptOutput *kept = nullptr);
 
 
 // The pack of the output rows that read a changed input row. changes: the
 // tiles of the input that changed since the previous call (null: all);
-// dst then holds that call's output. False when the frames do not fit.
-bool pack_changed_cpu(const PackParams &params, const FrameView &in, const FrameView &dst, const ChangeMap *changes);
+// dst then holds that call's output, or kept->previous does. False when
+// the frames do not fit.
+bool pack_changed_cpu(const PackParams &params, const FrameView &in, const FrameView &dst, const ChangeMap *changes,
+                      KeptOutput *kept = nullptr);
+
+// Copies the rows of `from` into `to` (same format and size) whose flag
+// in `rows` (one a row) equals `flagged`; a 4:2:0 chroma row goes with
+// its two rows, flagged when either is.
+void copy_flagged_rows(const FrameView &from, const FrameView &to, const std::vector<uint8_t> &rows, bool flagged);
 
 }  // namespace p3d

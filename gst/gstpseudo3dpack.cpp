@@ -229,6 +229,7 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   // Adaptive: the output rows that read a changed input row are packed
   // again, the rest is the previous output.
   p3d::ChangeMap changes;
+  p3d::FrameView previous;
   bool whole = true;
   // While frames keep changing, uncompared (ChangeBackOff): the history
   // is dropped, and so is the output kept.
@@ -236,17 +237,19 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
   if (compare) {
     changes = state->input.compare(src, nullptr, adaptive.tolerance);
     // A change in every row of tiles: nothing of the previous output survives.
-    whole = state->params.changed(params) || p3d::busy_for(p3d::ChangeReach::Rows, changes) || !state->output.copy_into(&base->out_info, out);
+    whole = state->params.changed(params) || p3d::busy_for(p3d::ChangeReach::Rows, changes) ||
+            !state->output.previous(&base->out_info, &previous);
   } else {
     state->params.reset();
     state->output.reset();
   }
-  if (!p3d::pack_changed_cpu(params, src, dst, whole ? nullptr : &changes)) {
+  p3d::KeptOutput kept{whole ? nullptr : &previous, {}};  // the rows not packed again
+  if (!p3d::pack_changed_cpu(params, src, dst, whole ? nullptr : &changes, &kept)) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the layout"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (compare) state->output.update(&base->out_info, out, changes, whole);
+  if (compare) state->output.update(&base->out_info, out, changes, whole, kept.written);
   return GST_FLOW_OK;
 }
 

@@ -167,6 +167,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
   const p3d::gst::DepthPlanePtr depth = p3d::gst::frame_depth_plane(inbuf);
   const p3d::FrameView dst = p3d::gst::frame_view(out);
   p3d::ChangeMap changes;
+  p3d::FrameView previous;
   bool whole = true;
   // While frames keep changing, uncompared (ChangeBackOff): the history
   // is dropped, and so is the output kept.
@@ -179,7 +180,7 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
     changes = state->inputs.compare(src, depth, adaptive.tolerance);
     // A busy change: the whole frame costs less than keeping the rest.
     whole = state->params.changed({params, pack, yuv, rect}) || p3d::busy_for(reach, changes) ||
-            !state->output.copy_into(&base->out_info, out);
+            !state->output.previous(&base->out_info, &previous);
   } else {
     state->params.reset();
     state->output.reset();
@@ -195,14 +196,16 @@ static GstFlowReturn render_cpu(GstPseudo3DWarp *self, GstBuffer *inbuf, const p
     state->active_pair.resize(static_cast<size_t>(active.pair.stride[0]) * active.pair.height);
     active.pair.plane[0] = state->active_pair.data();
   }
+  // The rows it does not write come from the kept previous output.
+  p3d::KeptOutput kept{whole ? nullptr : &previous, {}};
   const long long holes = p3d::warp_pack_changed_cpu(params, pack, src, yuv, p3d::as_const(depth->view()), pair, dst,
-                                                     state->cpu, whole ? nullptr : &changes, &active);
+                                                     state->cpu, whole ? nullptr : &changes, &active, &kept);
   if (holes < 0) {
     GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Frames do not fit the warp"),
                       ("input %dx%d, output %dx%d", src.width, src.height, dst.width, dst.height));
     return GST_FLOW_ERROR;
   }
-  if (compare) state->output.update(&base->out_info, out, changes, whole);
+  if (compare) state->output.update(&base->out_info, out, changes, whole, kept.written);
   GST_LOG_OBJECT(self, "%lld hole pixels filled", holes);
   return GST_FLOW_OK;
 }

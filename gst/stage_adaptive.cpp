@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "depth_meta.h"
+#include "video_util.h"
 
 namespace p3d::gst {
 
@@ -89,29 +90,34 @@ void WholeOutputGpu::reset() {
 
 namespace {
 
-// Copies plane `plane`'s rows between a mapped frame (its strides) and a
-// packed copy (rows back to back): into the frame, or out of it.
-void copy_rows(const GstVideoFrame *frame, guint plane, const uint8_t *from, uint8_t *to, bool into_frame) {
+// Copies plane `plane`'s rows out of a mapped frame (its strides) into a
+// packed copy (rows back to back).
+void copy_rows_out(const GstVideoFrame *frame, guint plane, uint8_t *to) {
   const gsize row = static_cast<gsize>(GST_VIDEO_FRAME_COMP_WIDTH(frame, plane)) *
                     GST_VIDEO_FRAME_COMP_PSTRIDE(frame, plane);
   const gsize stride = static_cast<gsize>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, plane));
-  const gint rows = GST_VIDEO_FRAME_COMP_HEIGHT(frame, plane);
-  if (into_frame)
-    p3d::copy_rows(to, stride, from, row, row, rows);
-  else
-    p3d::copy_rows(to, row, from, stride, row, rows);
+  p3d::copy_rows(to, row, static_cast<const uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(frame, plane)), stride, row,
+                 GST_VIDEO_FRAME_COMP_HEIGHT(frame, plane));
 }
 
 }  // namespace
 
-bool OutputHistory::copy_into(const GstVideoInfo *info, GstVideoFrame *out) const {
+bool OutputHistory::previous(const GstVideoInfo *info, FrameView *view) const {
   if (!valid_ || !gst_video_info_is_equal(info, &info_)) return false;
-  for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(out); ++p)
-    copy_rows(out, p, planes_[p].data(), static_cast<uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(out, p)), true);
+  FrameView v;
+  if (!pixel_format_from_gst(GST_VIDEO_INFO_FORMAT(info), &v.format)) return false;
+  v.width = GST_VIDEO_INFO_WIDTH(info);
+  v.height = GST_VIDEO_INFO_HEIGHT(info);
+  for (guint p = 0; p < GST_VIDEO_INFO_N_PLANES(info) && p < 3; ++p) {
+    v.plane[p] = const_cast<uint8_t *>(planes_[p].data());
+    v.stride[p] = GST_VIDEO_INFO_COMP_WIDTH(info, p) * GST_VIDEO_INFO_COMP_PSTRIDE(info, p);
+  }
+  *view = v;
   return true;
 }
 
-void OutputHistory::update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole) {
+void OutputHistory::update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole,
+                           const std::vector<uint8_t> &written) {
   const bool first = !seen_;
   seen_ = true;
   if (busy_for(reach_, changes) && !first) {
@@ -119,11 +125,16 @@ void OutputHistory::update(const GstVideoInfo *info, const GstVideoFrame *out, c
     return;
   }
   if (!whole && !changes.any()) return;  // the copy holds these pixels already
+  FrameView kept;
+  if (!whole && written.size() == static_cast<size_t>(GST_VIDEO_INFO_HEIGHT(info)) && previous(info, &kept)) {
+    copy_flagged_rows(frame_view(out), kept, written, true);
+    return;
+  }
   info_ = *info;
   for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(out); ++p) {
     planes_[p].resize(static_cast<size_t>(GST_VIDEO_FRAME_COMP_WIDTH(out, p)) * GST_VIDEO_FRAME_COMP_PSTRIDE(out, p) *
                       GST_VIDEO_FRAME_COMP_HEIGHT(out, p));
-    copy_rows(out, p, static_cast<const uint8_t *>(GST_VIDEO_FRAME_PLANE_DATA(out, p)), planes_[p].data(), false);
+    copy_rows_out(out, p, planes_[p].data());
   }
   valid_ = true;
 }

@@ -59,14 +59,17 @@ class OutputHistory {
   // (busy_for) leaves nothing of its output worth keeping.
   explicit OutputHistory(ChangeReach reach) : reach_(reach) {}
   void set_reach(ChangeReach reach) { reach_ = reach; }
-  // Copies the previous output into `out` (mapped, of `info`); false when
-  // there is none of that size and format.
-  bool copy_into(const GstVideoInfo *info, GstVideoFrame *out) const;
+  // The previous output, a frame of `info` (KeptOutput::previous: the
+  // stage's call copies the rows it does not write); false when there is
+  // none of that size and format.
+  bool previous(const GstVideoInfo *info, FrameView *view) const;
   // After a frame: keeps a copy of `out` (mapped, of `info`) where it
-  // changed (whole, or `changes` has a tile). Not after a busy frame, the
-  // stream's first apart: its successor likely is too and would not read
-  // it (a frame that changes less after such a run is computed whole).
-  void update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole);
+  // changed (whole, or `changes` has a tile; of a frame computed from
+  // previous(), the rows `written`). Not after a busy frame, the stream's
+  // first apart: its successor likely is too and would not read it (a
+  // frame that changes less after such a run is computed whole).
+  void update(const GstVideoInfo *info, const GstVideoFrame *out, const ChangeMap &changes, bool whole,
+              const std::vector<uint8_t> &written);
   void reset() { valid_ = seen_ = false; }
 
  private:

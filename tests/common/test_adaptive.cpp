@@ -1272,20 +1272,32 @@ class WarpPackRun {
       holes_full = warp_render_cpu(c_.warp, src.view(), m_, cview(depth), pair_full.view());
       if (!pair_is_out_) pack_cpu(c_.pack, pair_full.view(), out_full.view());
     }
+    // Every other frame the output buffer starts as other bytes and the
+    // call takes the rows it does not write from the kept previous output
+    // (KeptOutput); the others start as a copy of it.
+    const bool from_kept = frames_++ % 2 == 1;
     HostFrame next = out_;
+    if (from_kept) next.fill(0x77);
+    const FrameView previous = out_.view();
+    KeptOutput kept{from_kept ? &previous : nullptr, {}};
     const FrameView pair = pair_is_out_ ? next.view() : pair_.view();
     const ActiveArea area{c_.active, active_pair_.view()};
     const long long holes = warp_pack_changed_cpu(c_.warp, c_.pack, src.view(), m_, cview(depth), pair, next.view(),
                                                   scratch_, prev_depth_.empty() ? nullptr : &changes,
-                                                  cropped ? &area : nullptr);
+                                                  cropped ? &area : nullptr, &kept);
     const bool first = prev_depth_.empty();
     prev_depth_ = depth;
+    // The kept copy brought up to date in the rows written: the output.
+    HostFrame updated = out_;
+    copy_flagged_rows(next.view(), updated.view(), kept.written, true);
+    const ::testing::AssertionResult written_same = same_bytes(updated.view(), next.view());
     out_ = next;
     auto fail = [&]() {
       return ::testing::AssertionFailure() << 100 * changes.fraction() << "% of the tiles changed, " << holes_full
-                                           << " holes: ";
+                                           << " holes" << (from_kept ? ", from the kept output" : "") << ": ";
     };
     if (holes < 0) return fail() << "frames do not fit";
+    if (!written_same) return fail() << "rows written: " << written_same.message();
     if (first && holes != holes_full) return fail() << holes << " holes, full " << holes_full;
     const ::testing::AssertionResult pair_same = same_bytes(pair, pair_full.view());
     if (!pair_same) return fail() << "pair: " << pair_same.message();
@@ -1306,6 +1318,7 @@ class WarpPackRun {
   StageInputs inputs_;
   cv::Mat prev_depth_;
   const YuvToRgb m_;
+  int frames_ = 0;
 };
 
 // A depth map of narrow near and far stripes in blocks of rows: holes

@@ -216,10 +216,10 @@ AdaptiveChain::Plane AdaptiveChain::filter(const FrameView &src, const Plane &de
   return filter_last_;
 }
 
-// gstpseudo3dwarp.cpp render_cpu: a new output buffer that starts as a copy
-// of the previous output (unless the change is busy), the columns a change
-// reaches warped and their rows packed again, and the output copied when
-// it changed.
+// gstpseudo3dwarp.cpp render_cpu: a new output buffer, the columns a change
+// reaches warped and their rows packed again, the other rows copied from
+// the kept previous output (unless the change is busy), and the rows
+// written copied into the kept one.
 // Backing off: the whole frame, nothing kept.
 void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *changes) {
   const ChangeReach reach = warp_change_reach(p_.warp);
@@ -237,18 +237,20 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
     *changes = ChangeMap(src.width, src.height, true);
   }
   warp_rect_ = rect_;
-  if (!whole) copy_frame(kept_, out_);
-  const FrameView dst = out_.view();
+  const FrameView dst = out_.view(), previous = kept_.view();
   const ActiveArea area{rect_, active_pair_.view()};
+  KeptOutput kept{whole ? nullptr : &previous, {}};
   if (warp_pack_changed_cpu(p_.warp, p_.pack, src, p_.yuv, const_view(*depth), target_.pair(dst), dst, warp_scratch_,
-                            whole ? nullptr : changes, &area) < 0)
+                            whole ? nullptr : changes, &area, &kept) < 0)
     warp_failed();
   if (compare) {  // gst/stage_adaptive.cpp OutputHistory::update.
     const bool first = !seen_;
     seen_ = true;
     if (busy_for(reach, *changes) && !first) {
       have_output_ = false;
-    } else if (whole || changes->any()) {
+    } else if (!whole && changes->any()) {
+      copy_flagged_rows(dst, kept_.view(), kept.written, true);
+    } else if (whole) {
       copy_frame(out_, kept_);
       have_output_ = true;
     }
