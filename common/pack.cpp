@@ -8,6 +8,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "row_convert.h"
+
 namespace p3d {
 
 namespace {
@@ -204,12 +206,80 @@ namespace {
 // channels load_rgba() would read, written where store_rgba() would write
 // them, so the same output (tests/common/test_pack.cpp checks it against
 // pack_pixel() for every method, format and eye order).
+#if P3D_CPU_VECTORS
+// anaglyph_mix_word() of the pixels [0, end) of a row, several at a time
+// (end <= w, where the scalar loop takes over). Each 16.16 coefficient is
+// split as q = 512 qh + ql (qh = q >> 9, ql = q & 511), so that every
+// factor is a 16-bit lane and v_dotprod sums pairs of products in 32 bits:
+// the channel's sum is 512 A + B with A = sum(c qh), B = sum(c ql), the
+// same integer as the scalar sum (|512 A| < 512 * 6 * 255 * 256 < 2^31),
+// shifted and clipped alike.
+template <bool kBgr, bool kAlpha>
+int anaglyph_pair_row_vector(const AnaglyphMatrices &am, const uint8_t *lp, const uint8_t *rp, uint8_t *o, int w) {
+  using namespace cv;
+  constexpr int L = v_uint8::nlanes, ri = kBgr ? 2 : 0, bi = 2 - ri;
+  // Output channel k's six coefficients (left R' G' B', right R' G' B') as
+  // three pairs of 16-bit lanes, high and low parts.
+  v_int16 qh[3][3], ql[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const int32_t q[6] = {am.left_q[3 * k],  am.left_q[3 * k + 1],  am.left_q[3 * k + 2],
+                          am.right_q[3 * k], am.right_q[3 * k + 1], am.right_q[3 * k + 2]};
+    for (int j = 0; j < 3; ++j) {
+      auto lanes = [](int32_t a, int32_t b) {
+        return v_reinterpret_as_s16(vx_setall_u32(static_cast<uint16_t>(a) | static_cast<uint32_t>(static_cast<uint16_t>(b)) << 16));
+      };
+      qh[k][j] = lanes(q[2 * j] >> 9, q[2 * j + 1] >> 9);
+      ql[k][j] = lanes(q[2 * j] & 511, q[2 * j + 1] & 511);
+    }
+  }
+  const v_int32 round = vx_setall_s32(32768), zero = vx_setzero_s32(), top = vx_setall_s32(255);
+  int x = 0;
+  for (; x + L <= w; x += L) {
+    v_uint8 l[4], r[4];
+    v_load_deinterleave(lp + 4 * x, l[0], l[1], l[2], l[3]);
+    v_load_deinterleave(rp + 4 * x, r[0], r[1], r[2], r[3]);
+    const v_uint8 c8[6] = {l[ri], l[1], l[bi], r[ri], r[1], r[bi]};
+    v_int16 c16[2][6];  // the two halves of the pixels, 16-bit lanes
+    for (int i = 0; i < 6; ++i) {
+      v_uint16 a, b;
+      v_expand(c8[i], a, b);
+      c16[0][i] = v_reinterpret_as_s16(a);
+      c16[1][i] = v_reinterpret_as_s16(b);
+    }
+    v_int32 sums[3][4];  // channel k, quarter of the pixels
+    for (int h = 0; h < 2; ++h) {
+      v_int16 pairs[3][2];
+      for (int j = 0; j < 3; ++j) v_zip(c16[h][2 * j], c16[h][2 * j + 1], pairs[j][0], pairs[j][1]);
+      for (int k = 0; k < 3; ++k)
+        for (int z = 0; z < 2; ++z) {
+          const v_int32 a = v_dotprod(pairs[0][z], qh[k][0]) + v_dotprod(pairs[1][z], qh[k][1]) +
+                            v_dotprod(pairs[2][z], qh[k][2]);
+          const v_int32 b = v_dotprod(pairs[0][z], ql[k][0]) + v_dotprod(pairs[1][z], ql[k][1]) +
+                            v_dotprod(pairs[2][z], ql[k][2]);
+          sums[k][2 * h + z] = v_min(v_max(((a << 9) + b + round) >> 16, zero), top);
+        }
+    }
+    v_uint8 c[3];
+    for (int k = 0; k < 3; ++k)
+      c[k] = v_pack_u(v_pack(sums[k][0], sums[k][1]), v_pack(sums[k][2], sums[k][3]));
+    const v_uint8 alpha = kAlpha ? l[3] : vx_setall_u8(255);
+    v_store_interleave(o + 4 * x, c[ri], c[1], c[bi], alpha);
+  }
+  vx_cleanup();
+  return x;
+}
+#endif
+
 template <bool kBgr, bool kAlpha>
 void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp, const uint8_t *__restrict rp,
                        uint8_t *__restrict o, int w) {
   constexpr int ri = kBgr ? 2 : 0, bi = 2 - ri;  // byte offsets of R' and B' (the output has the input's format)
   auto pixel = [](const uint8_t *p) { return Rgba{p[ri], p[1], p[bi], kAlpha ? p[3] : uint8_t{255}}; };
-  for (int x = 0; x < w; ++x) {
+  int x = 0;
+#if P3D_CPU_VECTORS
+  x = anaglyph_pair_row_vector<kBgr, kAlpha>(am, lp, rp, o, w);
+#endif
+  for (; x < w; ++x) {
     const Rgba c = pack_detail::anaglyph_gamma(am, pixel(lp + 4 * x), pixel(rp + 4 * x));
     o[4 * x + ri] = c.r;
     o[4 * x + 1] = c.g;
