@@ -24,12 +24,16 @@ bool ProcessingLatency::observe(uint64_t ns) {
     }
   }
   if (count_ == 1) second = longest;
-  if (second <= reported()) return false;
-  // Grown: an eighth more, so that the frames' jitter does not post a
-  // message on every few frames.
+  // What to report for it: an eighth more, so that the frames' jitter does
+  // not post a message on every few frames, in whole milliseconds.
   constexpr uint64_t kMs = 1000000;
-  const uint64_t grown = second + second / 8;
-  reported_.store((grown + kMs - 1) / kMs * kMs, std::memory_order_relaxed);
+  const uint64_t margin = second + second / 8, wanted = (margin + kMs - 1) / kMs * kMs;
+  const uint64_t now = reported();
+  // Longer frames raise it at once; a whole window of frames that take
+  // under half of it lowers it.
+  const bool grow = second > now, shrink = count_ == kWindow && 2 * wanted <= now;
+  if (!grow && !shrink) return false;
+  reported_.store(wanted, std::memory_order_relaxed);
   return true;
 }
 

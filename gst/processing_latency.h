@@ -9,15 +9,18 @@
 // Each stage measures its frames (observe()) and adds to the query what
 // its frames take (reported()): the second longest of the last kWindow
 // frames (one spike does not count; a single frame while there is only
-// one). It only grows while the stream runs, because every change makes
-// the sinks re-time their frames: when that time exceeds what is
-// reported, the stage reports it plus an eighth (so that jitter does not
-// post a message every few frames), rounded up to a whole millisecond,
-// and, in a live pipeline, posts a LATENCY message, on which the
-// application recalculates the pipeline's latency
-// (gst_bin_recalculate_latency, as gst-launch does). The first kWarmUp
-// frames after a start or a caps change are not counted: they allocate
-// the stage's buffers. Plain C++ so that a unit test can drive it.
+// one), plus an eighth (so that jitter does not post a message every few
+// frames), rounded up to a whole millisecond. Every change makes the
+// sinks re-time their frames, so it changes rarely: it grows as soon as
+// that time exceeds what is reported, and shrinks only when a whole
+// window of frames takes under half of it (the first frames, which fill
+// the stages' pools and are computed whole, take much longer than the
+// frames of a still or slowly changing picture). On a change in a live
+// pipeline the stage posts a LATENCY message, on which the application
+// recalculates the pipeline's latency (gst_bin_recalculate_latency, as
+// gst-launch does). The first kWarmUp frames after a start or a caps
+// change are not counted: they allocate the stage's buffers. Plain C++
+// so that a unit test can drive it.
 #pragma once
 
 #include <array>
@@ -31,7 +34,7 @@ class ProcessingLatency {
   static constexpr int kWarmUp = 1, kWindow = 16;
 
   // One frame's processing time in nanoseconds (streaming thread). Returns
-  // true when reported() grew: post a LATENCY message.
+  // true when reported() changed: post a LATENCY message.
   bool observe(uint64_t ns);
   // Nanoseconds to add to the latency (any thread); 0 before a frame was
   // measured.

@@ -572,9 +572,10 @@ TEST(Renegotiation, SizeAndFormatMidStream) {
 
 // The rule of gst/processing_latency.h: nothing before a measured frame, the
 // first frame after a start not counted, then the second longest of the
-// window plus an eighth, rounded up to a millisecond, growing only when a
-// frame time exceeds what is reported.
-TEST(ProcessingLatency, ReportsTheSecondLongestFrameAndOnlyGrows) {
+// window plus an eighth, rounded up to a millisecond, growing as soon as a
+// frame time exceeds what is reported and shrinking only when a whole
+// window asks for under half of it.
+TEST(ProcessingLatency, ReportsTheSecondLongestFrameGrowingAtOnceShrinkingRarely) {
   constexpr uint64_t ms = 1000000;
   p3d::gst::ProcessingLatency l;
   EXPECT_FALSE(l.observe(90 * ms));  // warm-up: allocations
@@ -586,11 +587,18 @@ TEST(ProcessingLatency, ReportsTheSecondLongestFrameAndOnlyGrows) {
   EXPECT_FALSE(l.observe(9 * ms));  // within what is reported
   EXPECT_TRUE(l.observe(16 * ms));  // second longest 16: 18 ms
   EXPECT_EQ(l.reported(), 18 * ms);
-  for (int i = 0; i < 2 * p3d::gst::ProcessingLatency::kWindow; ++i) EXPECT_FALSE(l.observe(2 * ms));
-  EXPECT_EQ(l.reported(), 18 * ms);  // never shrinks while running
+  constexpr int window = p3d::gst::ProcessingLatency::kWindow;
+  for (int i = 0; i < 2 * window; ++i) EXPECT_FALSE(l.observe(11 * ms));  // 13 ms: not under half of 18
+  EXPECT_EQ(l.reported(), 18 * ms);
+  int changes = 0;
+  for (int i = 0; i < window - 2; ++i) changes += l.observe(2 * ms);  // the window still holds two of 11 ms
+  EXPECT_EQ(changes, 0);
+  EXPECT_TRUE(l.observe(2 * ms));  // one 11 ms frame left: the second longest is 2, so 3 ms
+  EXPECT_EQ(l.reported(), 3 * ms);
+  for (int i = 0; i < 2 * window; ++i) EXPECT_FALSE(l.observe(2 * ms));
   l.restart();  // new caps: warm-up again, the report stays
   EXPECT_FALSE(l.observe(100 * ms));
-  EXPECT_EQ(l.reported(), 18 * ms);
+  EXPECT_EQ(l.reported(), 3 * ms);
   l.set_live(true);
   EXPECT_TRUE(l.live());
   l.reset();  // stopped
