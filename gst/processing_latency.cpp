@@ -31,9 +31,15 @@ bool ProcessingLatency::observe(uint64_t ns) {
   const uint64_t now = reported();
   // Longer frames raise it at once; a whole window of frames that take
   // under half of it lowers it.
-  const bool grow = second > now, shrink = count_ == kWindow && 2 * wanted <= now;
+  const bool grow = second > now, shrink = count_ == kWindow && 2 * wanted < now;
   if (!grow && !shrink) return false;
   reported_.store(wanted, std::memory_order_relaxed);
+  return true;
+}
+
+bool ProcessingLatency::expect_frames(uint64_t frame_ns) {
+  if (reported() != 0 || frame_ns == 0) return false;
+  reported_.store(frame_ns, std::memory_order_relaxed);
   return true;
 }
 

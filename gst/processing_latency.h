@@ -10,10 +10,11 @@
 // its frames take (reported()): the second longest of the last kWindow
 // frames (one spike does not count; a single frame while there is only
 // one), plus an eighth (so that jitter does not post a message every few
-// frames), rounded up to a whole millisecond. Every change makes the
+// frames), rounded up to a whole millisecond; before the first measured
+// frame, one frame's duration (expect_frames()). Every change makes the
 // sinks re-time their frames, so it changes rarely: it grows as soon as
 // that time exceeds what is reported, and shrinks only when a whole
-// window of frames takes under half of it (the first frames, which fill
+// window of frames asks for under half of it (the first frames, which fill
 // the stages' pools and are computed whole, take much longer than the
 // frames of a still or slowly changing picture). On a change in a live
 // pipeline the stage posts a LATENCY message, on which the application
@@ -44,6 +45,12 @@ class ProcessingLatency {
   // posts none there.
   void set_live(bool live) { live_.store(live, std::memory_order_relaxed); }
   bool live() const { return live_.load(std::memory_order_relaxed); }
+  // The stream's frame duration (from the caps; 0: unknown). Until a
+  // stage has measured frames it reports that much: a stage that keeps up
+  // with the stream takes at most a frame, and its first frames, which
+  // fill the pools, take longest; the window then lowers it. Returns true
+  // when reported() changed: post a LATENCY message.
+  bool expect_frames(uint64_t frame_ns);
   // New caps: the next frames allocate again; what was reported stays.
   void restart();
   // Stopped: nothing reported.
