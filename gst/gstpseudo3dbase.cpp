@@ -331,9 +331,6 @@ static gboolean gst_pseudo3d_base_set_caps(GstBaseTransform *trans, GstCaps *inc
   self->out_info = out;
   self->cuda_caps = cuda_caps;
   self->latency->restart();
-  const uint64_t frame_ns = in.fps_n > 0 && in.fps_d > 0 ? gst_util_uint64_scale_int(GST_SECOND, in.fps_d, in.fps_n) : 0;
-  if (self->latency->expect_frames(frame_ns) && self->latency->live())
-    gst_element_post_message(GST_ELEMENT(self), gst_message_new_latency(GST_OBJECT(self)));
 
   const GstPseudo3DPath path = gst_pseudo3d_base_path(self);
   if (cuda_caps && path == GST_PSEUDO3D_PATH_CPU)

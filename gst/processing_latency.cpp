@@ -37,12 +37,6 @@ bool ProcessingLatency::observe(uint64_t ns) {
   return true;
 }
 
-bool ProcessingLatency::expect_frames(uint64_t frame_ns) {
-  if (reported() != 0 || frame_ns == 0) return false;
-  reported_.store(frame_ns, std::memory_order_relaxed);
-  return true;
-}
-
 void ProcessingLatency::restart() {
   seen_ = count_ = next_ = 0;
 }

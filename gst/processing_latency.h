@@ -10,13 +10,16 @@
 // its frames take (reported()): the second longest of the last kWindow
 // frames (one spike does not count; a single frame while there is only
 // one), plus an eighth (so that jitter does not post a message every few
-// frames), rounded up to a whole millisecond; before the first measured
-// frame, one frame's duration (expect_frames()). Every change makes the
+// frames), rounded up to a whole millisecond. Every change makes the
 // sinks re-time their frames, so it changes rarely: it grows as soon as
 // that time exceeds what is reported, and shrinks only when a whole
 // window of frames asks for under half of it (the first frames, which fill
 // the stages' pools and are computed whole, take much longer than the
-// frames of a still or slowly changing picture). On a change in a live
+// frames of a still or slowly changing picture). A shrink costs frames in
+// flight their place: in a pipeline of one thread a live source runs
+// behind by what the sink waited, so frames taken against a much larger
+// latency arrive late against the new one; reporting more than the
+// frames take, to spare the first frames, would make that lag. On a change in a live
 // pipeline the stage posts a LATENCY message, on which the application
 // recalculates the pipeline's latency (gst_bin_recalculate_latency, as
 // gst-launch does). The first kWarmUp frames after a start or a caps
@@ -45,12 +48,6 @@ class ProcessingLatency {
   // posts none there.
   void set_live(bool live) { live_.store(live, std::memory_order_relaxed); }
   bool live() const { return live_.load(std::memory_order_relaxed); }
-  // The stream's frame duration (from the caps; 0: unknown). Until a
-  // stage has measured frames it reports that much: a stage that keeps up
-  // with the stream takes at most a frame, and its first frames, which
-  // fill the pools, take longest; the window then lowers it. Returns true
-  // when reported() changed: post a LATENCY message.
-  bool expect_frames(uint64_t frame_ns);
   // New caps: the next frames allocate again; what was reported stays.
   void restart();
   // Stopped: nothing reported.

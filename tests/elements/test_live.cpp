@@ -607,24 +607,17 @@ TEST(ProcessingLatency, ReportsTheSecondLongestFrameGrowingAtOnceShrinkingRarely
   EXPECT_FALSE(l.observe(5 * ms));
   EXPECT_TRUE(l.observe(5 * ms - 1));
   EXPECT_EQ(l.reported(), 6 * ms);  // 5 ms - 1 ns plus an eighth, rounded up
-  EXPECT_FALSE(l.expect_frames(33 * ms));  // measured already: the caps change nothing
-  EXPECT_EQ(l.reported(), 6 * ms);
 }
 
-// Before a frame is measured a stage reports one frame's duration of the
-// caps, so that a live sink waits for the first frames (which fill the
-// pools and take longest); a whole window of short frames then lowers it,
-// and a report of 2 ms does not drop to 1 and back on frames near 1 ms.
-TEST(ProcessingLatency, ReportsAFrameUntilFramesAreMeasured) {
+// After a whole window of short frames the report comes down, once; a
+// report of 2 ms does not drop to 1 and back on frames near 1 ms.
+TEST(ProcessingLatency, ShrinksOnceToWhatAWholeWindowAsksFor) {
   constexpr uint64_t ms = 1000000;
   constexpr int window = p3d::gst::ProcessingLatency::kWindow;
   p3d::gst::ProcessingLatency l;
-  EXPECT_FALSE(l.expect_frames(0));  // no framerate: nothing to go by
-  EXPECT_EQ(l.reported(), 0u);
-  EXPECT_TRUE(l.expect_frames(33 * ms));
-  EXPECT_EQ(l.reported(), 33 * ms);
   EXPECT_FALSE(l.observe(60 * ms));  // warm-up
-  EXPECT_FALSE(l.observe(20 * ms));  // 23 ms: under the frame
+  EXPECT_TRUE(l.observe(20 * ms));  // 23 ms
+  EXPECT_EQ(l.reported(), 23 * ms);
   int changes = 0;
   for (int i = 0; i < window - 2; ++i) changes += l.observe(1 * ms + 500000);  // the window is not full yet
   EXPECT_EQ(changes, 0);
