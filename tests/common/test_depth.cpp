@@ -255,6 +255,26 @@ TEST(DepthRegions, MatchesFloodFillOnRandomMazes) {
   }
 }
 
+// The edge test of whole tile rows at a time (several pairs a vector) is
+// blocks_joined() pair by pair: features whose differences lie around the
+// threshold, integer ones that meet it exactly, R'G'B' and Y'CbCr.
+TEST(DepthRegions, EdgesNearTheThresholdAreBlocksJoined) {
+  const uint32_t seed = std::random_device{}();
+  SCOPED_TRACE(::testing::Message() << "seed " << seed);
+  std::mt19937 rng(seed);
+  for (int trial = 0; trial < 8; ++trial)
+    for (const bool yuv : {false, true}) {
+      const int bx = 1 + rng() % 150, by = 1 + rng() % 40;
+      std::vector<float> feat(3 * static_cast<size_t>(bx) * by);
+      for (float &f : feat) f = trial % 2 ? static_cast<float>(100 + rng() % 17) : 100.f + (rng() % 1000) / 50.f;
+      const float threshold = yuv ? 18.f : 24.f;
+      BlockRegions regions;
+      regions.label(feat, bx, by, threshold, yuv, nullptr);
+      ASSERT_EQ(regions.labels(), flood_labels(feat, bx, by, threshold, yuv))
+          << bx << "x" << by << (yuv ? " Y'CbCr" : " R'G'B'") << ", trial " << trial;
+    }
+}
+
 // Each region's statistics as a flood fill gives them, checked against
 // BlockRegions at every region's label.
 void expect_region_stats(const BlockRegions &regions, const std::vector<int> &want, const std::vector<uint32_t> &hq,
@@ -307,8 +327,9 @@ TEST(DepthRegions, StatisticsOfEveryRegionWhateverTheThreads) {
 // Incremental calls label again only the tiles whose features changed and
 // join the tiles again. After edits of small rects (which merge and split
 // regions that reach across the grid) the labels and statistics must be a
-// flood fill's, exactly the changed tiles labelled, and a new threshold
-// must label every tile.
+// flood fill's, exactly the changed tiles labelled; a new threshold, other
+// features' space, forget() with new hypotheses and a whole call in
+// between must label every tile.
 TEST(DepthRegions, IncrementalLabellingIsAFreshOne) {
   const uint32_t seed = std::random_device{}();
   SCOPED_TRACE(::testing::Message() << "seed " << seed);
@@ -342,12 +363,21 @@ TEST(DepthRegions, IncrementalLabellingIsAFreshOne) {
           if (feat[3 * k] != v) changed[(y / TH) * tiles_x + x / TW] = 1;
           colour(k, v);
         }
-      const float threshold = step == 13 ? 30.f : 24.f;  // one step with another threshold
-      regions.label(feat, bx, by, threshold, false, hq.data(), true);
-      const std::vector<int> want = flood_labels(feat, bx, by, threshold);
+      // Steps that must label every tile: another threshold (13, and 14
+      // back), Y'CbCr features (16, and 17 back), new hypotheses after
+      // forget() (5), a whole call between incremental ones (9, 10).
+      const float threshold = step == 13 ? 30.f : 24.f;
+      const bool yuv = step == 16;
+      if (step == 5) {
+        for (uint32_t &q : hq) q = rng() % 65536;
+        regions.forget();
+      }
+      regions.label(feat, bx, by, threshold, yuv, hq.data(), step != 9);
+      const std::vector<int> want = flood_labels(feat, bx, by, threshold, yuv);
       ASSERT_EQ(regions.labels(), want) << where;
       expect_region_stats(regions, want, hq, where);
-      const int expected = step == 13 || step == 14 ? tiles : static_cast<int>(std::count(changed.begin(), changed.end(), 1));
+      const bool all = step == 5 || step == 9 || step == 10 || step == 13 || step == 14 || step == 16 || step == 17;
+      const int expected = all ? tiles : static_cast<int>(std::count(changed.begin(), changed.end(), 1));
       ASSERT_EQ(regions.tiles_labelled(), expected) << where;
     }
   }
