@@ -6,8 +6,8 @@
 // The rule is the estimator's: a region's label is the smallest block index
 // in it. Any correct labelling gives those labels, and the statistics are
 // exact integer reductions, so the result does not depend on how the work
-// is split. Here the grid is cut into tiles of kRegionTileW x kRegionTileH
-// blocks, labelled in parallel (union-find whose parents always point to a
+// is split. Here the grid is cut into tiles of kTileW x kTileH blocks,
+// labelled in parallel (union-find whose parents always point to a
 // smaller index, so a root is its tree's smallest index), each tile's
 // statistics summed at its own roots. One serial pass then joins the tiles'
 // roots across the tile edges, merging the statistics of the trees it

@@ -207,8 +207,9 @@ namespace {
 // them, so the same output (tests/common/test_pack.cpp checks it against
 // pack_pixel() for every method, format and eye order).
 #if P3D_CPU_VECTORS
-// anaglyph_mix_word() of the pixels [0, end) of a row, several at a time
-// (end <= w, where the scalar loop takes over). Each 16.16 coefficient is
+// anaglyph_mix_word() of a row's pixels from 0, several at a time; returns
+// where it stopped (at most w), from which the scalar loop takes over.
+// Each 16.16 coefficient is
 // split as q = 512 qh + ql (qh = q >> 9, ql = q & 511), so that every
 // factor is a 16-bit lane and v_dotprod sums pairs of products in 32 bits:
 // the channel's sum is 512 A + B with A = sum(c qh), B = sum(c ql), the

@@ -29,16 +29,18 @@ bool ProcessingLatency::observe(uint64_t ns) {
   constexpr uint64_t kMs = 1000000;
   const uint64_t margin = second + second / 8, wanted = (margin + kMs - 1) / kMs * kMs;
   const uint64_t now = reported();
-  // Longer frames raise it at once; a whole window of frames that take
-  // under half of it lowers it.
-  const bool grow = second > now, shrink = count_ == kWindow && 2 * wanted < now;
+  // Longer frames raise it at once; kShrinkAfter frames in a row whose
+  // full windows ask for under half of it lower it.
+  short_ = count_ == kWindow && 2 * wanted < now ? short_ + 1 : 0;
+  const bool grow = second > now, shrink = short_ >= kShrinkAfter;
   if (!grow && !shrink) return false;
+  short_ = 0;
   reported_.store(wanted, std::memory_order_relaxed);
   return true;
 }
 
 void ProcessingLatency::restart() {
-  seen_ = count_ = next_ = 0;
+  seen_ = count_ = next_ = short_ = 0;
 }
 
 void ProcessingLatency::reset() {

@@ -12,14 +12,16 @@
 // one), plus an eighth (so that jitter does not post a message every few
 // frames), rounded up to a whole millisecond. Every change makes the
 // sinks re-time their frames, so it changes rarely: it grows as soon as
-// that time exceeds what is reported, and shrinks only when a whole
-// window of frames asks for under half of it (the first frames, which fill
-// the stages' pools and are computed whole, take much longer than the
-// frames of a still or slowly changing picture). A shrink costs frames in
-// flight their place: in a pipeline of one thread a live source runs
-// behind by what the sink waited, so frames taken against a much larger
-// latency arrive late against the new one; reporting more than the
-// frames take, to spare the first frames, would make that lag. On a change in a live
+// that time exceeds what is reported, and shrinks only when the windows
+// of kShrinkAfter frames in a row (about 2 s at 30 frames/s) ask for
+// under half of it: the first frames, which fill the stages' pools and
+// are computed whole, take much longer than the frames of a still or
+// slowly changing picture, while a picture that changes now and then
+// (slides) keeps what its changes take. A shrink can cost frames: in a
+// pipeline of one thread a live source runs behind by what the sink
+// waited, so frames taken against a much larger latency arrive late
+// against the new one; for the same reason a stage reports nothing
+// before it has measured frames. On a change in a live
 // pipeline the stage posts a LATENCY message, on which the application
 // recalculates the pipeline's latency (gst_bin_recalculate_latency, as
 // gst-launch does). The first kWarmUp frames after a start or a caps
@@ -35,7 +37,7 @@ namespace p3d::gst {
 
 class ProcessingLatency {
  public:
-  static constexpr int kWarmUp = 1, kWindow = 16;
+  static constexpr int kWarmUp = 1, kWindow = 16, kShrinkAfter = 4 * kWindow;
 
   // One frame's processing time in nanoseconds (streaming thread). Returns
   // true when reported() changed: post a LATENCY message.
@@ -55,7 +57,7 @@ class ProcessingLatency {
 
  private:
   std::array<uint64_t, kWindow> frames_{};
-  int seen_ = 0, count_ = 0, next_ = 0;
+  int seen_ = 0, count_ = 0, next_ = 0, short_ = 0;
   std::atomic<uint64_t> reported_{0};
   std::atomic<bool> live_{false};
 };

@@ -31,10 +31,13 @@
 //        nothing changed, and then the full filter equals prev_out; the
 //        filter over rectangles that cut the picture into odd pieces
 //        equals the filter over the whole picture;
-//      - warp_pack_changed_cpu() with its own pair buffer, scratch and
-//        output copied from its previous one against warp_render_cpu() and
-//        pack_cpu() from scratch: every fill, view and layout, packed RGB
-//        and 4:2:0 output, the pair being the output where it is;
+//      - warp_pack_changed_cpu() with its own pair buffer and scratch, its
+//        output a copy of its previous one or (every other frame) other
+//        bytes with the previous output kept apart (KeptOutput), against
+//        warp_render_cpu() and pack_cpu() from scratch: every fill, view
+//        and layout, packed RGB and 4:2:0 output, the pair being the
+//        output where it is; the kept copy updated in the rows written
+//        is the output;
 //      - pack_changed_cpu() against pack_cpu(): every input arrangement,
 //        layout and eye order, packed RGB and 4:2:0 output.
 // Two cases of the warp's BackgroundSmooth fill run on their own as well:
@@ -1231,9 +1234,10 @@ std::string warp_case_text(const WarpPackCase &c) {
 
 // The adaptive warp and pack as the element runs them, beside the full
 // computation from nothing. The adaptive side keeps its pair buffer and
-// scratch from frame to frame, and its output starts each frame as a copy
-// of its previous output; where the layout is the pair itself (and the
-// output packed RGB) the pair is the output.
+// scratch from frame to frame; its output starts as a copy of its previous
+// output, or every other frame as other bytes, the previous output handed
+// over as KeptOutput; where the layout is the pair itself (and the output
+// packed RGB) the pair is the output.
 class WarpPackRun {
  public:
   WarpPackRun(const WarpPackCase &c, int w, int h) : c_(c), w_(w), h_(h) {

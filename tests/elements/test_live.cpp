@@ -573,8 +573,8 @@ TEST(Renegotiation, SizeAndFormatMidStream) {
 // The rule of gst/processing_latency.h: nothing before a measured frame, the
 // first frame after a start not counted, then the second longest of the
 // window plus an eighth, rounded up to a millisecond, growing as soon as a
-// frame time exceeds what is reported and shrinking only when a whole
-// window asks for under half of it.
+// frame time exceeds what is reported and shrinking only when the windows
+// of kShrinkAfter frames in a row ask for under half of it.
 TEST(ProcessingLatency, ReportsTheSecondLongestFrameGrowingAtOnceShrinkingRarely) {
   constexpr uint64_t ms = 1000000;
   p3d::gst::ProcessingLatency l;
@@ -590,10 +590,13 @@ TEST(ProcessingLatency, ReportsTheSecondLongestFrameGrowingAtOnceShrinkingRarely
   constexpr int window = p3d::gst::ProcessingLatency::kWindow;
   for (int i = 0; i < 2 * window; ++i) EXPECT_FALSE(l.observe(11 * ms));  // 13 ms: not under half of 18
   EXPECT_EQ(l.reported(), 18 * ms);
+  // From the 15th frame of 2 ms the window (one 11 ms frame left, the
+  // second longest 2 ms) asks for 3 ms; kShrinkAfter such frames lower it.
+  constexpr int shrink_after = p3d::gst::ProcessingLatency::kShrinkAfter;
   int changes = 0;
-  for (int i = 0; i < window - 2; ++i) changes += l.observe(2 * ms);  // the window still holds two of 11 ms
+  for (int i = 0; i < window - 3 + shrink_after; ++i) changes += l.observe(2 * ms);
   EXPECT_EQ(changes, 0);
-  EXPECT_TRUE(l.observe(2 * ms));  // one 11 ms frame left: the second longest is 2, so 3 ms
+  EXPECT_TRUE(l.observe(2 * ms));
   EXPECT_EQ(l.reported(), 3 * ms);
   for (int i = 0; i < 2 * window; ++i) EXPECT_FALSE(l.observe(2 * ms));
   l.restart();  // new caps: warm-up again, the report stays
@@ -609,20 +612,32 @@ TEST(ProcessingLatency, ReportsTheSecondLongestFrameGrowingAtOnceShrinkingRarely
   EXPECT_EQ(l.reported(), 6 * ms);  // 5 ms - 1 ns plus an eighth, rounded up
 }
 
-// After a whole window of short frames the report comes down, once; a
-// report of 2 ms does not drop to 1 and back on frames near 1 ms.
-TEST(ProcessingLatency, ShrinksOnceToWhatAWholeWindowAsksFor) {
+// After kShrinkAfter frames whose windows ask for under half, the report
+// comes down, once; a change now and then (a slide) keeps it; a report of
+// 2 ms does not drop to 1 and back on frames near 1 ms.
+TEST(ProcessingLatency, ShrinksOnceAfterAPeriodOfShortFrames) {
   constexpr uint64_t ms = 1000000;
   constexpr int window = p3d::gst::ProcessingLatency::kWindow;
+  constexpr int shrink_after = p3d::gst::ProcessingLatency::kShrinkAfter;
+  static_assert(shrink_after > 50 - window, "a slide every 50 frames leaves no long enough calm");
   p3d::gst::ProcessingLatency l;
   EXPECT_FALSE(l.observe(60 * ms));  // warm-up
   EXPECT_TRUE(l.observe(20 * ms));  // 23 ms
   EXPECT_EQ(l.reported(), 23 * ms);
   int changes = 0;
-  for (int i = 0; i < window - 2; ++i) changes += l.observe(1 * ms + 500000);  // the window is not full yet
+  for (int slide = 0; slide < 4; ++slide) {  // two slow frames every 50: never a long enough calm
+    changes += l.observe(20 * ms);
+    changes += l.observe(20 * ms);
+    for (int i = 0; i < 48; ++i) changes += l.observe(1 * ms + 500000);
+  }
   EXPECT_EQ(changes, 0);
-  EXPECT_TRUE(l.observe(1 * ms + 500000));  // full: the second longest 1.5 ms plus an eighth, 2 ms
+  EXPECT_EQ(l.reported(), 23 * ms);
+  // A calm of kShrinkAfter frames (the windows' second longest 1.5 ms plus
+  // an eighth: 2 ms) lowers it, once.
+  for (int i = 0; i < shrink_after; ++i) changes += l.observe(1 * ms + 500000);
+  EXPECT_EQ(changes, 1);
   EXPECT_EQ(l.reported(), 2 * ms);
+  changes = 0;
   for (int i = 0; i < 4 * window; ++i) changes += l.observe(i % 2 ? 700000 : 800000);  // 0.9 ms: 1 ms
   EXPECT_EQ(changes, 0);  // 1 ms would be half of 2, not under it
   EXPECT_EQ(l.reported(), 2 * ms);
