@@ -206,8 +206,8 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
               : warp_render_cpu(params, src, m, depth, pair, scratch, changes ? &spans : nullptr);
   if (holes < 0) return holes;
   if (changes && !cropped) written = warp_rows_written(params, src.width, spans);
-  if (pair_is_dst) {
-    if (changes && kept) kept->written = whole_pairs(written, dst.format);
+  if (pair_is_dst) {  // packed RGB (the pair's format): no rows in pairs
+    if (changes && kept) kept->written = std::move(written);
     return holes;
   }
   if (!changes) {

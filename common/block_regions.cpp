@@ -78,13 +78,12 @@ void BlockRegions::label(const std::vector<float> &features, int bx, int by, flo
 
   cv::parallel_for_(cv::Range(0, tiles), [&](const cv::Range &range) {
     for (int t = range.start; t < range.end; ++t) {
-      const int x0 = (t % tiles_x_) * kTileW, x1 = std::min(bx, x0 + kTileW);
-      const int y0 = (t / tiles_x_) * kTileH, y1 = std::min(by, y0 + kTileH);
-      const size_t row_bytes = 3 * sizeof(float) * (x1 - x0);
+      const PixelRect tile = tile_blocks(t);
+      const size_t row_bytes = 3 * sizeof(float) * tile.width();
       if (keep) {
         bool differs = false;
-        for (int y = y0; y < y1 && !differs; ++y) {
-          const size_t f = 3 * (static_cast<size_t>(y) * bx + x0);
+        for (int y = tile.y0; y < tile.y1 && !differs; ++y) {
+          const size_t f = 3 * (static_cast<size_t>(y) * bx + tile.x0);
           differs = std::memcmp(&features[f], &kept_features_[f], row_bytes) != 0;
         }
         dirty_[t] = differs;
@@ -92,19 +91,15 @@ void BlockRegions::label(const std::vector<float> &features, int bx, int by, flo
       if (!dirty_[t]) continue;
       label_tile(features, t, hq);
       if (incremental)
-        for (int y = y0; y < y1; ++y) {
-          const size_t f = 3 * (static_cast<size_t>(y) * bx + x0);
+        for (int y = tile.y0; y < tile.y1; ++y) {
+          const size_t f = 3 * (static_cast<size_t>(y) * bx + tile.x0);
           std::memcpy(&kept_features_[f], &features[f], row_bytes);
         }
     }
   });
   tiles_labelled_ = static_cast<int>(std::count(dirty_.begin(), dirty_.end(), 1));
   join_tiles(features);
-  for (const int i : touched_) {  // every tile root then points at its region's root
-    int r = i;
-    while (parent_[r] != r) r = parent_[r];
-    parent_[i] = r;
-  }
+  for (const int i : touched_) parent_[i] = find_root(parent_.data(), i);  // straight at the region's root
   cv::parallel_for_(cv::Range(0, by), [&](const cv::Range &range) {
     for (size_t k = static_cast<size_t>(range.start) * bx; k < static_cast<size_t>(range.end) * bx; ++k)
       labels_[k] = parent_[tile_root_[k]];
@@ -149,8 +144,8 @@ uint64_t joined_bits(const float *a, const float *b, int n, float threshold, boo
 void BlockRegions::label_tile(const std::vector<float> &features, int t, const uint32_t *hq) {
   static_assert(kTileW <= 64, "a tile row's joins are one 64-bit mask");
   const int bx = bx_;
-  const int x0 = (t % tiles_x_) * kTileW, x1 = std::min(bx, x0 + kTileW);
-  const int y0 = (t / tiles_x_) * kTileH, y1 = std::min(by_, y0 + kTileH);
+  const PixelRect tile = tile_blocks(t);
+  const int x0 = tile.x0, x1 = tile.x1, y0 = tile.y0, y1 = tile.y1;
   int *parent = tile_root_.data();
   // Row by row: each run of right-joined blocks points at its first block;
   // then the runs joined to the row above are united, once a pair of runs
@@ -190,6 +185,11 @@ void BlockRegions::label_tile(const std::vector<float> &features, int t, const u
         max_[r] = std::max(max_[r], hq[k]);
       }
     }
+}
+
+PixelRect BlockRegions::tile_blocks(int t) const {
+  const int x0 = (t % tiles_x_) * kTileW, y0 = (t / tiles_x_) * kTileH;
+  return PixelRect{x0, y0, std::min(bx_, x0 + kTileW), std::min(by_, y0 + kTileH)};
 }
 
 void BlockRegions::join_tiles(const std::vector<float> &features) {

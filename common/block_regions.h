@@ -22,6 +22,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "p3d_defs.h"
+
 namespace p3d {
 
 class BlockRegions {
@@ -48,6 +50,7 @@ class BlockRegions {
   int tiles_labelled() const { return tiles_labelled_; }
 
  private:
+  PixelRect tile_blocks(int tile) const;  // the blocks of a tile (x: columns, y: rows of blocks)
   void label_tile(const std::vector<float> &features, int tile, const uint32_t *hq);
   void join_tiles(const std::vector<float> &features);
   void unite(int a, int b);  // serial: roots across a tile edge, statistics merged

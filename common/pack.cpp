@@ -199,22 +199,14 @@ bool pack_args_valid(const PackParams &params, const FrameView &in, const FrameV
 
 namespace {
 
-// The default case, the anaglyph of a side-by-side pair into packed RGB
-// mixed in gamma-encoded R'G'B' (every method but DuboisLinear), a row at a
-// time with the format's channel order and the views' places worked out
-// once instead of per pixel: anaglyph_gamma(), anaglyph()'s own mix, on the
-// channels load_rgba() would read, written where store_rgba() would write
-// them, so the same output (tests/common/test_pack.cpp checks it against
-// pack_pixel() for every method, format and eye order).
 #if P3D_CPU_VECTORS
 // anaglyph_mix_word() of a row's pixels from 0, several at a time; returns
 // where it stopped (at most w), from which the scalar loop takes over.
-// Each 16.16 coefficient is
-// split as q = 512 qh + ql (qh = q >> 9, ql = q & 511), so that every
-// factor is a 16-bit lane and v_dotprod sums pairs of products in 32 bits:
-// the channel's sum is 512 A + B with A = sum(c qh), B = sum(c ql), the
-// same integer as the scalar sum (|512 A| < 512 * 6 * 255 * 256 < 2^31),
-// shifted and clipped alike.
+// Each 16.16 coefficient is split as q = 512 qh + ql (qh = q >> 9,
+// ql = q & 511), so that every factor is a 16-bit lane and v_dotprod sums
+// pairs of products in 32 bits: the channel's sum is 512 A + B with
+// A = sum(c qh), B = sum(c ql), the same integer as the scalar sum
+// (|512 A| < 512 * 6 * 255 * 256 < 2^31), shifted and clipped alike.
 template <bool kBgr, bool kAlpha>
 int anaglyph_pair_row_vector(const AnaglyphMatrices &am, const uint8_t *lp, const uint8_t *rp, uint8_t *o, int w) {
   using namespace cv;
@@ -226,8 +218,9 @@ int anaglyph_pair_row_vector(const AnaglyphMatrices &am, const uint8_t *lp, cons
     const int32_t q[6] = {am.left_q[3 * k],  am.left_q[3 * k + 1],  am.left_q[3 * k + 2],
                           am.right_q[3 * k], am.right_q[3 * k + 1], am.right_q[3 * k + 2]};
     for (int j = 0; j < 3; ++j) {
-      auto lanes = [](int32_t a, int32_t b) {
-        return v_reinterpret_as_s16(vx_setall_u32(static_cast<uint16_t>(a) | static_cast<uint32_t>(static_cast<uint16_t>(b)) << 16));
+      auto lanes = [](int32_t a, int32_t b) {  // a in the even lanes, b in the odd ones
+        const uint32_t pair = static_cast<uint16_t>(a) | static_cast<uint32_t>(static_cast<uint16_t>(b)) << 16;
+        return v_reinterpret_as_s16(vx_setall_u32(pair));
       };
       qh[k][j] = lanes(q[2 * j] >> 9, q[2 * j + 1] >> 9);
       ql[k][j] = lanes(q[2 * j] & 511, q[2 * j + 1] & 511);
@@ -271,6 +264,13 @@ int anaglyph_pair_row_vector(const AnaglyphMatrices &am, const uint8_t *lp, cons
 }
 #endif
 
+// The default case, the anaglyph of a side-by-side pair into packed RGB
+// mixed in gamma-encoded R'G'B' (every method but DuboisLinear), a row at a
+// time with the format's channel order and the views' places worked out
+// once instead of per pixel: anaglyph_gamma(), anaglyph()'s own mix, on the
+// channels load_rgba() would read, written where store_rgba() would write
+// them, so the same output (tests/common/test_pack.cpp checks it against
+// pack_pixel() for every method, format and eye order).
 template <bool kBgr, bool kAlpha>
 void anaglyph_pair_row(const AnaglyphMatrices &am, const uint8_t *__restrict lp, const uint8_t *__restrict rp,
                        uint8_t *__restrict o, int w) {

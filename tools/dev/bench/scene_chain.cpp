@@ -16,17 +16,6 @@ namespace {
 
 ImageView<const float> const_view(const cv::Mat &m) { return depth_view_of(m); }
 
-// OutputHistory's copies (gst/stage_adaptive.cpp): every plane's rows, in
-// parallel bands (both frames have one geometry).
-void copy_frame(const HostFrame &from, HostFrame &to) {
-  const FrameView a = from.view(), b = to.view();
-  for (int i = 0; i < frame_plane_count(a.format); ++i) {
-    int row_bytes = 0, rows = 0;
-    frame_plane_size(a.format, a.width, a.height, i, &row_bytes, &rows);
-    copy_rows(b.plane[i], b.stride[i], a.plane[i], a.stride[i], static_cast<size_t>(row_bytes), rows);
-  }
-}
-
 void warp_failed() { throw std::runtime_error("the warp's frames do not fit"); }
 
 // DepthPlane::set_active: 0 in the plane outside r.
@@ -248,10 +237,8 @@ void AdaptiveChain::warp(const FrameView &src, const Plane &depth, ChangeMap *ch
     seen_ = true;
     if (busy_for(reach, *changes) && !first) {
       have_output_ = false;
-    } else if (!whole && changes->any()) {
+    } else if (whole || changes->any()) {  // kept.written: every row of a whole frame
       copy_flagged_rows(dst, kept_.view(), kept.written, true);
-    } else if (whole) {
-      copy_frame(out_, kept_);
       have_output_ = true;
     }
   }
