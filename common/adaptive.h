@@ -24,6 +24,8 @@ namespace p3d {
 // tiles (the pack: a change in every row); Spans, in each row of tiles the
 // columns from its first changed tile to its last, widened by the warp's
 // reach (the warp: spans over more than kWholeWarpShare of the picture).
+// On CUDA memory the warp is busy when its changes reach more than
+// kWholeWarpShare of its rows (KeptOutputGpu::last_rows_share).
 enum class ChangeReach { Tiles, Rows, Spans };
 constexpr double kWholeWarpShare = 0.9;
 bool busy_for(ChangeReach reach, const ChangeMap &changes);

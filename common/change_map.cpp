@@ -71,13 +71,11 @@ ChangeMap ChangeMap::dilated(int reach_x, int reach_y) const {
   return out;
 }
 
-std::vector<uint8_t> ChangeMap::rows() const {
+std::vector<uint8_t> ChangeMap::rows_within(int reach) const {
   std::vector<uint8_t> rows(static_cast<size_t>(height_), 0);
-  for (int ty = 0; ty < tiles_y_; ++ty) {
-    if (!row_changed(ty)) continue;
-    const PixelRect r = tile_pixels(0, ty, width_, height_);
-    std::fill(rows.begin() + r.y0, rows.begin() + r.y1, 1);
-  }
+  std::vector<uint8_t> tile_rows(static_cast<size_t>(tiles_y_));
+  for (int ty = 0; ty < tiles_y_; ++ty) tile_rows[ty] = row_changed(ty);
+  for (int y = 0; y < height_; ++y) rows[y] = row_within_reach(tile_rows.data(), height_, y, reach);
   return rows;
 }
 

@@ -67,7 +67,10 @@ class ChangeMap {
   // from r's corner, are marked where a changed tile of this map overlaps.
   ChangeMap cropped(PixelRect r) const;
   // The pixel rows of the changed tiles: one flag a row (height()).
-  std::vector<uint8_t> rows() const;
+  std::vector<uint8_t> rows() const { return rows_within(0); }
+  // The pixel rows within `reach` rows of a changed tile's rows
+  // (row_within_reach): one flag a row.
+  std::vector<uint8_t> rows_within(int reach) const;
   // Each pixel row's changed columns (height() spans): from the first
   // changed tile of its row of tiles to the last, clipped to the picture.
   std::vector<ColumnSpan> row_spans() const;
@@ -90,6 +93,18 @@ P3D_HD int change_tiles(int pixels) { return (pixels + kChangeTile - 1) / kChang
 P3D_HD PixelRect tile_pixels(int tx, int ty, int width, int height) {
   const int x1 = (tx + 1) * kChangeTile, y1 = (ty + 1) * kChangeTile;
   return PixelRect{tx * kChangeTile, ty * kChangeTile, x1 < width ? x1 : width, y1 < height ? y1 : height};
+}
+
+// Whether pixel row y of a picture of `height` rows lies within `reach`
+// rows (up or down) of a row of tiles with a changed tile; tile_rows: one
+// flag a row of tiles (ChangeMap::row_changed). The rule of
+// ChangeMap::rows_within on the host and of the adaptive warp's rows on
+// the device.
+P3D_HD bool row_within_reach(const uint8_t *tile_rows, int height, int y, int reach) {
+  const int y0 = y - reach < 0 ? 0 : y - reach, y1 = y + reach >= height ? height - 1 : y + reach;
+  for (int ty = y0 / kChangeTile; ty <= y1 / kChangeTile; ++ty)
+    if (tile_rows[ty]) return true;
+  return false;
 }
 
 // Tiles on either side that a reach of `pixels` covers: a changed pixel at

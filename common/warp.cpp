@@ -681,14 +681,10 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
   return warp_render_cpu(params, src, m, depth, out, scratch);
 }
 
-std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<ColumnSpan> &changed) {
+int warp_rows_reach(const WarpParams &params, int width, int height) {
   const WarpParams p = warp_sanitize(params);
-  std::vector<uint8_t> rows(changed.size());
-  for (size_t y = 0; y < changed.size(); ++y) rows[y] = !changed[y].empty();
-  const bool any = std::find(rows.begin(), rows.end(), 1) != rows.end();
-  if (!any) return rows;
-  if (p.fill == HoleFill::NeighborAverage) return std::vector<uint8_t>(rows.size(), 1);
-  if (p.fill != HoleFill::BackgroundSmooth) return rows;
+  if (p.fill == HoleFill::NeighborAverage) return std::max(height, 0);
+  if (p.fill != HoleFill::BackgroundSmooth) return 0;
   // A hole's fill sums the anchors of its column's run within R rows.
   const float D = disparity_scale(p, width);
   int R = 0;
@@ -696,10 +692,14 @@ std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, cons
     const float shift = warp_eye_shift(p, D, e);
     if (shift != 0.f) R = std::max(R, smooth_fill_radius(shift, D));
   }
-  std::vector<uint8_t> out(rows.size(), 0);
-  const int H = static_cast<int>(rows.size());
+  return R;
+}
+
+std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<ColumnSpan> &changed) {
+  const int H = static_cast<int>(changed.size()), R = warp_rows_reach(params, width, H);
+  std::vector<uint8_t> out(changed.size(), 0);
   for (int y = 0; y < H; ++y)
-    if (rows[y]) std::fill(out.begin() + std::max(0, y - R), out.begin() + std::min(H, y + R + 1), 1);
+    if (!changed[y].empty()) std::fill(out.begin() + std::max(0, y - R), out.begin() + std::min(H, y + R + 1), 1);
   return out;
 }
 

@@ -575,9 +575,14 @@ long long warp_render_cpu(const WarpParams &params, const FrameView &src, const 
                           ImageView<const float> depth, const FrameView &out, WarpCpuScratch &scratch,
                           const std::vector<ColumnSpan> *changed);
 // The output rows of both views that the adaptive warp rewrites when the
-// spans `changed` changed: BackgroundSmooth reaches smooth_fill_radius()
-// rows up and down, NeighborAverage the whole picture, the other fills the
-// row itself.
+// spans `changed` changed: those within warp_rows_reach() of a changed row.
 std::vector<uint8_t> warp_rows_written(const WarpParams &params, int width, const std::vector<ColumnSpan> &changed);
+// How many rows up and down a changed source row reaches in the output of
+// a width x height picture (the source and depth of a row only reach
+// targets in that row): BackgroundSmooth's smooth_fill_radius(),
+// NeighborAverage the whole picture (its steps cross it), 0 for the fills
+// that stay in the row. The adaptive warp on CUDA memory renders the rows
+// within it of a changed tile's rows again.
+int warp_rows_reach(const WarpParams &params, int width, int height);
 
 }  // namespace p3d

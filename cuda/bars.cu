@@ -90,8 +90,11 @@ CudaStatus ActiveWarpGpu::render(WarpRendererGpu &warp, const WarpParams &params
                       __LINE__};
   // The pair as the CPU path keeps it (StereoPacking::pair_target): dst
   // itself where the layout is the pair, else a packed RGB pair.
+  // The gate's rows are rendered into the pairs kept here: dst keeps none.
   FrameView pair = dst;
   const bool pair_is_dst = pack_is_identity(pack) && is_packed_rgb(dst.format);
+  const size_t had_pair = pair_.size(), had_active = active_pair_.size();
+  if (pair_is_dst) gate = gate.every_row();
   if (!pair_is_dst)
     P3D_CUDA_TRY_STATUS(buffer_frame(pair_, is_packed_rgb(dst.format) ? dst.format
                                             : is_deep(dst.format)     ? PixelFormat::RGBA64
@@ -100,14 +103,17 @@ CudaStatus ActiveWarpGpu::render(WarpRendererGpu &warp, const WarpParams &params
   const WarpParams active_params = active_warp_params(params, src.width, rect.width());
   const FrameView sub_src = sub_frame(src, rect);
   const DepthGrid<const float> sub_depth = sub_grid(depth, rect);
+  if (pair_.size() != had_pair) gate = gate.every_row();  // a new pair holds no rows
   if (rect.x0 == 0 && rect.x1 == src.width) {
     P3D_CUDA_TRY_STATUS(warp.render(active_params, sub_src, m, sub_depth,
                                     sub_frame(pair, PixelRect{0, rect.y0, pair.width, rect.y1}), stream, nullptr,
-                                    gate));
+                                    gate.from_row(rect.y0)));
   } else {
     FrameView active_pair;
     P3D_CUDA_TRY_STATUS(buffer_frame(active_pair_, pair.format, 2 * rect.width(), rect.height(), &active_pair));
-    P3D_CUDA_TRY_STATUS(warp.render(active_params, sub_src, m, sub_depth, active_pair, stream, nullptr, gate));
+    if (active_pair_.size() != had_active) gate = gate.every_row();
+    P3D_CUDA_TRY_STATUS(
+        warp.render(active_params, sub_src, m, sub_depth, active_pair, stream, nullptr, gate.from_row(rect.y0)));
     const size_t px = static_cast<size_t>(packed_pixel_bytes(pair.format)), view_bytes = px * rect.width();
     uint8_t *to = pair.plane[0] + static_cast<size_t>(rect.y0) * pair.stride[0];
     P3D_CUDA_TRY_STATUS(copy_rows_gated(to + px * rect.x0, pair.stride[0], active_pair.plane[0],

@@ -41,7 +41,8 @@ class BarCountsGpu {
 // size placed into the pair; views_outside_gpu() around it; then
 // pack_gpu() into dst unless dst is the pair. pair: dst where the layout
 // is the pair itself, else device memory the caller keeps (packed RGB,
-// 2W x H).
+// 2W x H). The gate's rows (frame rows) are rendered into the kept pairs
+// only; a dst that is the pair renders every row.
 class ActiveWarpGpu {
  public:
   CudaStatus render(WarpRendererGpu &warp, const WarpParams &params, const PackParams &pack, const FrameView &src,

@@ -57,11 +57,50 @@ __global__ void count_kernel(const uint8_t *flags, int tiles, unsigned *count) {
   if (threadIdx.x == 0) *count = total;
 }
 
-// One block: KeptOutputGpu::decide's rule from the flags; *changed (host
-// memory) tells the host afterwards whether a tile changed.
+// What KeptOutputGpu::decide marks for the warp: rows[y] for each row of
+// a tiles_x x tiles_y map's picture of `height` rows (at most
+// kMaxFrameSide); none where rows is null.
+struct RowsRequest {
+  int tiles_x = 0, tiles_y = 0, height = 0, reach = 0;
+  uint8_t *rows = nullptr;
+  unsigned *count = nullptr;
+};
+
+// The whole block: rows[y] = row_within_reach of the rows of tiles (in
+// shared memory first), or 1 for every row (all); *count: the rows
+// reached, whatever all says.
+__device__ void mark_rows(const uint8_t *flags, const RowsRequest &r, bool all) {
+  __shared__ uint8_t tile_rows[kMaxFrameSide / kChangeTile];
+  __shared__ unsigned total;
+  // A warp a row of tiles (each written by one lane: no race).
+  const int lane = static_cast<int>(threadIdx.x % 32), warps = static_cast<int>(blockDim.x / 32);
+  for (int ty = static_cast<int>(threadIdx.x / 32); ty < r.tiles_y; ty += warps) {
+    bool any = false;
+    for (int tx = lane; tx < r.tiles_x; tx += 32) any = any || flags[static_cast<size_t>(ty) * r.tiles_x + tx];
+    any = __any_sync(0xffffffffu, any);
+    if (lane == 0) tile_rows[ty] = any ? 1 : 0;
+  }
+  if (threadIdx.x == 0) total = 0;
+  __syncthreads();
+  unsigned reached = 0;
+  for (int y = threadIdx.x; y < r.height; y += blockDim.x) {
+    const bool within = row_within_reach(tile_rows, r.height, y, r.reach);
+    reached += within ? 1u : 0u;
+    r.rows[y] = all || within ? 1 : 0;
+  }
+  if (reached) atomicAdd(&total, reached);
+  __syncthreads();
+  if (threadIdx.x == 0) *r.count = total;
+}
+
+// One block: KeptOutputGpu::decide's rule from the flags, and the rows
+// where asked; *changed (host memory) tells the host afterwards whether a
+// tile changed. whole: the frame is computed whatever changed (every row).
 // A plain launch (<<< >>>), as every kernel of this file.
-__global__ void decide_kernel(const uint8_t *flags, int tiles, bool whole, bool first, GateState *state,
-                              unsigned *changed) {
+constexpr int kDecideThreads = 1024;
+__global__ void __launch_bounds__(kDecideThreads)
+    decide_kernel(const uint8_t *flags, int tiles, bool whole, bool first, GateState *state, unsigned *changed,
+                  RowsRequest rows) {
   const bool any = __syncthreads_or([&] {
     for (int i = threadIdx.x; i < tiles; i += blockDim.x)
       if (flags[i]) return true;
@@ -72,6 +111,7 @@ __global__ void decide_kernel(const uint8_t *flags, int tiles, bool whole, bool 
       if (!flags[i]) return false;
     return true;
   }());
+  if (rows.rows) mark_rows(flags, rows, whole);
   if (threadIdx.x != 0) return;
   const bool run = whole || any || !state->kept_valid;
   const bool keep = run && (!all || first);
@@ -83,13 +123,23 @@ __global__ void decide_kernel(const uint8_t *flags, int tiles, bool whole, bool 
 
 enum class CopyWhen : int { Run, Finish };
 
-// Copies rows between two planes: CopyWhen::Run copies `from` into `to`
-// when the gate is open; CopyWhen::Finish copies `from` (the kept copy)
-// into `to` (the output) when it is closed, and `to` into `from` when the
-// frame is kept. 16-byte words where both planes allow.
+// Up to three planes' rows to copy between two frames: plane p's
+// row_bytes[p] bytes of rows[p] rows.
+struct PlaneCopies {
+  uint8_t *to[3] = {}, *from[3] = {};
+  size_t to_pitch[3] = {}, from_pitch[3] = {}, row_bytes[3] = {};
+  int rows[3] = {};
+  bool vec16[3] = {};
+  int planes = 0;
+};
+
+// Copies rows between two frames, a plane a row of blocks (blockIdx.y):
+// CopyWhen::Run copies `from` into `to` when the gate is open;
+// CopyWhen::Finish copies `from` (the kept copy) into `to` (the output)
+// when it is closed, and `to` into `from` when the frame is kept. 16-byte
+// words where both planes allow.
 // A plain launch (<<< >>>), as every kernel of this file.
-__global__ void copy_rows_kernel(uint8_t *to, size_t to_pitch, uint8_t *from, size_t from_pitch, size_t row_bytes,
-                                 int rows, const GateState *state, CopyWhen when, bool vec16) {
+__global__ void copy_rows_kernel(PlaneCopies c, const GateState *state, CopyWhen when) {
   bool forward;
   if (when == CopyWhen::Run) {
     if (state && !state->run) return;
@@ -98,11 +148,14 @@ __global__ void copy_rows_kernel(uint8_t *to, size_t to_pitch, uint8_t *from, si
     if (state->run && !state->keep) return;
     forward = !state->run;
   }
-  uint8_t *dst = forward ? to : from;
-  const uint8_t *src = forward ? from : to;
-  const size_t dst_pitch = forward ? to_pitch : from_pitch, src_pitch = forward ? from_pitch : to_pitch;
-  const size_t unit = vec16 ? 16 : 1, per_row = row_bytes / unit;
-  const size_t items = per_row * rows;
+  const int p = static_cast<int>(blockIdx.y);
+  uint8_t *dst = forward ? c.to[p] : c.from[p];
+  const uint8_t *src = forward ? c.from[p] : c.to[p];
+  const size_t dst_pitch = forward ? c.to_pitch[p] : c.from_pitch[p];
+  const size_t src_pitch = forward ? c.from_pitch[p] : c.to_pitch[p];
+  const bool vec16 = c.vec16[p];
+  const size_t unit = vec16 ? 16 : 1, per_row = c.row_bytes[p] / unit;
+  const size_t items = per_row * c.rows[p];
   for (size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; i < items;
        i += static_cast<size_t>(gridDim.x) * blockDim.x) {
     const size_t y = i / per_row, k = i % per_row;
@@ -113,14 +166,28 @@ __global__ void copy_rows_kernel(uint8_t *to, size_t to_pitch, uint8_t *from, si
   }
 }
 
-CudaStatus launch_copy(uint8_t *to, size_t to_pitch, uint8_t *from, size_t from_pitch, size_t row_bytes, int rows,
-                       const GateState *state, CopyWhen when, cudaStream_t stream) {
-  if (rows <= 0 || row_bytes == 0) return {};
-  const bool vec16 = row_bytes % 16 == 0 && to_pitch % 16 == 0 && from_pitch % 16 == 0 &&
-                     reinterpret_cast<uintptr_t>(to) % 16 == 0 && reinterpret_cast<uintptr_t>(from) % 16 == 0;
-  const long long items = static_cast<long long>(row_bytes / (vec16 ? 16 : 1)) * rows;
-  const unsigned grid = std::min<unsigned>(blocks_for(items, kThreads), 65535u);
-  copy_rows_kernel<<<grid, kThreads, 0, stream>>>(to, to_pitch, from, from_pitch, row_bytes, rows, state, when, vec16);
+// Adds a plane to c (none of no bytes).
+void add_plane(PlaneCopies *c, uint8_t *to, size_t to_pitch, uint8_t *from, size_t from_pitch, size_t row_bytes,
+               int rows) {
+  if (rows <= 0 || row_bytes == 0) return;
+  const int p = c->planes++;
+  c->to[p] = to;
+  c->from[p] = from;
+  c->to_pitch[p] = to_pitch;
+  c->from_pitch[p] = from_pitch;
+  c->row_bytes[p] = row_bytes;
+  c->rows[p] = rows;
+  c->vec16[p] = row_bytes % 16 == 0 && to_pitch % 16 == 0 && from_pitch % 16 == 0 &&
+                reinterpret_cast<uintptr_t>(to) % 16 == 0 && reinterpret_cast<uintptr_t>(from) % 16 == 0;
+}
+
+CudaStatus launch_copy(const PlaneCopies &c, const GateState *state, CopyWhen when, cudaStream_t stream) {
+  if (c.planes == 0) return {};
+  long long items = 0;
+  for (int p = 0; p < c.planes; ++p)
+    items = std::max(items, static_cast<long long>(c.row_bytes[p] / (c.vec16[p] ? 16 : 1)) * c.rows[p]);
+  const dim3 grid(std::min<unsigned>(blocks_for(items, kThreads), 65535u), static_cast<unsigned>(c.planes));
+  copy_rows_kernel<<<grid, kThreads, 0, stream>>>(c, state, when);
   P3D_CUDA_TRY_LAUNCH(copy_rows_kernel);
   return {};
 }
@@ -175,6 +242,10 @@ CudaStatus ChangeMapGpu::summarize(cudaStream_t stream) {
   count_kernel<<<1, kThreads, 0, stream>>>(data(), static_cast<int>(tiles()), count_.device());
   P3D_CUDA_TRY_LAUNCH(count_kernel);
   return {};
+}
+
+double KeptOutputGpu::last_rows_share() const {
+  return rows_height_ ? static_cast<double>(rows_count_.host()) / static_cast<double>(rows_height_) : 0.0;
 }
 
 double ChangeMapGpu::last_share() const {
@@ -273,7 +344,7 @@ CudaStatus dilate_gpu(const ChangeMapGpu &in, int reach_x, int reach_y, ChangeMa
 }
 
 CudaStatus KeptOutputGpu::decide(const ChangeMapGpu &changes, const FrameView &out, bool whole,
-                                  cudaStream_t stream) {
+                                  cudaStream_t stream, int reach_rows) {
   if (!state_.get()) {
     P3D_CUDA_TRY_STATUS(state_.ensure(sizeof(GateState)));
     first_ = true;
@@ -291,8 +362,17 @@ CudaStatus KeptOutputGpu::decide(const ChangeMapGpu &changes, const FrameView &o
     height_ = out.height;
     P3D_CUDA_TRY(cudaMemsetAsync(state_.get(), 0, sizeof(GateState), stream));
   }
-  decide_kernel<<<1, kThreads, 0, stream>>>(changes.data(), static_cast<int>(changes.tiles()), whole || first_, first_,
-                                            state_.as<GateState>(), changed_.device());
+  with_rows_ = reach_rows >= 0 && changes.height() > 0 && changes.height() <= kMaxFrameSide;
+  rows_height_ = with_rows_ ? changes.height() : 0;
+  RowsRequest rows;
+  if (with_rows_) {
+    P3D_CUDA_TRY_STATUS(rows_.ensure(static_cast<size_t>(changes.height())));
+    P3D_CUDA_TRY_STATUS(rows_count_.ensure());
+    const TileFlags f = changes.flags();
+    rows = RowsRequest{f.tiles_x, f.tiles_y, f.height, reach_rows, rows_.as<uint8_t>(), rows_count_.device()};
+  }
+  decide_kernel<<<1, kDecideThreads, 0, stream>>>(changes.data(), static_cast<int>(changes.tiles()), whole || first_,
+                                                  first_, state_.as<GateState>(), changed_.device(), rows);
   P3D_CUDA_TRY_LAUNCH(decide_kernel);
   first_ = false;
   return {};
@@ -302,19 +382,20 @@ CudaStatus KeptOutputGpu::finish(const FrameView &out, cudaStream_t stream) {
   if (out.format != format_ || out.width != width_ || out.height != height_)
     return CudaStatus{cudaErrorInvalidValue, "KeptOutputGpu::finish: the output decide() was given", __FILE__,
                       __LINE__};
+  PlaneCopies c;
   for (int p = 0; p < planes_; ++p) {
     int row_bytes = 0, rows = 0;
     frame_plane_size(out.format, out.width, out.height, p, &row_bytes, &rows);
-    P3D_CUDA_TRY_STATUS(launch_copy(out.plane[p], out.stride[p], copy_.as<uint8_t>() + offset_[p], pitch_[p],
-                                    row_bytes, rows, state_.as<const GateState>(), CopyWhen::Finish, stream));
+    add_plane(&c, out.plane[p], out.stride[p], copy_.as<uint8_t>() + offset_[p], pitch_[p], row_bytes, rows);
   }
-  return {};
+  return launch_copy(c, state_.as<const GateState>(), CopyWhen::Finish, stream);
 }
 
 CudaStatus copy_rows_gated(uint8_t *to, size_t to_pitch, const uint8_t *from, size_t from_pitch, size_t row_bytes,
                            int rows, StageGate gate, cudaStream_t stream) {
-  return launch_copy(to, to_pitch, const_cast<uint8_t *>(from), from_pitch, row_bytes, rows, gate.state, CopyWhen::Run,
-                     stream);
+  PlaneCopies c;
+  add_plane(&c, to, to_pitch, const_cast<uint8_t *>(from), from_pitch, row_bytes, rows);
+  return launch_copy(c, gate.state, CopyWhen::Run, stream);
 }
 
 }  // namespace p3d

@@ -13,7 +13,8 @@
 //   dilate    dilate_gpu, where an output reads a neighbourhood (the filter);
 //   decide    KeptOutputGpu::decide, for a stage that keeps a copy of its
 //             output (the warp, the pack): run when a tile changed or
-//             nothing is kept;
+//             nothing is kept; for the warp also the rows its changes
+//             reach (warp_rows_reach), the only ones it renders again;
 //   compute   the stage's kernels, each returning at once where the flags
 //             (TileFlags::any_in) or the gate (StageGate) say so;
 //   finish    KeptOutputGpu::finish: the kept copy into the output where
@@ -152,9 +153,26 @@ struct GateState {
 
 // What a stage's kernels read: closed() when the frame is not computed
 // (its output then comes from the kept copy). A default gate is open.
+// rows (the warp's, KeptOutputGpu::decide with a reach): one flag a row of
+// the picture, set where the row is rendered again; null: every row. Only
+// a target that keeps the rows not rendered (a pair kept from frame to
+// frame) may be rendered through a gate with rows.
 struct StageGate {
   const GateState *state = nullptr;
+  const uint8_t *rows = nullptr;
   P3D_HD bool closed() const { return state && !state->run; }
+  // Whether rows y0 .. y0 + n - 1 are left as they are this frame.
+  P3D_HD bool skips_rows(int y0, int n) const {
+    if (closed()) return true;
+    if (!rows) return false;
+    for (int i = 0; i < n; ++i)
+      if (rows[y0 + i]) return false;
+    return true;
+  }
+  // The gate of the sub-picture starting at row y0.
+  StageGate from_row(int y0) const { return StageGate{state, rows ? rows + y0 : nullptr}; }
+  // The gate for a target that does not keep its rows: every row.
+  StageGate every_row() const { return StageGate{state, nullptr}; }
 };
 
 // A stage's previous output, kept on the device, and the decision whether
@@ -166,12 +184,22 @@ class KeptOutputGpu {
   // of out's format and size is kept, or `whole` (the parameters changed:
   // what is kept was made otherwise). The output is kept after a frame
   // that did not change every tile, or after the first one.
-  CudaStatus decide(const ChangeMapGpu &changes, const FrameView &out, bool whole, cudaStream_t stream);
-  StageGate gate() const { return StageGate{state_.as<const GateState>()}; }
+  // reach_rows >= 0 (the warp: warp_rows_reach()) also marks the gate's
+  // rows: those within reach_rows of a changed tile's rows
+  // (row_within_reach), every row where nothing is kept or `whole`.
+  CudaStatus decide(const ChangeMapGpu &changes, const FrameView &out, bool whole, cudaStream_t stream,
+                    int reach_rows = -1);
+  StageGate gate() const {
+    return StageGate{state_.as<const GateState>(), with_rows_ ? rows_.as<const uint8_t>() : nullptr};
+  }
   // Whether a tile of the last decided frame's inputs changed, once the
   // stream has passed the decision (ChangeBackOff's signal for such a
   // stage: a frame computed only because nothing was kept is not busy).
   bool last_changed() const { return changed_.host() != 0; }
+  // The share of the rows that the last decided frame's changes reach
+  // (decide() with a reach; 0 without), once the stream has passed it:
+  // the warp's ChangeBackOff signal.
+  double last_rows_share() const;
   // After the stage's kernels: `out` (decide()'s) gets the kept copy when
   // the frame was not computed; the copy takes `out` when it was and is
   // kept.
@@ -180,8 +208,10 @@ class KeptOutputGpu {
   void reset() { first_ = true; }
 
  private:
-  DeviceBuffer state_, copy_;
-  PinnedWord changed_;
+  DeviceBuffer state_, copy_, rows_;
+  PinnedWord changed_, rows_count_;
+  bool with_rows_ = false;
+  int rows_height_ = 0;
   // The copy's frames: their format and size, each plane's place in copy_.
   PixelFormat format_ = PixelFormat::RGBA;
   int width_ = 0, height_ = 0, planes_ = 0;

@@ -122,7 +122,10 @@ CudaStatus WarpRendererGpu::render_pair(const WarpParams &params, const FrameVie
     // anchor of a chunk with holes beside its state and drops those whose
     // state names none, so no byte it loads may be uninitialised memory
     // (compute-sanitizer initcheck), though no such value is ever used.
-    if (smooth_.size() != had) P3D_CUDA_TRY(zero_chained(smooth_.get(), smooth_.size(), stream));
+    if (smooth_.size() != had) {
+      P3D_CUDA_TRY(zero_chained(smooth_.get(), smooth_.size(), stream));
+      gate = gate.every_row();  // the states and anchors of the rows left out are gone
+    }
   }
   const size_t counter_bytes = kTileMarksOffset + sizeof(unsigned) * plan.tiles();
   P3D_CUDA_TRY_STATUS(counters_.ensure(counter_bytes));

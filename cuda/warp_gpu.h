@@ -36,7 +36,12 @@ class WarpRendererGpu {
   // coarse cells, read in place; the result is the full-size map's.
   // A closed gate (cuda/change_gpu.h: an adaptive stage keeping the frame)
   // makes every kernel return at once; fill=NeighborAverage, whose steps
-  // the host checks, takes none (cudaErrorInvalidValue).
+  // the host checks, takes none (cudaErrorInvalidValue). A gate's rows
+  // (the adaptive warp's: those its changes reach) are the only rows
+  // rendered: out must hold the rows of the last frame rendered into it
+  // with the same parameters (the renderer keeps its fill's states and
+  // anchors of every row), as the pairs render_packed and ActiveWarpGpu
+  // keep do.
   CudaStatus render(const WarpParams &params, const FrameView &src, const YuvToRgb &m, DepthGrid<const float> depth,
                     const FrameView &out, cudaStream_t stream, long long *holes_out = nullptr, StageGate gate = {});
   // Renders the pair and packs it in one: the function of warp_render_cpu()
@@ -53,6 +58,9 @@ class WarpRendererGpu {
   // (measured: docs/benchmarks.md, Design measurements, "Fused pack").
   // Anything else renders into a scratch pair, then pack_gpu(). *fused_out
   // (if not null) says which ran. No host sync (but fill=NeighborAverage's).
+  // The gate's rows apply to the scratch pair, which the renderer keeps
+  // from frame to frame (every row when it is new); a side-by-side output
+  // and the fused anaglyph render every row of a frame the gate runs.
   CudaStatus render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src, const YuvToRgb &m,
                            DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
                            bool *fused_out = nullptr, StageGate gate = {});

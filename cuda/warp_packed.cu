@@ -121,13 +121,17 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
   const PixelFormat pair_format = is_packed_rgb(out.format) ? out.format
                                   : is_deep(out.format)     ? PixelFormat::RGBA64
                                                             : PixelFormat::RGBA;
+  // The rows of the gate are rendered into the pair kept here; an output
+  // that is the pair, or written by the fused pack, keeps no rows.
   if (pack_is_identity(pp) && out.format == pair_format)
-    return render_pair(params, src, m, depth, out, nullptr, stream, nullptr, nullptr, gate);
+    return render_pair(params, src, m, depth, out, nullptr, stream, nullptr, nullptr, gate.every_row());
   if (src.width <= 0 || src.height <= 0 || src.width > kMaxFrameSide || src.height > kMaxFrameSide)
     return invalid_frames();
   const int W = src.width, H = src.height;
   const int pair_stride = 2 * W * packed_pixel_bytes(pair_format);
+  const size_t had_pair = pair_.size();
   P3D_CUDA_TRY_STATUS(pair_.ensure(static_cast<size_t>(pair_stride) * H));
+  if (pair_.size() != had_pair) gate = gate.every_row();  // a new pair holds no rows
   FrameView pair{};
   pair.format = pair_format;
   pair.width = 2 * W;
@@ -151,6 +155,7 @@ CudaStatus WarpRendererGpu::render_packed(const WarpParams &params, const PackPa
     }
     fused.swap = pp.swap_eyes;
   }
+  if (fusable) gate = gate.every_row();
   bool used = false;
   P3D_CUDA_TRY_STATUS(
       render_pair(params, src, m, depth, pair, fusable ? &fused : nullptr, stream, nullptr, &used, gate));

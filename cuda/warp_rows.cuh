@@ -621,7 +621,7 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
                     unsigned long long *total, bool words, int group_rows, int group_blocks, FusedAnaglyph fused,
                     StageGate gate) {
   chained_kernel_start();
-  if (gate.closed()) return;  // the smooth fill then finds no tile listed
+  if (gate.closed()) return;  // the smooth fill then finds no tile listed (rows: below)
   static_assert(kSharedKeys || !kBothEyes, "both eyes at once keep their keys in shared memory");
   static_assert(!kFused || kBlock == RowBlock::RowsTogether, "the pack is fused in RowsTogether blocks");
   static_assert(kBothEyes || kBlock == RowBlock::Row, "row groups render both eyes at once");
@@ -638,6 +638,7 @@ __global__ void __launch_bounds__(kBlock == RowBlock::WideGroup || kBlock == Row
                  : in_tail               ? group_blocks * group_rows + ((b - group_blocks) >> (kEyeTail ? 1 : 0))
                                          : b * group_rows;
   const int block_rows = min(kBlock == RowBlock::Row || in_tail ? 1 : group_rows, src.height - y0);
+  if (gate.skips_rows(y0, block_rows)) return;  // the target keeps these rows, its fill's states and anchors
   RowJob<Keys, Px> j;
   j.y = y0;
   j.W = src.width;

@@ -243,12 +243,19 @@ static GstFlowReturn process(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuf
     if (!adaptive_fill) state->forget();
     const bool keep = state->adaptive_gpu.begin(adaptive_fill);
     const bool changed_params = keep && state->params.changed({params, pack, yuv, rect});
+    // A changed source row reaches the rows of the views within
+    // warp_rows_reach() of it: only those are rendered again, into the
+    // pair the renderer keeps (the others' bytes stay there), then packed.
+    const int reach_rows =
+        rect != whole
+            ? p3d::warp_rows_reach(p3d::active_warp_params(params, src.width, rect.width()), rect.width(), rect.height())
+            : p3d::warp_rows_reach(params, src.width, src.height);
     const GstFlowReturn ret = p3d::gst::run_gpu(base, "rendering the views", [&]() -> p3d::CudaStatus {
       cudaStream_t stream = base->gpu->stream();
       p3d::StageGate gate;
       if (keep)
         P3D_CUDA_TRY_STATUS(state->adaptive_gpu.decide(src, p3d::gst::frame_depth_plane(inbuf), adaptive.tolerance,
-                                                       dst, changed_params, stream, &gate));
+                                                       dst, changed_params, stream, &gate, reach_rows));
       if (rect != whole)
         P3D_CUDA_TRY_STATUS(state->active_gpu.render(state->gpu, params, pack, src, yuv, grid, rect, dst, stream, gate));
       else

@@ -65,9 +65,11 @@ bool WholeOutputGpu::begin(bool adaptive) {
 }
 
 CudaStatus WholeOutputGpu::decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance,
-                                  const FrameView &out, bool whole, cudaStream_t stream, StageGate *gate) {
+                                  const FrameView &out, bool whole, cudaStream_t stream, StageGate *gate,
+                                  int reach_rows) {
   P3D_CUDA_TRY_STATUS(inputs_.compare(frame, depth, tolerance, stream));
-  P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), out, whole, stream));
+  P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), out, whole, stream, reach_rows));
+  rows_ = reach_rows >= 0;
   *gate = output_.gate();
   return {};
 }
@@ -77,8 +79,10 @@ void WholeOutputGpu::end(bool ok) {
     reset();
     return;
   }
-  // Any change makes such a stage compute the whole frame: it is busy.
-  if (comparing_ && inputs_.compared()) backoff_.observe(output_.last_changed());
+  // Busy: any change, which makes such a stage compute the whole frame;
+  // with rows, changes that reach more than kWholeWarpShare of them.
+  if (comparing_ && inputs_.compared())
+    backoff_.observe(rows_ ? output_.last_rows_share() > kWholeWarpShare : output_.last_changed());
 }
 
 void WholeOutputGpu::reset() {

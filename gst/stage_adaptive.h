@@ -103,9 +103,10 @@ class InputHistoryGpu {
 
 // The adaptive steps on CUDA memory of a stage that keeps its output
 // whole (pseudo3dwarp, pseudo3dpack): its inputs compared, the device's
-// decision (KeptOutputGpu), the back-off (ChangeBackOff). Per frame:
-// begin() before the GPU block; inside it decide(), the stage's kernels
-// behind the gate, finish(); end() after the block's wait.
+// decision (KeptOutputGpu; the warp's rows), the back-off
+// (ChangeBackOff). Per frame: begin() before the GPU block; inside it
+// decide(), the stage's kernels behind the gate, finish(); end() after
+// the block's wait.
 class WholeOutputGpu {
  public:
   // Whether this frame is compared (adaptive and not backing off); when
@@ -113,9 +114,10 @@ class WholeOutputGpu {
   bool begin(bool adaptive);
   // Compares the inputs (depth: as InputHistoryGpu::compare) and queues
   // the decision for the output `out`; whole: the parameters changed.
-  // *gate: the stage's.
+  // *gate: the stage's; with its rows where reach_rows >= 0
+  // (KeptOutputGpu::decide).
   CudaStatus decide(const FrameView &frame, const DepthPlanePtr &depth, float tolerance, const FrameView &out,
-                    bool whole, cudaStream_t stream, StageGate *gate);
+                    bool whole, cudaStream_t stream, StageGate *gate, int reach_rows = -1);
   CudaStatus finish(const FrameView &out, cudaStream_t stream) { return output_.finish(out, stream); }
   // After the frame's work was waited for (ok: it succeeded; a failed
   // frame leaves nothing kept).
@@ -127,6 +129,7 @@ class WholeOutputGpu {
   KeptOutputGpu output_;
   ChangeBackOff backoff_;
   bool comparing_ = false;
+  bool rows_ = false;  // the last decision marked rows
 };
 #endif
 

@@ -400,6 +400,38 @@ TEST(AdaptiveChangeMap, RowsAndRunsOnOddSizes) {
       }
 }
 
+// rows_within: the rows within a reach of a changed tile's rows, which
+// for the warp's reach (warp_rows_reach) are the rows the adaptive warp
+// writes (warp_rows_written of the map's spans): the rule the warp's rows
+// on the device follow (tests/gpu/test_gpu_change.cpp checks the kernel).
+TEST(AdaptiveChangeMap, RowsWithinAReachAreTheWarpsRowsWritten) {
+  ChangeMap one(50, 100, false);
+  one.mark(1, 1);  // rows 32 .. 63
+  std::vector<uint8_t> want(100, 0);
+  std::fill(want.begin() + 27, want.begin() + 69, 1);
+  EXPECT_EQ(one.rows_within(5), want);
+  EXPECT_EQ(one.rows_within(0), one.rows());
+  EXPECT_EQ(one.rows_within(100), std::vector<uint8_t>(100, 1));
+  EXPECT_EQ(ChangeMap(50, 100, false).rows_within(100), std::vector<uint8_t>(100, 0));
+  std::mt19937 rng(15);
+  for (const cv::Size sz : {cv::Size(97, 45), cv::Size(33, 300), cv::Size(1920, 1080), cv::Size(1, 1)})
+    for (const HoleFill fill :
+         {HoleFill::BackgroundSmooth, HoleFill::Background, HoleFill::None, HoleFill::NeighborAverage})
+      for (const float disparity : {3.f, 20.f})
+        for (const double p : {0.0, 0.02, 0.3}) {
+          const ChangeMap m = random_map(sz.width, sz.height, rng, p);
+          SCOPED_TRACE(tiles_text(m));
+          const WarpParams params = test::warp_params(disparity, 0.5f, StereoView::Both, fill);
+          const int reach = warp_rows_reach(params, sz.width, sz.height);
+          EXPECT_GE(reach, 0);
+          if (fill == HoleFill::BackgroundSmooth)
+            EXPECT_GT(reach, 0);
+          else if (fill != HoleFill::NeighborAverage)
+            EXPECT_EQ(reach, 0);
+          EXPECT_EQ(m.rows_within(reach), warp_rows_written(params, sz.width, m.row_spans()));
+        }
+}
+
 TEST(AdaptiveChangeMap, ComparePlanesAndCopyPlaneRect) {
   cv::Mat a(45, 97, CV_32FC1);
   cv::randu(a, 0.f, 1.f);

@@ -2,7 +2,8 @@
 // the sequences of tests/elements/test_adaptive.cpp (unchanged frames, a
 // small box, a big change, cuts, one pixel) give, frame by frame, the
 // bytes of adaptive=false on the GPU and of the CPU chain; inside
-// letterbox and pillarbox bars too; a property changed between frames, a
+// letterbox and pillarbox bars too; frames of small changes only, which
+// the warp renders a few rows of; a property changed between frames, a
 // flush and toggling adaptive give what a fresh element gives. Part of
 // test_gpu_elements (its main() skips without a device).
 #include <gst/check/gstharness.h>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -118,6 +120,45 @@ TEST(GpuAdaptive, InsideBarsSameBytesAsFullComputation) {
     expect_same_bytes(adaptive, outputs(on_cpu(chain, "I420"), PixelFormat::I420, frames),
                       std::string(top ? "letterbox" : "pillarbox") + " against the CPU");
   }
+}
+
+// Frames whose every change is a small box somewhere, the picture's first
+// and last rows among the places: the warp renders only the rows the
+// changes reach (cuda/change_gpu.h, the gate's rows) and keeps the others
+// in its pair, frame after frame, without backing off.
+std::vector<cv::Mat> boxes_sequence(int w, int h, uint32_t seed) {
+  std::vector<cv::Mat> frames;
+  cv::Mat cur = textured_picture(w, h, seed);
+  std::mt19937 rng(seed + 1);
+  for (int k = 0; k < 16; ++k) {
+    cv::Mat next = cur.clone();
+    const int y = k % 4 == 1 ? 0 : k % 4 == 2 ? h - 6 : static_cast<int>(rng() % (h - 6));
+    const cv::Rect r(static_cast<int>(rng() % (w - 14)), y, 14, 6);
+    if (k > 0) next(r).setTo(cv::Scalar(rng() % 256, rng() % 256, rng() % 256));
+    frames.push_back(next);
+    cur = next;
+  }
+  return frames;
+}
+
+TEST(GpuAdaptive, PartlyChangedRowsGiveTheFullComputation) {
+  const std::vector<Case> cases = {
+      {"pseudo3dconvert layout=side-by-side-half", PixelFormat::I420, "I420"},
+      {"pseudo3dconvert layout=top-bottom-half fill=none max-disparity=8", PixelFormat::NV12, "NV12"},
+      {"pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp layout=right", PixelFormat::RGBA, "RGBA"},
+  };
+  for (const Case &c : cases)
+    for (const cv::Size size : {cv::Size(200, 120), cv::Size(1280, 720)}) {
+      const std::vector<cv::Mat> frames = boxes_sequence(size.width, size.height, 5);
+      const auto adaptive = outputs(on_device(c.chain, true, c.out), c.format, frames);
+      expect_same_bytes(adaptive, outputs(on_device(c.chain, false, c.out), c.format, frames), c.chain + " on the GPU");
+      expect_same_bytes(adaptive, outputs(on_cpu(c.chain, c.out), c.format, frames), c.chain + " against the CPU");
+    }
+  // Inside letterbox bars: the rows of the picture between them.
+  const std::string chain = "pseudo3dconvert layout=side-by-side-half";
+  const std::vector<cv::Mat> frames = in_bars(boxes_sequence(320, 136, 9), 52, 0);
+  expect_same_bytes(outputs(on_device(chain, true, "I420"), PixelFormat::I420, frames),
+                    outputs(on_device(chain, false, "I420"), PixelFormat::I420, frames), "letterbox, boxes");
 }
 
 GstElement *element_c(GstHarness *hx) {

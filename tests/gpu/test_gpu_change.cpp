@@ -10,10 +10,13 @@
 //  * KeptOutputGpu: an unchanged frame gets the kept output, byte for
 //    byte; a changed one runs; a frame that changed every tile is not kept
 //    (the next unchanged frame is computed again); `whole` runs the frame;
+//    the warp's rows are ChangeMap::rows_within at its reach, and the warp
+//    rendering only those rows gives a whole frame's bytes;
 //  * the depth estimator with tile flags and the filter with dirty tiles
 //    and a kept output give, frame after frame, the bytes of their full
 //    runs (the elements' adaptive runs, the warp's and the pack's gates
 //    included: test_gpu_elements.cpp, GpuAdaptive).
+#include <algorithm>
 #include <cstring>
 #include <memory>
 #include <random>
@@ -249,6 +252,130 @@ TEST(GpuChange, KeptOutputRunsKeepsAndRestores) {
     check_cuda(kept.finish(o, nullptr));
     EXPECT_TRUE(same_bytes(out.download(), wider)) << format_name(f) << ": another size runs";
   }
+}
+
+// The rows KeptOutputGpu::decide marks for the warp: ChangeMap::rows_within
+// of the flags at the reach, every row on the first frame and with
+// `whole`; the share counts the rows the changes reach either way.
+TEST(GpuChange, KeptOutputRowsAreTheRowsWithinTheReach) {
+  std::mt19937 rng(16);
+  for (const cv::Size sz : {cv::Size(70, 45), cv::Size(33, 300), cv::Size(1920, 1080), cv::Size(64, 8192)}) {
+    KeptOutputGpu kept;
+    ChangeMapGpu changes;
+    check_cuda(changes.resize(sz.width, sz.height));
+    const DeviceFrame out = DeviceFrame::upload(stage_output(PixelFormat::RGBA, 8, 8, 1));
+    int step = 0;
+    for (const int reach : {0, 1, 15, 31, 32, 100, sz.height})
+      for (const double p : {0.0, 0.01, 0.2})
+        for (const bool whole : {false, true}) {
+          ChangeMap m(sz.width, sz.height, false);
+          std::vector<uint8_t> flags(changes.tiles());
+          for (int ty = 0; ty < m.tiles_y(); ++ty)
+            for (int tx = 0; tx < m.tiles_x(); ++tx)
+              if (std::uniform_real_distribution<double>(0, 1)(rng) < p) {
+                m.mark(tx, ty);
+                flags[static_cast<size_t>(ty) * m.tiles_x() + tx] = 1;
+              }
+          check_cuda(CudaStatus{cudaMemcpy(changes.data(), flags.data(), flags.size(), cudaMemcpyHostToDevice)});
+          check_cuda(kept.decide(changes, out.view(), whole, nullptr, reach));
+          check_cuda(CudaStatus{cudaDeviceSynchronize()});
+          const StageGate gate = kept.gate();
+          ASSERT_NE(gate.rows, nullptr);
+          std::vector<uint8_t> rows(static_cast<size_t>(sz.height));
+          check_cuda(CudaStatus{cudaMemcpy(rows.data(), gate.rows, rows.size(), cudaMemcpyDeviceToHost)});
+          const std::vector<uint8_t> within = m.rows_within(reach);
+          const bool every_row = whole || step == 0;
+          EXPECT_EQ(rows, every_row ? std::vector<uint8_t>(rows.size(), 1) : within)
+              << sz.width << "x" << sz.height << " reach " << reach << " share " << p << (whole ? " whole" : "");
+          const double reached = static_cast<double>(std::count(within.begin(), within.end(), 1));
+          EXPECT_DOUBLE_EQ(kept.last_rows_share(), reached / sz.height);
+          ++step;
+        }
+    // Without a reach the gate has no rows.
+    check_cuda(kept.decide(changes, out.view(), false, nullptr));
+    EXPECT_EQ(kept.gate().rows, nullptr);
+  }
+}
+
+// A depth map of near and far boxes on a slope, which leaves holes for
+// the fills (the same for every frame unless a test changes it).
+cv::Mat boxes_depth(int w, int h, uint32_t seed) {
+  cv::Mat d(h, w, CV_32FC1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) d.at<float>(y, x) = 0.2f + 0.3f * y / h;
+  std::mt19937 rng(seed);
+  for (int k = 0; k < 12; ++k) {
+    const cv::Rect r(static_cast<int>(rng() % w), static_cast<int>(rng() % h), 4 + static_cast<int>(rng() % (w / 4)),
+                     4 + static_cast<int>(rng() % (h / 4)));
+    d(r & cv::Rect(0, 0, w, h)).setTo(0.5f + 0.5f * static_cast<float>(rng() % 100) / 100.f);
+  }
+  return d;
+}
+
+// The adaptive warp on the device renders only the rows its changes reach
+// (the gate's rows, KeptOutputGpu::decide at warp_rows_reach) into the
+// pair it keeps, and packs the whole pair: each frame equals a fresh
+// renderer's whole frame, with the source or the depth changed in a band
+// of rows (the top and bottom rows among them), for the fills that keep
+// rows and layouts packed from the pair, the pair itself and the fused
+// anaglyph's candidates.
+TEST(GpuChange, WarpRowsRenderOnlyTheRowsTheChangesReach) {
+  const PackLayout layouts[] = {PackLayout::SideBySideHalf, PackLayout::TopBottomHalf, PackLayout::SideBySide,
+                                PackLayout::Anaglyph};
+  for (const cv::Size size : {cv::Size(200, 120), cv::Size(1280, 720)})
+    for (const HoleFill fill : {HoleFill::BackgroundSmooth, HoleFill::None, HoleFill::Background})
+      for (const PackLayout layout : layouts) {
+        const WarpParams wp = test::warp_params(8.f, 0.5f, StereoView::Both, fill);
+        const PackParams pp = test::pack_params(layout);
+        const PixelFormat out_format = layout == PackLayout::SideBySideHalf ? PixelFormat::I420 : PixelFormat::RGBA;
+        int ow = 0, oh = 0;
+        pack_size(layout, size.width, size.height, &ow, &oh);
+        const int reach = warp_rows_reach(wp, size.width, size.height);
+        WarpRendererGpu adaptive;
+        KeptOutputGpu kept;
+        ChangeMapGpu changes;
+        check_cuda(changes.resize(size.width, size.height));
+        cv::Mat bgr = picture(size.width, size.height, 21), depth = boxes_depth(size.width, size.height, 22);
+        std::mt19937 rng(23);
+        double rows_share = 0;
+        for (int k = 0; k < 8; ++k) {
+          ChangeMap map(size.width, size.height, k == 0);
+          if (k > 0) {  // a band of rows: the first, the last, or anywhere
+            const int bh = 5;
+            const int y = k % 3 == 1   ? 0
+                          : k % 3 == 2 ? size.height - bh
+                                       : static_cast<int>(rng() % static_cast<unsigned>(size.height - bh));
+            const cv::Rect r(static_cast<int>(rng() % (size.width - 20)), y, 20, bh);
+            if (k % 2)
+              bgr(r).setTo(cv::Scalar(rng() % 256, rng() % 256, rng() % 256));
+            else
+              depth(r).setTo(0.9f);
+            map.mark_pixels(PixelRect{r.x, r.y, r.x + r.width, r.y + r.height});
+          }
+          std::vector<uint8_t> flags(changes.tiles());
+          for (int ty = 0; ty < map.tiles_y(); ++ty)
+            for (int tx = 0; tx < map.tiles_x(); ++tx)
+              flags[static_cast<size_t>(ty) * map.tiles_x() + tx] = map.tile(tx, ty);
+          check_cuda(CudaStatus{cudaMemcpy(changes.data(), flags.data(), flags.size(), cudaMemcpyHostToDevice)});
+          const DeviceFrame src = DeviceFrame::upload(HostFrame::from_bgr(bgr, PixelFormat::RGBA));
+          const DeviceDepth d = DeviceDepth::upload(depth);
+          // A pool buffer's old bytes.
+          DeviceFrame out = DeviceFrame::upload(stage_output(out_format, ow, oh, 900 + k));
+          check_cuda(kept.decide(changes, out.view(), false, nullptr, reach));
+          check_cuda(adaptive.render_packed(wp, pp, src.view(), YuvToRgb{}, as_const(d.grid()), out.view(), nullptr,
+                                            nullptr, kept.gate()));
+          check_cuda(kept.finish(out.view(), nullptr));
+          check_cuda(CudaStatus{cudaDeviceSynchronize()});
+          if (k > 0) rows_share += kept.last_rows_share();
+          WarpRendererGpu whole;
+          DeviceFrame want = DeviceFrame::upload(stage_output(out_format, ow, oh, 800 + k));
+          check_cuda(whole.render_packed(wp, pp, src.view(), YuvToRgb{}, as_const(d.grid()), want.view(), nullptr));
+          EXPECT_TRUE(same_bytes(out.download(), want.download()))
+              << size.width << "x" << size.height << " fill " << static_cast<int>(fill) << " layout "
+              << static_cast<int>(layout) << " frame " << k;
+        }
+        EXPECT_LT(rows_share / 7, 0.5) << "the changes reached most rows: the test renders whole frames";
+      }
 }
 
 // A copy of a device grid's cells (the same geometry).

@@ -146,7 +146,8 @@ std::vector<FrameView> views_of(const std::vector<HostFrame> &frames) {
 }
 
 // The chains' shares of changed tiles and spans (AdaptiveChain::shares);
-// the GPU chain reports none, so its input share is FrameHistory's.
+// the GPU chain reports its warp's rows, and its input share is
+// FrameHistory's.
 void add_shares(SceneResult *r, const AdaptiveChain &adaptive) {
   const AdaptiveChain::Shares &s = adaptive.shares();
   r->changed.input += s.input;
@@ -155,7 +156,7 @@ void add_shares(SceneResult *r, const AdaptiveChain &adaptive) {
   r->changed.warp_spans += s.warp_spans;
 }
 #ifdef P3D_BENCH_GPU
-void add_shares(SceneResult *, const GpuSceneChain &) {}
+void add_shares(SceneResult *r, const GpuSceneChain &adaptive) { r->changed.warp_rows += adaptive.warp_rows_share(); }
 #endif
 
 // Both chains over one sequence (`frames`, their views in the chains'
@@ -190,7 +191,9 @@ SceneResult measure(const std::vector<HostFrame> &frames, const std::vector<Fram
     run_round(views, &r, make_full, make_adaptive, [](const auto &, const auto &, size_t) {});
   if (differing > 0) r.psnr_mean = psnr_sum / differing;
   const double timed = std::max(1, r.frames - 1);
-  for (double *share : {&r.changed.input, &r.changed.filter, &r.changed.warp, &r.changed.warp_spans}) *share /= timed;
+  for (double *share :
+       {&r.changed.input, &r.changed.filter, &r.changed.warp, &r.changed.warp_spans, &r.changed.warp_rows})
+    *share /= timed;
   return r;
 }
 
@@ -276,7 +279,8 @@ void print_row(const SceneResult &r) {
   std::snprintf(size, sizeof size, "%dx%d", r.size.width, r.size.height);
   if (!r.identical()) std::snprintf(psnr_text, sizeof psnr_text, "%.1f/%.1f", r.psnr_mean, r.psnr_min);
   std::printf("%-9s %-9s %4g %6.1f%% %5.1f%% %7.1f %8.1f %7.1f %8.1f %6.1f%% %5s %13s  %-20s %-20s\n", r.scene.c_str(),
-              size, r.tolerance, 100.0 * r.changed.input, 100.0 * r.changed.warp_spans, r.off.median(), r.off.mean(),
+              size, r.tolerance, 100.0 * r.changed.input, 100.0 * (r.gpu ? r.changed.warp_rows : r.changed.warp_spans),
+              r.off.median(), r.off.mean(),
               r.on.median(), r.on.mean(), r.ratio(),
               !r.compared ? "n/a" : r.identical() ? "yes" : "no", psnr_text, stages_text(r.off).c_str(),
               stages_text(r.on).c_str());
@@ -310,6 +314,7 @@ void emit(const SceneResult &r, const StageParams &p, const SceneRunInfo &info, 
   j.integer("rounds", r.rounds);
   j.num("changed_tiles", r.changed.input).num("filter_tiles", r.changed.filter).num("warp_tiles", r.changed.warp);
   j.num("warp_spans", r.changed.warp_spans);
+  if (r.gpu) j.num("warp_rows", r.changed.warp_rows);
   j.num("off_median_ms", r.off.median()).num("off_mean_ms", r.off.mean());
   j.num("on_median_ms", r.on.median()).num("on_mean_ms", r.on.mean()).num("ratio_pct", r.ratio());
   j.str("on", r.compared ? "adaptive=true" : "crop-bars=auto");
@@ -336,7 +341,7 @@ int run_scenes(const SceneOptions &o, const StageParams &p, PixelFormat format, 
   std::printf("scene mode: the %s chain (depth, filter, warp + pack), adaptive off and on in turn frame by frame;\n"
               "%d frames a sequence, the first the warm-up; ms a frame, the shortest of %d round(s).\n"
               "changed: input tiles that differ from the frame before; spans: source pixels in the columns of\n"
-              "each row the warp is given as changed;\n"
+              "each row the warp is given as changed (GPU: rows, the share of the rows the warp renders);\n"
               "on/off: mean on / mean off; same: every output byte equal to adaptive=false's\n"
               "letterbox: on is crop-bars=auto, off crop-bars=off, both adaptive=false (changed: n/a)\n",
               o.gpu ? "GPU" : "CPU", o.frames, o.rounds);

@@ -109,9 +109,10 @@ class AdaptiveChain {
   // The last frame's shares of the picture that the stages took as
   // changed (1 on a whole frame): the depth stage's tiles (the input), the
   // filter's and the warp's tiles (input or depth), and the source pixels
-  // in the columns of each row the warp was given as changed (ColumnSpan).
+  // in the columns of each row the warp was given as changed (ColumnSpan);
+  // warp_rows: the GPU chain's (GpuSceneChain::warp_rows_share).
   struct Shares {
-    double input = 0, filter = 0, warp = 0, warp_spans = 0;
+    double input = 0, filter = 0, warp = 0, warp_spans = 0, warp_rows = 0;
   };
   const Shares &shares() const { return shares_; }
 

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "adaptive.h"
 #include "bars.h"
 #include "bilateral_gpu.h"
 #include "change_gpu.h"
@@ -47,6 +48,7 @@ struct GpuSceneChain::Impl {
   KeptOutputGpu kept;
   ChangeBackOff depth_backoff, filter_backoff, warp_backoff;
   bool filter_has_last = false;  // the filter holds its previous output
+  double warp_rows = 1;          // warp_rows_share()
   HostFrame host_out;
 
   ~Impl() {
@@ -141,7 +143,7 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
       check(s.warp_changes.fill(true, s.stream));
     else
       check(mark_grid_changes_gpu(as_const(s.filter_planes[prev].view), as_const(filtered), s.warp_changes, s.stream));
-    check(s.kept.decide(s.warp_changes, out, false, s.stream));
+    check(s.kept.decide(s.warp_changes, out, false, s.stream, warp_rows_reach(s.p.warp, src.width, src.height)));
     check(s.warp.render_packed(s.p.warp, s.p.pack, src, s.p.yuv, as_const(filtered), out, s.stream, nullptr,
                                s.kept.gate()));
     check(s.kept.finish(out, s.stream));
@@ -152,7 +154,9 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
   check(cudaEventSynchronize(s.marks[3]), "cudaEventSynchronize");
   if (depth_compares && s.depth_frame.compared()) s.depth_backoff.observe(s.depth_changes.last_share() > 0);
   if (!filter_whole && s.filter_frame.compared()) s.filter_backoff.observe(s.dirty.last_share() > 0);
-  if (warp_compares && s.warp_frame.compared() && !first) s.warp_backoff.observe(s.kept.last_changed());
+  const bool warp_compared = warp_compares && s.warp_frame.compared() && !first;
+  s.warp_rows = warp_compared ? s.kept.last_rows_share() : 1.0;
+  if (warp_compared) s.warp_backoff.observe(s.warp_rows > kWholeWarpShare);
   s.filter_has_last = filter_compares;
   float t[3] = {0, 0, 0};
   for (int i = 0; i < 3; ++i) check(cudaEventElapsedTime(&t[i], s.marks[i], s.marks[i + 1]), "cudaEventElapsedTime");
@@ -164,5 +168,6 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
 }
 
 const HostFrame &GpuSceneChain::output() const { return impl_->host_out; }
+double GpuSceneChain::warp_rows_share() const { return impl_->warp_rows; }
 
 }  // namespace p3d::bench

@@ -29,6 +29,10 @@ class GpuSceneChain {
   void frame(const FrameView &src, StageMs *ms);
   // The last frame's output, copied to the host.
   const HostFrame &output() const;
+  // The share of the rows the warp rendered in the last frame: every row
+  // of a frame it did not compare (the first, backing off, adaptive
+  // off), else those its changes reach (KeptOutputGpu::last_rows_share).
+  double warp_rows_share() const;
 
  private:
   struct Impl;
