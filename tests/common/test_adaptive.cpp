@@ -1176,13 +1176,33 @@ TEST(AdaptiveFilter, PiecesGiveTheWholePicture) {
     HostFrame want(out_format, ow, oh, 1);
     want.fill(0x5A);
     pack_cpu(p, in.view(), want.view());
+    // Every other frame into a new buffer of old bytes, the previous
+    // output handed over as kept (KeptOutput): the rows not packed come
+    // from it, and every row that differs from it is reported written.
+    const bool into_new = frame % 2 == 1;
     HostFrame next = out;
-    if (!pack_changed_cpu(p, in.view(), next.view(), frame == 0 ? nullptr : &changes))
+    if (into_new) next.fill(0x77);
+    const FrameView previous = out.view();
+    KeptOutput kept{&previous, {}};
+    if (!pack_changed_cpu(p, in.view(), next.view(), frame == 0 ? nullptr : &changes, into_new ? &kept : nullptr))
       return ::testing::AssertionFailure() << "frames do not fit";
     const ::testing::AssertionResult same = same_bytes(next.view(), want.view());
     if (!same)
       return ::testing::AssertionFailure() << "frame " << frame << " (" << what << ", " << 100 * changes.fraction()
-                                           << "% of the tiles): " << same.message();
+                                           << "% of the tiles" << (into_new ? ", kept output" : "")
+                                           << "): " << same.message();
+    if (into_new) {
+      if (kept.written.size() != static_cast<size_t>(oh))
+        return ::testing::AssertionFailure() << "frame " << frame << ": " << kept.written.size() << " rows written of "
+                                             << oh;
+      const FrameView a = want.view(), b = previous;
+      const size_t row = static_cast<size_t>(ow) * (is_packed_rgb(out_format) ? 4 : 1);
+      for (int y = 0; y < oh; ++y)
+        if (std::memcmp(a.plane[0] + static_cast<size_t>(y) * a.stride[0],
+                        b.plane[0] + static_cast<size_t>(y) * b.stride[0], row) != 0 &&
+            !kept.written[y])
+          return ::testing::AssertionFailure() << "frame " << frame << ": row " << y << " changed, not written";
+    }
     out = std::move(next);
   }
   return ::testing::AssertionSuccess();

@@ -275,6 +275,54 @@ TEST(DepthRegions, EdgesNearTheThresholdAreBlocksJoined) {
     }
 }
 
+// The largest threshold at which blocks_joined(a, b) is false: the pair's
+// distance as blocks_joined computes it (found by bisection over the
+// positive floats, whose bit patterns are ordered).
+float joined_distance(const float *a, const float *b, bool yuv) {
+  uint32_t lo = 0, hi = 0x7f800000u;  // blocks_joined(lo) false, blocks_joined(hi = +inf) true
+  while (hi - lo > 1) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    float t;
+    std::memcpy(&t, &mid, sizeof t);
+    (blocks_joined(a, b, t, yuv) ? hi : lo) = mid;
+  }
+  float d;
+  std::memcpy(&d, &lo, sizeof d);
+  return d;
+}
+
+// Pairs whose distance is exactly the threshold (not joined) or one ulp
+// under it (joined), in checkerboards of two features wide enough for the
+// vector edge tests (joined_bits) and their scalar tail: every edge of the
+// picture has that distance, so the labels are all blocks or one region.
+// Any other order of the distance's float operations than blocks_joined's
+// gives another distance for some of the random pairs, and other labels.
+TEST(DepthRegions, EdgesExactlyAtTheThresholdAreBlocksJoined) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> level(0.f, 255.f);
+  for (const bool yuv : {false, true})
+    for (int pair = 0; pair < 48; ++pair) {
+      float a[3], b[3];
+      for (int c = 0; c < 3; ++c) {
+        a[c] = level(rng);
+        b[c] = level(rng);
+      }
+      const float d = joined_distance(a, b, yuv);
+      const int bx = 67, by = 3;
+      std::vector<float> feat(3 * static_cast<size_t>(bx) * by);
+      for (int y = 0; y < by; ++y)
+        for (int x = 0; x < bx; ++x)
+          std::memcpy(&feat[3 * (static_cast<size_t>(y) * bx + x)], (x + y) % 2 ? b : a, sizeof a);
+      for (const float threshold : {d, std::nextafter(d, INFINITY)}) {
+        BlockRegions regions;
+        regions.label(feat, bx, by, threshold, yuv, nullptr);
+        ASSERT_EQ(regions.labels(), flood_labels(feat, bx, by, threshold, yuv))
+            << (yuv ? "Y'CbCr" : "R'G'B'") << " pair " << pair << ", threshold " << threshold
+            << (threshold == d ? " (the distance)" : " (an ulp over it)");
+      }
+    }
+}
+
 // Each region's statistics as a flood fill gives them, checked against
 // BlockRegions at every region's label.
 void expect_region_stats(const BlockRegions &regions, const std::vector<int> &want, const std::vector<uint32_t> &hq,
