@@ -219,6 +219,13 @@ class KeptOutputGpu {
   bool first_ = true;
 };
 
+// Whether the filter on CUDA memory compares its inputs (adaptive): only
+// on the full-resolution grid. On a coarse grid (step 2 and up, the
+// automatic step from 2160 rows) its whole pass costs less than the
+// comparison of the guide frame alone (docs/benchmarks.md, "Adaptive work
+// per scene (GPU)"), so the stage computes every frame whole.
+inline bool filter_compares_on_gpu(int grid_shift) { return grid_shift == 0; }
+
 // Copies `rows` rows of row_bytes bytes from one device plane to another
 // when the gate is open (a stage's own copies, which must not run on a
 // frame it keeps).

@@ -158,8 +158,9 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
     // Adaptive: the blocks of outputs within the filter's reach of a
     // changed guide or depth tile are filtered, the others copied from the
     // previous output plane, which the stage holds; while frames keep
-    // changing, uncompared (ChangeBackOff).
-    const bool compare = adaptive.on && state->backoff_gpu.compare_next();
+    // changing, uncompared (ChangeBackOff); on a coarse grid never
+    // (filter_compares_on_gpu).
+    const bool compare = adaptive.on && p3d::filter_compares_on_gpu(shift) && state->backoff_gpu.compare_next();
     if (!compare) {
       state->inputs_gpu.reset();
       state->last_out.reset();

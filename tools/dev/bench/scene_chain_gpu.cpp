@@ -94,7 +94,8 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
   // Which stages compare this frame (ChangeBackOff); the others compute it
   // whole with their histories reset, as the elements do.
   const bool depth_compares = s.adaptive && s.depth_backoff.compare_next();
-  const bool filter_compares = s.adaptive && s.filter_backoff.compare_next();
+  const bool filter_compares =
+      s.adaptive && filter_compares_on_gpu(s.filter_planes[k].view.shift) && s.filter_backoff.compare_next();
   const bool warp_compares = s.adaptive && s.warp_backoff.compare_next();
   if (!depth_compares) s.depth_frame.reset();
   if (!filter_compares) {
