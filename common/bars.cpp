@@ -241,4 +241,10 @@ void BarTracker::reset() {
   last_rows_.clear();
 }
 
+std::array<PixelRect, 4> cells_outside(PixelRect r, int shift, int cells_w, int cells_h) {
+  const PixelRect in{r.x0 >> shift, r.y0 >> shift, grid_cells(r.x1, shift), grid_cells(r.y1, shift)};
+  return {PixelRect{0, 0, cells_w, in.y0}, PixelRect{0, in.y1, cells_w, cells_h}, PixelRect{0, in.y0, in.x0, in.y1},
+          PixelRect{in.x1, in.y0, cells_w, in.y1}};
+}
+
 }  // namespace p3d

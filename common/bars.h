@@ -20,6 +20,7 @@
 //     and a reset adopt the next plausible measure at once.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -108,6 +109,12 @@ struct ActiveArea {
 // `frame_width` wide: the same parallax in pixels (max_disparity is a
 // share of the width), within kMaxDisparityPercent.
 WarpParams active_warp_params(const WarpParams &params, int frame_width, int active_width);
+
+// The cells of a depth grid (grid_cells of its picture at `shift`, cells_w
+// x cells_h) outside the active rect r: the bands above, below, left and
+// right of it (some empty). A plane's depth there is 0
+// (DepthPlane::set_active).
+std::array<PixelRect, 4> cells_outside(PixelRect r, int shift, int cells_w, int cells_h);
 
 // The automatic sizes of the whole frame (the depth's block, the filter's
 // grid step) made explicit, for stages that run inside an active rect: a

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "bars.h"
+
 namespace p3d::gst {
 
 DepthPlane::~DepthPlane() {
@@ -33,13 +35,7 @@ bool DepthPlane::set_active(PixelRect rect, std::nullptr_t, std::string *) {
   active = rect;
   if (!cropped()) return true;
   const ImageView<float> cells = view();
-  // The bands outside, in cells: above, below, left and right of the rect.
-  const PixelRect in{rect.x0 >> shift, rect.y0 >> shift, grid_cells(rect.x1, shift), grid_cells(rect.y1, shift)};
-  const PixelRect bands[4] = {{0, 0, cells.width, in.y0},
-                              {0, in.y1, cells.width, cells.height},
-                              {0, in.y0, in.x0, in.y1},
-                              {in.x1, in.y0, cells.width, in.y1}};
-  for (const PixelRect &b : bands) {
+  for (const PixelRect &b : cells_outside(rect, shift, cells.width, cells.height)) {
     if (b.empty()) continue;
 #if HAVE_CUDA
     if (on_device) {

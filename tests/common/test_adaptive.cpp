@@ -424,10 +424,11 @@ TEST(AdaptiveChangeMap, RowsWithinAReachAreTheWarpsRowsWritten) {
           const WarpParams params = test::warp_params(disparity, 0.5f, StereoView::Both, fill);
           const int reach = warp_rows_reach(params, sz.width, sz.height);
           EXPECT_GE(reach, 0);
-          if (fill == HoleFill::BackgroundSmooth)
+          if (fill == HoleFill::BackgroundSmooth) {
             EXPECT_GT(reach, 0);
-          else if (fill != HoleFill::NeighborAverage)
+          } else if (fill != HoleFill::NeighborAverage) {
             EXPECT_EQ(reach, 0);
+          }
           EXPECT_EQ(m.rows_within(reach), warp_rows_written(params, sz.width, m.row_spans()));
         }
 }

@@ -20,11 +20,8 @@ void warp_failed() { throw std::runtime_error("the warp's frames do not fit"); }
 
 // DepthPlane::set_active: 0 in the plane outside r.
 void zero_outside(cv::Mat &plane, PixelRect r) {
-  if (r == whole_picture(plane.cols, plane.rows)) return;
-  plane.rowRange(0, r.y0).setTo(cv::Scalar(0));
-  plane.rowRange(r.y1, plane.rows).setTo(cv::Scalar(0));
-  plane(cv::Rect(0, r.y0, r.x0, r.height())).setTo(cv::Scalar(0));
-  plane(cv::Rect(r.x1, r.y0, plane.cols - r.x1, r.height())).setTo(cv::Scalar(0));
+  for (const PixelRect &b : cells_outside(r, 0, plane.cols, plane.rows))
+    if (!b.empty()) plane(cv::Rect(b.x0, b.y0, b.width(), b.height())).setTo(cv::Scalar(0));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include "adaptive.h"
 #include "bars.h"
+#include "bars_gpu.h"
 #include "bilateral_gpu.h"
 #include "change_gpu.h"
 #include "depth_estimate_gpu.h"
@@ -50,8 +51,15 @@ struct GpuSceneChain::Impl {
   bool filter_has_last = false;  // the filter holds its previous output
   double warp_rows = 1;          // warp_rows_share()
   HostFrame host_out;
+  // crop-bars=auto (adaptive off): the bars and the picture between them.
+  bool crop = false;
+  BarCountsGpu bar_counts;
+  BarTracker bars;
+  PixelRect rect;
+  ActiveWarpGpu active_warp;
 
   ~Impl() {
+    bar_counts.reset();
     for (cudaEvent_t e : marks)
       if (e) cudaEventDestroy(e);
     if (stream) cudaStreamDestroy(stream);
@@ -59,9 +67,12 @@ struct GpuSceneChain::Impl {
 };
 
 GpuSceneChain::GpuSceneChain(const StageParams &p, int width, int height, PixelFormat input, bool adaptive,
-                             float tolerance)
+                             float tolerance, bool crop)
     : impl_(std::make_unique<Impl>()) {
   Impl &s = *impl_;
+  if (adaptive && crop) throw std::runtime_error("the GPU scene chain crops the bars with adaptive off only");
+  s.crop = crop;
+  s.rect = whole_picture(width, height);
   s.p = p;
   s.p.depth = frame_scaled(p.depth, width, height);  // as the elements scale them
   s.p.filter = frame_scaled(p.filter, width, height);
@@ -85,7 +96,78 @@ GpuSceneChain::GpuSceneChain(const StageParams &p, int width, int height, PixelF
 GpuSceneChain::~GpuSceneChain() = default;
 GpuSceneChain::GpuSceneChain(GpuSceneChain &&) noexcept = default;
 
+namespace {
+
+// DepthPlane::set_active on the device: 0 in the grid's cells outside r.
+void zero_outside(DepthGrid<float> g, PixelRect r, cudaStream_t stream) {
+  for (const PixelRect &b : cells_outside(r, g.shift, g.cells.width, g.cells.height))
+    if (!b.empty())
+      check(cudaMemset2DAsync(g.cells.row(b.y0) + b.x0, g.cells.pitch, 0, b.width() * sizeof(float), b.height(),
+                              stream),
+            "cudaMemset2DAsync");
+}
+
+}  // namespace
+
+// crop-bars=auto with adaptive off, as the elements run it on CUDA memory:
+// pseudo3ddepth's bar counts (waited for) and frame_rect, pseudo3dfilter's
+// filter_rect, pseudo3dwarp's ActiveWarpGpu inside the rect.
+void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
+  Impl &s = *impl_;
+  const int k = s.frames % kPoolPlanes;
+  const DepthGrid<float> depth = s.depth_planes[k].view, filtered = s.filter_planes[k].view;
+  const FrameView out = s.outputs[k].view;
+  const PixelRect whole = whole_picture(src.width, src.height);
+  check(cudaEventRecord(s.marks[0], s.stream), "cudaEventRecord");
+  // pseudo3ddepth
+  BarCounts counts;
+  CudaStatus st;
+  check(s.bar_counts.count(src, bar_luma_threshold(s.p.yuv), s.stream));
+  if (!s.bar_counts.take(&counts, &st)) throw std::runtime_error("no bar counts queued");
+  check(st);
+  s.bars.observe(counts);
+  PixelRect rect = s.bars.active(src.width, src.height);
+  const int block_shift = block_grid_shift(s.p.depth, rect.width(), rect.height());
+  if (rect.x0 % (1 << block_shift) != 0 || rect.y0 % (1 << block_shift) != 0) rect = whole;
+  if (rect != s.rect) {
+    s.estimator.reset();
+    s.rect = rect;
+  }
+  zero_outside(depth, rect, s.stream);
+  check(s.estimator.estimate(s.p.depth, sub_frame(src, rect), sub_grid(depth, rect), s.stream));
+  check(cudaEventRecord(s.marks[1], s.stream), "cudaEventRecord");
+  // pseudo3dfilter
+  const int cell_shift = bilateral_grid_shift(bilateral_sanitize(s.p.filter), rect.width(), rect.height());
+  const PixelRect frect = rect != whole && sub_grid_fits(depth, rect) && rect.x0 % (1 << cell_shift) == 0 &&
+                                  rect.y0 % (1 << cell_shift) == 0
+                              ? rect
+                              : whole;
+  zero_outside(filtered, frect, s.stream);
+  check(s.filter.run(s.p.filter, sub_frame(src, frect), sub_grid(as_const(depth), frect), sub_grid(filtered, frect),
+                     s.stream));
+  check(cudaEventRecord(s.marks[2], s.stream), "cudaEventRecord");
+  // pseudo3dwarp
+  const PixelRect wrect = sub_grid_fits(filtered, frect) ? frect : whole;
+  if (wrect != whole)
+    check(s.active_warp.render(s.warp, s.p.warp, s.p.pack, src, s.p.yuv, as_const(filtered), wrect, out, s.stream));
+  else
+    check(s.warp.render_packed(s.p.warp, s.p.pack, src, s.p.yuv, as_const(filtered), out, s.stream));
+  check(cudaEventRecord(s.marks[3], s.stream), "cudaEventRecord");
+  check(cudaEventSynchronize(s.marks[3]), "cudaEventSynchronize");
+  float t[3] = {0, 0, 0};
+  for (int i = 0; i < 3; ++i) check(cudaEventElapsedTime(&t[i], s.marks[i], s.marks[i + 1]), "cudaEventElapsedTime");
+  ms->depth = t[0];
+  ms->filter = t[1];
+  ms->warp = t[2];
+  check(s.outputs[k].download(&s.host_out));
+  ++s.frames;
+}
+
 void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
+  if (impl_->crop) {
+    frame_cropped(src, ms);
+    return;
+  }
   Impl &s = *impl_;
   const int k = s.frames % kPoolPlanes, prev = (s.frames + kPoolPlanes - 1) % kPoolPlanes;
   const bool first = s.frames == 0;

@@ -6,8 +6,12 @@
 // change_gpu.h): it compares its inputs on the device, the depth sums the
 // blocks of changed tiles, the filter the cells within its reach, and the
 // warp's kernels return at once on a frame whose inputs did not change,
-// whose output is then the kept copy. crop-bars off. Host code on the
-// CUDA runtime API (built by the host compiler, linked with the kernels).
+// whose output is then the kept copy, and render only the rows a change
+// reaches. crop-bars off, or (adaptive off) auto: the bars counted on the
+// device and waited for as pseudo3ddepth does, the depth estimated and
+// filtered inside them (the planes 0 outside), the views rendered by
+// ActiveWarpGpu. Host code on the CUDA runtime API (built by the host
+// compiler, linked with the kernels).
 #pragma once
 
 #include <memory>
@@ -21,7 +25,9 @@ namespace p3d::bench {
 
 class GpuSceneChain {
  public:
-  GpuSceneChain(const StageParams &p, int width, int height, PixelFormat input, bool adaptive, float tolerance);
+  // crop: crop-bars=auto, with adaptive false only.
+  GpuSceneChain(const StageParams &p, int width, int height, PixelFormat input, bool adaptive, float tolerance,
+                bool crop = false);
   ~GpuSceneChain();
   GpuSceneChain(GpuSceneChain &&) noexcept;
   // One frame (device memory: a DevFrame); ms: each stage's GPU time (CUDA events).
@@ -35,6 +41,7 @@ class GpuSceneChain {
   double warp_rows_share() const;
 
  private:
+  void frame_cropped(const FrameView &src, StageMs *ms);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
