@@ -86,6 +86,14 @@ struct Case {
   const char *out;  // the output's format, pinned on both devices
 };
 
+// Frame by frame, the case's chain with adaptive=true on CUDA memory
+// gives the bytes of adaptive=false there and of the CPU chain.
+void expect_full_computation(const Case &c, const std::vector<cv::Mat> &frames) {
+  const auto adaptive = outputs(on_device(c.chain, true, c.out), c.format, frames);
+  expect_same_bytes(adaptive, outputs(on_device(c.chain, false, c.out), c.format, frames), c.chain + " on the GPU");
+  expect_same_bytes(adaptive, outputs(on_cpu(c.chain, c.out), c.format, frames), c.chain + " against the CPU");
+}
+
 TEST(GpuAdaptive, SameBytesAsFullComputationAndTheCpu) {
   const std::vector<Case> cases = {
       {"pseudo3dconvert layout=side-by-side-half", PixelFormat::I420, "I420"},
@@ -99,12 +107,8 @@ TEST(GpuAdaptive, SameBytesAsFullComputationAndTheCpu) {
       {"pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp layout=left fill=none", PixelFormat::RGBx, "NV12"},
   };
   for (const Case &c : cases)
-    for (const cv::Size size : {cv::Size(160, 100), cv::Size(1280, 720)}) {
-      const std::vector<cv::Mat> frames = changing_sequence(size.width, size.height, 7);
-      const auto adaptive = outputs(on_device(c.chain, true, c.out), c.format, frames);
-      expect_same_bytes(adaptive, outputs(on_device(c.chain, false, c.out), c.format, frames), c.chain + " on the GPU");
-      expect_same_bytes(adaptive, outputs(on_cpu(c.chain, c.out), c.format, frames), c.chain + " against the CPU");
-    }
+    for (const cv::Size size : {cv::Size(160, 100), cv::Size(1280, 720)})
+      expect_full_computation(c, changing_sequence(size.width, size.height, 7));
 }
 
 // crop-bars on CUDA memory: the views of the picture inside the bars
@@ -148,12 +152,8 @@ TEST(GpuAdaptive, PartlyChangedRowsGiveTheFullComputation) {
       {"pseudo3ddepth ! pseudo3dfilter ! pseudo3dwarp layout=right", PixelFormat::RGBA, "RGBA"},
   };
   for (const Case &c : cases)
-    for (const cv::Size size : {cv::Size(200, 120), cv::Size(1280, 720)}) {
-      const std::vector<cv::Mat> frames = boxes_sequence(size.width, size.height, 5);
-      const auto adaptive = outputs(on_device(c.chain, true, c.out), c.format, frames);
-      expect_same_bytes(adaptive, outputs(on_device(c.chain, false, c.out), c.format, frames), c.chain + " on the GPU");
-      expect_same_bytes(adaptive, outputs(on_cpu(c.chain, c.out), c.format, frames), c.chain + " against the CPU");
-    }
+    for (const cv::Size size : {cv::Size(200, 120), cv::Size(1280, 720)})
+      expect_full_computation(c, boxes_sequence(size.width, size.height, 5));
   // Inside letterbox bars: the rows of the picture between them.
   const std::string chain = "pseudo3dconvert layout=side-by-side-half";
   const std::vector<cv::Mat> frames = in_bars(boxes_sequence(320, 136, 9), 52, 0);

@@ -58,6 +58,18 @@ struct GpuSceneChain::Impl {
   PixelRect rect;
   ActiveWarpGpu active_warp;
 
+  // After the frame's last event: each stage's time between the marks,
+  // the output (pool slot k) read back.
+  void end_frame(int k, StageMs *ms) {
+    float t[3] = {0, 0, 0};
+    for (int i = 0; i < 3; ++i) check(cudaEventElapsedTime(&t[i], marks[i], marks[i + 1]), "cudaEventElapsedTime");
+    ms->depth = t[0];
+    ms->filter = t[1];
+    ms->warp = t[2];
+    check(outputs[k].download(&host_out));
+    ++frames;
+  }
+
   ~Impl() {
     bar_counts.reset();
     for (cudaEvent_t e : marks)
@@ -154,13 +166,7 @@ void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
     check(s.warp.render_packed(s.p.warp, s.p.pack, src, s.p.yuv, as_const(filtered), out, s.stream));
   check(cudaEventRecord(s.marks[3], s.stream), "cudaEventRecord");
   check(cudaEventSynchronize(s.marks[3]), "cudaEventSynchronize");
-  float t[3] = {0, 0, 0};
-  for (int i = 0; i < 3; ++i) check(cudaEventElapsedTime(&t[i], s.marks[i], s.marks[i + 1]), "cudaEventElapsedTime");
-  ms->depth = t[0];
-  ms->filter = t[1];
-  ms->warp = t[2];
-  check(s.outputs[k].download(&s.host_out));
-  ++s.frames;
+  s.end_frame(k, ms);
 }
 
 void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
@@ -241,13 +247,7 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
   s.warp_rows = warp_compared ? s.kept.last_rows_share() : 1.0;
   if (warp_compared) s.warp_backoff.observe(s.warp_rows > kWholeWarpShare);
   s.filter_has_last = filter_compares;
-  float t[3] = {0, 0, 0};
-  for (int i = 0; i < 3; ++i) check(cudaEventElapsedTime(&t[i], s.marks[i], s.marks[i + 1]), "cudaEventElapsedTime");
-  ms->depth = t[0];
-  ms->filter = t[1];
-  ms->warp = t[2];
-  check(s.outputs[k].download(&s.host_out));
-  ++s.frames;
+  s.end_frame(k, ms);
 }
 
 const HostFrame &GpuSceneChain::output() const { return impl_->host_out; }
