@@ -186,7 +186,11 @@ class KeptOutputGpu {
   // that did not change every tile, or after the first one.
   // reach_rows >= 0 (the warp: warp_rows_reach()) also marks the gate's
   // rows: those within reach_rows of a changed tile's rows
-  // (row_within_reach), every row where nothing is kept or `whole`.
+  // (row_within_reach); every row on the first decision (after reset(),
+  // or for an output of another format or size) and with `whole`. A frame
+  // that runs only because nothing is kept marks the rows of its changes
+  // alone: the rows of the pair the warp keeps are its own, not the kept
+  // output's.
   CudaStatus decide(const ChangeMapGpu &changes, const FrameView &out, bool whole, cudaStream_t stream,
                     int reach_rows = -1);
   StageGate gate() const {
@@ -220,10 +224,12 @@ class KeptOutputGpu {
 };
 
 // Whether the filter on CUDA memory compares its inputs (adaptive): only
-// on the full-resolution grid. On a coarse grid (step 2 and up, the
-// automatic step from 2160 rows) its whole pass costs less than the
-// comparison of the guide frame alone (docs/benchmarks.md, "Adaptive work
-// per scene (GPU)"), so the stage computes every frame whole.
+// on the full-resolution grid. On the automatic step 4 from 2160 rows its
+// whole pass costs less than the comparison of the guide frame alone
+// (docs/benchmarks.md, "Adaptive work per scene (GPU)"); a coarse grid of
+// any step reads a sixteenth of the cells or less per guide pixel it
+// compares, so every step from 2 takes the same rule and the stage
+// computes every frame whole.
 inline bool filter_compares_on_gpu(int grid_shift) { return grid_shift == 0; }
 
 // Copies `rows` rows of row_bytes bytes from one device plane to another

@@ -60,7 +60,8 @@ class WarpRendererGpu {
   // (if not null) says which ran. No host sync (but fill=NeighborAverage's).
   // The gate's rows apply to the scratch pair, which the renderer keeps
   // from frame to frame (every row when it is new); a side-by-side output
-  // and the fused anaglyph render every row of a frame the gate runs.
+  // and an anaglyph that may fuse (the conditions above but the rows
+  // resolved together) render every row of a frame the gate runs.
   CudaStatus render_packed(const WarpParams &params, const PackParams &pack, const FrameView &src, const YuvToRgb &m,
                            DepthGrid<const float> depth, const FrameView &out, cudaStream_t stream,
                            bool *fused_out = nullptr, StageGate gate = {});

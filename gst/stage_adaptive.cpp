@@ -69,7 +69,7 @@ CudaStatus WholeOutputGpu::decide(const FrameView &frame, const DepthPlanePtr &d
                                   int reach_rows) {
   P3D_CUDA_TRY_STATUS(inputs_.compare(frame, depth, tolerance, stream));
   P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), out, whole, stream, reach_rows));
-  rows_ = reach_rows >= 0;
+  rows_ = output_.gate().rows != nullptr;
   *gate = output_.gate();
   return {};
 }

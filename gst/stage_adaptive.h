@@ -101,8 +101,8 @@ class InputHistoryGpu {
   bool compared_ = false;
 };
 
-// The adaptive steps on CUDA memory of a stage that keeps its output
-// whole (pseudo3dwarp, pseudo3dpack): its inputs compared, the device's
+// The adaptive steps on CUDA memory of a stage that keeps a whole copy of
+// its output (pseudo3dwarp, pseudo3dpack): its inputs compared, the device's
 // decision (KeptOutputGpu; the warp's rows), the back-off
 // (ChangeBackOff). Per frame: begin() before the GPU block; inside it
 // decide(), the stage's kernels behind the gate, finish(); end() after

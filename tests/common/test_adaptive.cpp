@@ -1196,13 +1196,21 @@ TEST(AdaptiveFilter, PiecesGiveTheWholePicture) {
       if (kept.written.size() != static_cast<size_t>(oh))
         return ::testing::AssertionFailure() << "frame " << frame << ": " << kept.written.size() << " rows written of "
                                              << oh;
+      // A 4:2:0 chroma row goes with its two rows (KeptOutput).
       const FrameView a = want.view(), b = previous;
-      const size_t row = static_cast<size_t>(ow) * (is_packed_rgb(out_format) ? 4 : 1);
-      for (int y = 0; y < oh; ++y)
-        if (std::memcmp(a.plane[0] + static_cast<size_t>(y) * a.stride[0],
-                        b.plane[0] + static_cast<size_t>(y) * b.stride[0], row) != 0 &&
-            !kept.written[y])
-          return ::testing::AssertionFailure() << "frame " << frame << ": row " << y << " changed, not written";
+      for (int pl = 0; pl < frame_plane_count(out_format); ++pl) {
+        int row_bytes = 0, rows = 0;
+        frame_plane_size(out_format, ow, oh, pl, &row_bytes, &rows);
+        const int step = pl > 0 ? 2 : 1;
+        for (int y = 0; y < rows; ++y) {
+          const bool written = kept.written[step * y] || (step * y + 1 < oh && step == 2 && kept.written[2 * y + 1]);
+          if (std::memcmp(a.plane[pl] + static_cast<size_t>(y) * a.stride[pl],
+                          b.plane[pl] + static_cast<size_t>(y) * b.stride[pl], static_cast<size_t>(row_bytes)) != 0 &&
+              !written)
+            return ::testing::AssertionFailure()
+                   << "frame " << frame << ": plane " << pl << " row " << y << " changed, not written";
+        }
+      }
     }
     out = std::move(next);
   }

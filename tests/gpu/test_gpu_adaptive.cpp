@@ -112,7 +112,7 @@ TEST(GpuAdaptive, SameBytesAsFullComputationAndTheCpu) {
 }
 
 // crop-bars on CUDA memory: the views of the picture inside the bars
-// (cuda/bars_gpu.h ActiveWarpGpu), gated as a whole.
+// (cuda/bars_gpu.h ActiveWarpGpu), behind the warp's gate and rows.
 TEST(GpuAdaptive, InsideBarsSameBytesAsFullComputation) {
   const std::string chain = "pseudo3dconvert layout=side-by-side-half";
   const std::vector<cv::Mat> picture = changing_sequence(320, 136, 5);

@@ -70,7 +70,7 @@ struct SceneResult {
   Series off, on;
   AdaptiveChain::Shares changed;  // means over the timed frames
   bool compared = true;  // false: the on chain is meant to differ (measure_crop)
-  bool gpu = false;      // the GPU chains (the spans and filter/warp shares are not counted)
+  bool gpu = false;      // the GPU chains (they count the warp's rows, not the spans and tiles)
   int identical_frames = 0;
   int first_mismatch = -1;  // frame number, -1: none
   std::string mismatch_at;
@@ -335,7 +335,7 @@ void emit(const SceneResult &r, const StageParams &p, const SceneRunInfo &info, 
   j.integer("rounds", r.rounds);
   j.num("changed_tiles", r.changed.input).num("filter_tiles", r.changed.filter).num("warp_tiles", r.changed.warp);
   j.num("warp_spans", r.changed.warp_spans);
-  if (r.gpu) j.num("warp_rows", r.changed.warp_rows);
+  if (r.gpu && r.compared) j.num("warp_rows", r.changed.warp_rows);
   j.num("off_median_ms", r.off.median()).num("off_mean_ms", r.off.mean());
   j.num("on_median_ms", r.on.median()).num("on_mean_ms", r.on.mean()).num("ratio_pct", r.ratio());
   j.str("on", r.compared ? "adaptive=true" : "crop-bars=auto");
