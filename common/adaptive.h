@@ -23,11 +23,9 @@ namespace p3d {
 // busy beyond ChangeBackOff::busy_on_cpu's share); Rows, whole rows of
 // tiles (the pack: a change in every row); Spans, in each row of tiles the
 // columns from its first changed tile to its last, widened by the warp's
-// reach (the warp: spans over more than kWholeWarpShare of the picture).
-// On CUDA memory the warp is busy when its changes reach more than
-// kWholeWarpShare of its rows (KeptOutputGpu::last_rows_share).
+// reach (the warp: spans over more than kWholeWarpShare of the picture,
+// common/change_map.h).
 enum class ChangeReach { Tiles, Rows, Spans };
-constexpr double kWholeWarpShare = 0.9;
 bool busy_for(ChangeReach reach, const ChangeMap &changes);
 // The warp's reach with these parameters: Spans where it renders column
 // windows (BackgroundSmooth, None), Rows where it renders whole rows

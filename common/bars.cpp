@@ -241,6 +241,11 @@ void BarTracker::reset() {
   last_rows_.clear();
 }
 
+PixelRect rect_on_cells(PixelRect rect, int shift, int width, int height) {
+  const int cell = 1 << shift;
+  return rect.x0 % cell == 0 && rect.y0 % cell == 0 ? rect : whole_picture(width, height);
+}
+
 std::array<PixelRect, 4> cells_outside(PixelRect r, int shift, int cells_w, int cells_h) {
   const PixelRect in{r.x0 >> shift, r.y0 >> shift, grid_cells(r.x1, shift), grid_cells(r.y1, shift)};
   return {PixelRect{0, 0, cells_w, in.y0}, PixelRect{0, in.y1, cells_w, cells_h}, PixelRect{0, in.y0, in.x0, in.y1},

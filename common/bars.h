@@ -110,6 +110,12 @@ struct ActiveArea {
 // share of the width), within kMaxDisparityPercent.
 WarpParams active_warp_params(const WarpParams &params, int frame_width, int active_width);
 
+// rect where its corner lies on the grid of 2^shift-pixel cells, else the
+// whole width x height picture: the stages on CUDA memory read the depth's
+// cells in place, so the picture they work on starts on a cell
+// (pseudo3ddepth's block grid, pseudo3dfilter's cell grid).
+PixelRect rect_on_cells(PixelRect rect, int shift, int width, int height);
+
 // The cells of a depth grid (grid_cells of its picture at `shift`, cells_w
 // x cells_h) outside the active rect r: the bands above, below, left and
 // right of it (some empty). A plane's depth there is 0

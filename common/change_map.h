@@ -162,6 +162,11 @@ P3D_HD bool tile_over_tolerance(unsigned long long diff, unsigned long long samp
 // frames are what adaptive=false computes: the output stays exact.
 constexpr int kBackOffFrames = 16;
 constexpr double kBusyShare = 0.75;
+// The warp's busy share: widened by its reach, spans over more than this
+// share of the picture (busy_for) cover nearly every row; on CUDA memory,
+// changes that reach more than this share of its rows
+// (KeptOutputGpu::last_busy).
+constexpr double kWholeWarpShare = 0.9;
 constexpr int kBackOffMax = 128;
 class ChangeBackOff {
  public:

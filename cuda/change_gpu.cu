@@ -248,6 +248,10 @@ double KeptOutputGpu::last_rows_share() const {
   return rows_height_ ? static_cast<double>(rows_count_.host()) / static_cast<double>(rows_height_) : 0.0;
 }
 
+bool KeptOutputGpu::last_busy() const {
+  return rows_height_ > 0 ? last_rows_share() > kWholeWarpShare : last_changed();
+}
+
 double ChangeMapGpu::last_share() const {
   return tiles() ? static_cast<double>(count_.host()) / static_cast<double>(tiles()) : 0.0;
 }
@@ -362,10 +366,10 @@ CudaStatus KeptOutputGpu::decide(const ChangeMapGpu &changes, const FrameView &o
     height_ = out.height;
     P3D_CUDA_TRY(cudaMemsetAsync(state_.get(), 0, sizeof(GateState), stream));
   }
-  with_rows_ = reach_rows >= 0 && changes.height() > 0 && changes.height() <= kMaxFrameSide;
-  rows_height_ = with_rows_ ? changes.height() : 0;
+  const bool with_rows = reach_rows >= 0 && changes.height() > 0 && changes.height() <= kMaxFrameSide;
+  rows_height_ = with_rows ? changes.height() : 0;
   RowsRequest rows;
-  if (with_rows_) {
+  if (with_rows) {
     P3D_CUDA_TRY_STATUS(rows_.ensure(static_cast<size_t>(changes.height())));
     P3D_CUDA_TRY_STATUS(rows_count_.ensure());
     const TileFlags f = changes.flags();

@@ -194,7 +194,7 @@ class KeptOutputGpu {
   CudaStatus decide(const ChangeMapGpu &changes, const FrameView &out, bool whole, cudaStream_t stream,
                     int reach_rows = -1);
   StageGate gate() const {
-    return StageGate{state_.as<const GateState>(), with_rows_ ? rows_.as<const uint8_t>() : nullptr};
+    return StageGate{state_.as<const GateState>(), rows_height_ > 0 ? rows_.as<const uint8_t>() : nullptr};
   }
   // Whether a tile of the last decided frame's inputs changed, once the
   // stream has passed the decision (ChangeBackOff's signal for such a
@@ -204,6 +204,11 @@ class KeptOutputGpu {
   // (decide() with a reach; 0 without), once the stream has passed it:
   // the warp's ChangeBackOff signal.
   double last_rows_share() const;
+  // ChangeBackOff's signal for such a stage, once the stream has passed
+  // the decision: a tile changed (the stage computes the whole frame), or,
+  // where the decision marked rows, changes that reach more than
+  // kWholeWarpShare of them.
+  bool last_busy() const;
   // After the stage's kernels: `out` (decide()'s) gets the kept copy when
   // the frame was not computed; the copy takes `out` when it was and is
   // kept.
@@ -214,8 +219,7 @@ class KeptOutputGpu {
  private:
   DeviceBuffer state_, copy_, rows_;
   PinnedWord changed_, rows_count_;
-  bool with_rows_ = false;
-  int rows_height_ = 0;
+  int rows_height_ = 0;  // the rows marked by the last decision (0: none)
   // The copy's frames: their format and size, each plane's place in copy_.
   PixelFormat format_ = PixelFormat::RGBA;
   int width_ = 0, height_ = 0, planes_ = 0;
@@ -226,10 +230,9 @@ class KeptOutputGpu {
 // Whether the filter on CUDA memory compares its inputs (adaptive): only
 // on the full-resolution grid. On the automatic step 4 from 2160 rows its
 // whole pass costs less than the comparison of the guide frame alone
-// (docs/benchmarks.md, "Adaptive work per scene (GPU)"); a coarse grid of
-// any step reads a sixteenth of the cells or less per guide pixel it
-// compares, so every step from 2 takes the same rule and the stage
-// computes every frame whole.
+// (docs/benchmarks.md, "Adaptive work per scene (GPU)"). Steps 2 and 3
+// (a quarter and a ninth of the cells) take the same rule unmeasured: the
+// stage computes every frame on a coarse grid whole.
 inline bool filter_compares_on_gpu(int grid_shift) { return grid_shift == 0; }
 
 // Copies `rows` rows of row_bytes bytes from one device plane to another

@@ -229,7 +229,7 @@ static p3d::PixelRect frame_rect(GstPseudo3DDepth *self, GstPseudo3DPath path, c
   }
   p3d::PixelRect rect = state->bars.active(view.width, view.height);
   const int shift = path == GST_PSEUDO3D_PATH_GPU ? p3d::block_grid_shift(params, rect.width(), rect.height()) : 0;
-  if (rect.x0 % (1 << shift) != 0 || rect.y0 % (1 << shift) != 0) rect = p3d::whole_picture(view.width, view.height);
+  rect = p3d::rect_on_cells(rect, shift, view.width, view.height);
   *moved = rect != state->estimated_rect;
   if (*moved) {
     if (!state->estimated_rect.empty())

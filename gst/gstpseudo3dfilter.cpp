@@ -120,7 +120,7 @@ static p3d::PixelRect filter_rect(GstPseudo3DPath path, p3d::gst::DepthPlane *de
   if (path != GST_PSEUDO3D_PATH_GPU || rect == whole) return rect;
   const int shift = p3d::bilateral_grid_shift(p3d::bilateral_sanitize(params), rect.width(), rect.height());
   const p3d::DepthGrid<float> grid = depth->grid();
-  return p3d::sub_grid_fits(grid, rect) && rect.x0 % (1 << shift) == 0 && rect.y0 % (1 << shift) == 0 ? rect : whole;
+  return p3d::sub_grid_fits(grid, rect) ? p3d::rect_on_cells(rect, shift, depth->width, depth->height) : whole;
 }
 
 static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, GstBuffer *buf,

@@ -69,7 +69,6 @@ CudaStatus WholeOutputGpu::decide(const FrameView &frame, const DepthPlanePtr &d
                                   int reach_rows) {
   P3D_CUDA_TRY_STATUS(inputs_.compare(frame, depth, tolerance, stream));
   P3D_CUDA_TRY_STATUS(output_.decide(inputs_.changes(), out, whole, stream, reach_rows));
-  rows_ = output_.gate().rows != nullptr;
   *gate = output_.gate();
   return {};
 }
@@ -79,10 +78,7 @@ void WholeOutputGpu::end(bool ok) {
     reset();
     return;
   }
-  // Busy: any change, which makes such a stage compute the whole frame;
-  // with rows, changes that reach more than kWholeWarpShare of them.
-  if (comparing_ && inputs_.compared())
-    backoff_.observe(rows_ ? output_.last_rows_share() > kWholeWarpShare : output_.last_changed());
+  if (comparing_ && inputs_.compared()) backoff_.observe(output_.last_busy());
 }
 
 void WholeOutputGpu::reset() {

@@ -129,7 +129,6 @@ class WholeOutputGpu {
   KeptOutputGpu output_;
   ChangeBackOff backoff_;
   bool comparing_ = false;
-  bool rows_ = false;  // the last decision marked rows
 };
 #endif
 

@@ -330,5 +330,27 @@ TEST(ActiveWarp, ThePackPacksThePair) {
   EXPECT_EQ(cv::norm(out.to_bgra(), want.to_bgra(), cv::NORM_INF), 0.0);
 }
 
+// A sub-picture starts on the stages' cells or is the whole picture; the
+// bands outside it are the grid's cells that no cell of it covers.
+TEST(BarRects, OnCellsAndTheCellsOutside) {
+  const PixelRect r{0, 140, 1920, 940};
+  EXPECT_EQ(rect_on_cells(r, 2, 1920, 1080), r);
+  EXPECT_EQ(rect_on_cells(r, 3, 1920, 1080), whole_picture(1920, 1080));  // 140 is not a multiple of 8
+  EXPECT_EQ(rect_on_cells(PixelRect{6, 142, 1914, 938}, 2, 1920, 1080), whole_picture(1920, 1080));
+  EXPECT_EQ(rect_on_cells(PixelRect{6, 142, 1914, 938}, 1, 1920, 1080), (PixelRect{6, 142, 1914, 938}));
+  EXPECT_EQ(rect_on_cells(PixelRect{3, 5, 9, 9}, 0, 20, 20), (PixelRect{3, 5, 9, 9}));
+  const int shift = 2, cw = grid_cells(30, shift), ch = grid_cells(22, shift);  // 8 x 6 cells
+  const PixelRect inside{4, 8, 21, 17};  // cells 1..5 x 2..4
+  std::vector<int> covered(static_cast<size_t>(cw) * ch, 0);
+  for (const PixelRect &b : cells_outside(inside, shift, cw, ch))
+    for (int y = b.y0; y < b.y1; ++y)
+      for (int x = b.x0; x < b.x1; ++x) ++covered[static_cast<size_t>(y) * cw + x];
+  for (int y = 0; y < ch; ++y)
+    for (int x = 0; x < cw; ++x) {
+      const bool in = x >= 1 && x <= 5 && y >= 2 && y <= 4;
+      EXPECT_EQ(covered[static_cast<size_t>(y) * cw + x], in ? 0 : 1) << "cell " << x << "," << y;
+    }
+}
+
 }  // namespace
 }  // namespace p3d

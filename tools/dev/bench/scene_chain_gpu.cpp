@@ -4,7 +4,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "adaptive.h"
 #include "bars.h"
 #include "bars_gpu.h"
 #include "bilateral_gpu.h"
@@ -140,7 +139,7 @@ void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   s.bars.observe(counts);
   PixelRect rect = s.bars.active(src.width, src.height);
   const int block_shift = block_grid_shift(s.p.depth, rect.width(), rect.height());
-  if (rect.x0 % (1 << block_shift) != 0 || rect.y0 % (1 << block_shift) != 0) rect = whole;
+  rect = rect_on_cells(rect, block_shift, src.width, src.height);
   if (rect != s.rect) {
     s.estimator.reset();
     s.rect = rect;
@@ -150,10 +149,7 @@ void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   check(cudaEventRecord(s.marks[1], s.stream), "cudaEventRecord");
   // pseudo3dfilter
   const int cell_shift = bilateral_grid_shift(bilateral_sanitize(s.p.filter), rect.width(), rect.height());
-  const PixelRect frect = rect != whole && sub_grid_fits(depth, rect) && rect.x0 % (1 << cell_shift) == 0 &&
-                                  rect.y0 % (1 << cell_shift) == 0
-                              ? rect
-                              : whole;
+  const PixelRect frect = sub_grid_fits(depth, rect) ? rect_on_cells(rect, cell_shift, src.width, src.height) : whole;
   zero_outside(filtered, frect, s.stream);
   check(s.filter.run(s.p.filter, sub_frame(src, frect), sub_grid(as_const(depth), frect), sub_grid(filtered, frect),
                      s.stream));
@@ -245,7 +241,7 @@ void GpuSceneChain::frame(const FrameView &src, StageMs *ms) {
   if (!filter_whole && s.filter_frame.compared()) s.filter_backoff.observe(s.dirty.last_share() > 0);
   const bool warp_compared = warp_compares && s.warp_frame.compared() && !first;
   s.warp_rows = warp_compared ? s.kept.last_rows_share() : 1.0;
-  if (warp_compared) s.warp_backoff.observe(s.warp_rows > kWholeWarpShare);
+  if (warp_compared) s.warp_backoff.observe(s.kept.last_busy());
   s.filter_has_last = filter_compares;
   s.end_frame(k, ms);
 }
