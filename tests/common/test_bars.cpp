@@ -1,7 +1,9 @@
 // Letterbox and pillarbox bars (common/bars.h). What the tests prove:
 //  * bar_counts_cpu counts, per row and per column, exactly the pixels
 //    over the bar level: the brightest R'G'B' byte on packed RGB, Y' over
-//    bar_luma_threshold() on 4:2:0 (limited and full range), chroma never.
+//    bar_luma_threshold() on 4:2:0 (limited and full range), chroma never;
+//    on 8-bit Y' for rows wider than its 16-bit chunks and thresholds
+//    past either end of a byte.
 //  * measure_active_rect finds a letterbox, a pillarbox and both, the
 //    top left corner moved onto kBarAlign cells; a few noisy pixels in a bar (up to a
 //    1/64 share of a row) do not count as picture; a black frame gives
@@ -86,6 +88,36 @@ TEST(BarCounts, CountThePixelsOverTheBarLevel) {
         }
       EXPECT_EQ(c.rows, rows) << "full range " << full_range;
       EXPECT_EQ(c.cols, cols) << "full range " << full_range;
+    }
+  }
+}
+
+// 8-bit Y' is counted a band at a time in bytes and 16-bit chunks: the
+// counts are still bar_pixel_bright()'s, for rows wider than a chunk (4096
+// pixels) and of odd width, bands cut short by the frame's last row, and
+// thresholds at and past the ends of the byte (nothing or everything
+// bright).
+TEST(BarCounts, WideLumaRowsCountEveryThreshold) {
+  for (const PixelFormat format : {PixelFormat::I420, PixelFormat::NV12}) {
+    SCOPED_TRACE(test::format_name(format));
+    for (const int w : {4097, kMaxFrameSide - 1}) {
+      const int h = 67;
+      HostFrame f(format, w, h, 3);
+      f.fill_random(static_cast<uint32_t>(w));
+      const FrameView v = f.view();
+      for (const int threshold : {-5, -1, 0, 1, 36, 127, 254, 255, 256, 1000}) {
+        BarCounts c;
+        bar_counts_cpu(v, threshold, &c);
+        std::vector<uint32_t> rows(h, 0), cols(w, 0);
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) {
+            const bool bright = bar_pixel_bright(v, x, y, threshold);
+            rows[y] += bright;
+            cols[x] += bright;
+          }
+        EXPECT_EQ(c.rows, rows) << "width " << w << ", threshold " << threshold;
+        EXPECT_EQ(c.cols, cols) << "width " << w << ", threshold " << threshold;
+      }
     }
   }
 }
