@@ -165,11 +165,12 @@ void block_features_cpu(const FrameView &frame, int block_size, std::vector<floa
       const int rows = block_extent(j, B, H);
       float *f = &features[static_cast<size_t>(j) * bx * 3];
       int i0 = 0, i1 = bx;  // the blocks to sum: all, or from the first flagged to the last
-      if (only) {
+      if (only) {  // memchr: a row of thousands of unflagged blocks is a few vector compares
         const uint8_t *flags = only->data() + static_cast<size_t>(j) * bx;
-        while (i0 < bx && !flags[i0]) ++i0;
-        while (i1 > i0 && !flags[i1 - 1]) --i1;
-        if (i0 == i1) continue;
+        const void *first = std::memchr(flags, 1, static_cast<size_t>(bx));
+        if (!first) continue;
+        i0 = static_cast<int>(static_cast<const uint8_t *>(first) - flags);
+        while (!flags[i1 - 1]) --i1;
       }
       if (column_sums) {
         block_row_features_8bit(frame, B, j, i0, i1, only, cols, pixel, sums, f);
@@ -289,9 +290,7 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
     touched = blocks_touched(*changes, B, bx, by);
     row_touched.resize(by);
     for (int j = 0; j < by; ++j)
-      row_touched[j] = std::find(touched.begin() + static_cast<size_t>(j) * bx,
-                                 touched.begin() + static_cast<size_t>(j + 1) * bx, 1) !=
-                       touched.begin() + static_cast<size_t>(j + 1) * bx;
+      row_touched[j] = std::memchr(touched.data() + static_cast<size_t>(j) * bx, 1, static_cast<size_t>(bx)) != nullptr;
     block_features_cpu(frame, B, features_, &touched);
   } else {
     block_features_cpu(frame, B, features_);

@@ -306,7 +306,8 @@ class DepthEstimatorCpu {
 
 // Stateless helpers the estimator is built from (exposed for tests and for
 // the GPU tests that compare intermediate results).
-// only: one flag a block; the blocks without it keep their values in features.
+// only: one flag a block (0 or 1); the blocks without it keep their values
+// in features.
 void block_features_cpu(const FrameView &frame, int block_size, std::vector<float> &features,
                         const std::vector<uint8_t> *only = nullptr);
 // yuv: the features are Y'CbCr means (blocks_joined()).

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <atomic>
 #include <cstring>
+#include <optional>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -452,16 +453,20 @@ void warp_eyes(const WarpJob &j, const Eye eyes[2], EyeScratch<Px> *scratch, lon
                const std::vector<ColumnSpan> *changed, std::vector<ColumnSpan> *windows) {
   std::atomic<long long> total[2] = {{0}, {0}};
   cv::parallel_for_(cv::Range(0, j.height), [&](const cv::Range &rows) {
-    RowScratch<Px> row(j.width, j.params.fill == HoleFill::BackgroundSmooth);
-    const SourceRow<Px> &src = row.src;
-    const std::vector<Keys::Word> &keys = row.keys;
+    // Made at the task's first rendered row: a task of unchanged rows
+    // allocates nothing.
+    std::optional<RowScratch<Px>> scratch_row;
     long long local[2] = {0, 0};
     for (int y = rows.start; y < rows.end; ++y) {
+      if (changed && (*changed)[y].empty()) continue;
+      RowScratch<Px> &row =
+          scratch_row ? *scratch_row : scratch_row.emplace(j.width, j.params.fill == HoleFill::BackgroundSmooth);
+      const SourceRow<Px> &src = row.src;
+      const std::vector<Keys::Word> &keys = row.keys;
       RowWindow w[2];
       int load0 = 0, load1 = j.width;  // the source words the windows read
       if (changed) {
         const ColumnSpan c = (*changed)[y];
-        if (c.empty()) continue;
         load0 = j.width, load1 = 0;
         for (int e = 0; e < 2; ++e) {
           // A copied eye is the changed columns themselves.
