@@ -214,8 +214,8 @@ PixelRect measure_active_rect(const BarCounts &counts) {
 
 void BarTracker::observe(const BarCounts &counts) {
   const int width = static_cast<int>(counts.cols.size()), height = static_cast<int>(counts.rows.size());
-  if (width != width_ || height != height_) {
-    reset();
+  if (width != width_ || height != height_) {  // another size: decided afresh (the order goes on)
+    forget_decision();
     width_ = width;
     height_ = height;
   }
@@ -262,6 +262,11 @@ PixelRect BarTracker::active(int width, int height) const {
 }
 
 void BarTracker::reset() {
+  forget_decision();
+  counted_ = seen_ = false;
+}
+
+void BarTracker::forget_decision() {
   decided_ = false;
   width_ = height_ = 0;
   candidate_frames_ = 0;

@@ -18,6 +18,13 @@
 //     night sky, a subtitle in a bar) keeps the rect. The first frame, a
 //     scene cut (the rows' counts move by an eighth of the frame's pixels)
 //     and a reset adopt the next plausible measure at once.
+//  4. Order. A frame's rect comes from the counts of the frames before it,
+//     the previous frame's last (BarTracker::previous_due), so that on CUDA
+//     memory a frame's counts are read back at the next frame instead of
+//     waited for before its depth is queued; a frame with no counted frame
+//     before it (the first, after a reset) is decided from its own
+//     (BarTracker::counted). A cut or a new rect thus takes effect one
+//     frame after the frame that shows it, on both devices alike.
 #pragma once
 
 #include <array>
@@ -131,16 +138,30 @@ BilateralParams frame_scaled(const BilateralParams &p, int frame_width, int fram
 
 class BarTracker {
  public:
-  // Takes one frame's counts; the rect for that frame and those that
-  // follow is active() afterwards.
+  // Takes one frame's counts; active() is then the rect decided from them
+  // and those observed before.
   void observe(const BarCounts &counts);
+  // The order of step 4, per frame: before counting it, whether the
+  // previous frame's counts are still to be observed (observe() them
+  // first); after counting it (in hand or queued), counted() says whether
+  // its own counts are to be observed now: true when no frame before it
+  // was counted since the last reset.
+  bool previous_due() const { return counted_ && !seen_; }
+  bool counted() {
+    seen_ = !counted_;
+    counted_ = true;
+    return seen_;
+  }
   // The rect the 3D stages run on: the whole picture until a measure was
   // adopted (and after a reset or a change of size).
   PixelRect active(int width, int height) const;
   void reset();
 
  private:
+  void forget_decision();
+
   bool decided_ = false;
+  bool counted_ = false, seen_ = false;  // a frame was counted; its counts were observed on that frame
   int width_ = 0, height_ = 0;
   PixelRect active_, candidate_;
   int candidate_frames_ = 0;

@@ -9,6 +9,12 @@
 namespace p3d {
 
 CudaStatus BarCountsGpu::count(const FrameView &frame, int luma_threshold, cudaStream_t stream) {
+  // A count left untaken (a reset of the caller's order) may still be
+  // copying into host_, perhaps from another stream: it ends first.
+  if (pending_) {
+    pending_ = false;
+    P3D_CUDA_TRY(cudaEventSynchronize(done_));
+  }
   const size_t values = static_cast<size_t>(frame.width) + frame.height;
   P3D_CUDA_TRY_STATUS(counts_.ensure(values * sizeof(uint32_t)));
   if (host_values_ < values) {

@@ -11,7 +11,8 @@ namespace p3d {
 
 // bar_counts_cpu() of frames in device memory: count() queues a frame's
 // counts and their copy into pinned host memory; take() waits for that
-// copy (an event, not the whole stream) and hands the counts over. Call
+// copy (an event, not the whole stream) and hands the counts over, at the
+// next frame where the tracker's order allows (common/bars.h, step 4). Call
 // reset() with the context that count() used current before the object
 // goes.
 class BarCountsGpu {

@@ -177,43 +177,47 @@ static bool crop_bars(GstPseudo3DDepth *self) {
   return crop;
 }
 
-// With crop-bars=auto: this frame's bar counts, into the tracker. On the
-// GPU the counts come back before the depth is queued (a wait for one small
-// kernel and a copy of a few kilobytes). changes: the tiles that changed
-// since the previous frame (adaptive, system memory; null: unknown); when
-// that frame was counted here too, only the changed bands are counted
-// again, and an unchanged frame takes its counts again.
+// With crop-bars=auto: the bar counts into the tracker in its order
+// (common/bars.h, step 4): the previous frame's first, then this frame's
+// counted for the next one. On the GPU a frame's counts are queued and read
+// back at the next frame, which finds them done: no frame waits for its own
+// but the first after a start, a reset or crop-bars coming back on, whose
+// rect comes from its own counts. changes: the tiles that changed since the
+// previous frame (adaptive, system memory; null: unknown); when that frame
+// was counted here too, only the changed bands are counted again, and an
+// unchanged frame takes its counts again.
 static GstFlowReturn observe_bars(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::FrameView &view,
                                   const p3d::ChangeMap *changes) {
   GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
   DepthState *state = self->state;
   const bool counted_last = state->counts_current;
   state->counts_current = false;
-  if (!counted_last) changes = nullptr;
-  if (changes && !changes->any() && state->counts.rows.size() == static_cast<size_t>(view.height) &&
-      state->counts.cols.size() == static_cast<size_t>(view.width)) {
-    state->counts_current = true;
-    state->bars.observe(state->counts);
-    return GST_FLOW_OK;
-  }
   const int luma_threshold = p3d::bar_luma_threshold(p3d::gst::yuv_params(&base->in_info));
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
-    p3d::CudaStatus st = state->bar_counts_gpu.count(view, luma_threshold, base->gpu->stream());
-    if (st.ok() && state->bar_counts_gpu.take(&state->counts, &st)) state->bars.observe(state->counts);
+    p3d::CudaStatus st;
+    if (state->bars.previous_due() && state->bar_counts_gpu.take(&state->counts, &st))
+      state->bars.observe(state->counts);
+    if (st.ok()) st = state->bar_counts_gpu.count(view, luma_threshold, base->gpu->stream());
+    if (st.ok() && state->bars.counted() && state->bar_counts_gpu.take(&state->counts, &st))
+      state->bars.observe(state->counts);
     return st.ok() ? GST_FLOW_OK : p3d::gst::post_cuda_error(base, st, "counting the bars");
   }
 #else
   (void)path;
 #endif
-  p3d::bar_counts_cpu(view, luma_threshold, &state->counts, changes);
+  if (state->bars.previous_due()) state->bars.observe(state->counts);
+  if (!counted_last) changes = nullptr;
+  const bool unchanged = changes && !changes->any() && state->counts.rows.size() == static_cast<size_t>(view.height) &&
+                         state->counts.cols.size() == static_cast<size_t>(view.width);
+  if (!unchanged) p3d::bar_counts_cpu(view, luma_threshold, &state->counts, changes);
   state->counts_current = true;
-  state->bars.observe(state->counts);
+  if (state->bars.counted()) state->bars.observe(state->counts);
   return GST_FLOW_OK;
 }
 
 // The rect this frame's depth is estimated in: with crop-bars=auto the
-// bars decided from the frames so far, this one included (the whole
+// bars decided from the counts observed so far (the whole
 // picture until a measure is adopted); the whole picture where the rect's
 // corner is not on a cell of the GPU's block grid (block-size over
 // kBarAlign). A new rect restarts the estimator's history, which belongs

@@ -13,7 +13,9 @@
 //    frames in a row, an interruption restarting the count; a fade to
 //    black, a subtitle in one bar (asymmetric), and a picture smaller
 //    than half the frame keep the rect; a scene cut adopts at once; a
-//    reset or a new size starts over.
+//    reset or a new size starts over. In the stages' order each frame is
+//    decided from the counts of the frames before it (a cut moves the
+//    rect at the next frame), the first after a reset from its own.
 //  * The warp inside an active rect (warp_pack_changed_cpu with an
 //    ActiveArea): outside the rect both views are the source converted,
 //    inside them the views are those warp_render_cpu gives for the
@@ -275,6 +277,50 @@ TEST(BarTracker, ASceneCutAdoptsAtOnce) {
   // an eighth of the frame's pixels and more.
   t.observe(film_frame(whole, 9));
   EXPECT_EQ(t.active(320, 240), whole);
+}
+
+// The order the stages keep (common/bars.h, step 4): a frame's rect comes
+// from the counts of the frames before it, each frame's counts observed
+// once; the first frame, and the first after a reset, from its own.
+TEST(BarTracker, EachFrameIsDecidedFromTheFramesBefore) {
+  const PixelRect wide{0, 40, 320, 200}, whole{0, 0, 320, 240};
+  BarTracker t;
+  BarCounts held;  // the last frame's counts (on the device: queued)
+  int observed = 0;
+  auto frame = [&](const BarCounts &own) {
+    if (t.previous_due()) {
+      t.observe(held);
+      ++observed;
+    }
+    held = own;
+    if (t.counted()) {
+      t.observe(held);
+      ++observed;
+    }
+    return t.active(320, 240);
+  };
+  EXPECT_EQ(frame(film_frame(wide, 1)), wide) << "the first frame: its own counts";
+  EXPECT_EQ(observed, 1);
+  EXPECT_FALSE(t.previous_due()) << "the first frame's counts were seen on it";
+  for (int k = 1; k < 4; ++k) EXPECT_EQ(frame(film_frame(wide, 1 + k)), wide) << "frame " << k;
+  EXPECT_EQ(observed, 3) << "frames 0-2 seen by frame 3";
+  // A cut to a full-frame picture at frame 4 moves the rect at frame 5.
+  EXPECT_EQ(frame(film_frame(whole, 9)), wide) << "the cut's own frame";
+  EXPECT_EQ(frame(film_frame(whole, 10)), whole) << "the frame after the cut";
+  EXPECT_EQ(observed, 5);
+  // After a reset the next frame is decided from its own counts again.
+  t.reset();
+  EXPECT_FALSE(t.previous_due());
+  EXPECT_EQ(frame(film_frame(wide, 11)), wide);
+  EXPECT_EQ(observed, 6);
+  // Counts of another size (observed at the next frame) decide afresh and
+  // keep the order: one observation a frame.
+  EXPECT_EQ(frame(counts_of(letterboxed(PixelFormat::I420, 160, 120, PixelRect{0, 16, 160, 104}, 0, 12))), wide);
+  EXPECT_TRUE(t.previous_due());
+  frame(film_frame(wide, 13));
+  EXPECT_EQ(t.active(160, 120), (PixelRect{0, 16, 160, 104})) << "decided from the small frame's counts";
+  EXPECT_EQ(observed, 7);
+  EXPECT_TRUE(t.previous_due()) << "the last frame's counts are the next frame's to observe";
 }
 
 // ---- the warp inside an active rect -------------------------------------------------

@@ -7,7 +7,8 @@
 //    and a pillarbox; with crop-bars=off the pillarbox picture shifts
 //    into its bars;
 //  * a fade to black and back, and a subtitle in a bar, do not move the
-//    rect; crop-bars=off and a caps change start from the whole frame;
+//    rect; a cut to other bars moves it at the next frame; crop-bars=off
+//    and a caps change start from the whole frame;
 //  * adaptive=true gives the bytes of adaptive=false on letterboxed and
 //    pillarboxed sequences with a cut to a full frame and back.
 #include <gst/check/gstharness.h>
@@ -188,6 +189,28 @@ TEST(CropBars, OffAndNewCapsStartFromTheWholeFrame) {
     gst_buffer_unref(b);
   }
   gst_harness_teardown(h);
+}
+
+// A cut from one letterbox to a film in other bars: the rect of a frame
+// comes from the bars of the frames before it (common/bars.h, step 4),
+// so the cut moves it at the next frame, which is decided at once (no
+// kBarConfirmFrames wait); the depth of every frame is 0 outside the
+// rect it carries.
+TEST(CropBars, ACutMovesTheRectAtTheNextFrame) {
+  std::vector<cv::Mat> frames = in_bars(film(160, 80, 4, 15), 24, 0);
+  for (const cv::Mat &f : in_bars(film(160, 112, 4, 16), 8, 0)) frames.push_back(f);
+  for (const bool adaptive : {false, true}) {
+    const std::string launch = std::string("pseudo3ddepth processing=cpu adaptive=") + (adaptive ? "true" : "false");
+    const Output out = run(launch, PixelFormat::I420, frames);
+    ASSERT_EQ(out.info.size(), frames.size());
+    for (size_t k = 0; k < out.info.size(); ++k) {
+      const PixelRect want = k <= 4 ? PixelRect{0, 24, 160, 104} : PixelRect{0, 8, 160, 120};
+      EXPECT_EQ(out.info[k].active, want) << "adaptive " << adaptive << " frame " << k << ": "
+                                          << rect_text(out.info[k].active);
+      const PixelRect r = out.info[k].active;
+      EXPECT_EQ(cv::norm(out.depth[k](cv::Rect(0, 0, 160, r.y0)), cv::NORM_INF), 0.0) << "top bar, frame " << k;
+    }
+  }
 }
 
 // crop-bars switched off and on again while playing, over unchanged

@@ -18,6 +18,7 @@
 #include <atomic>
 #include <chrono>
 #include <climits>
+#include <regex>
 #include <thread>
 #include <cstdlib>
 
@@ -256,6 +257,31 @@ TEST(GpuChainBars, MatchesCpuChain) {
       const auto cpu = run_chain(chain(kCpu, layout, "BGRA"), PixelFormat::NV12, b.w, b.h, frames);
       expect_same(gpu, cpu, what);
     }
+  }
+}
+
+// A cut from one letterbox to other bars on CUDA memory: the counts of a
+// frame are read back at the next frame (common/bars.h, step 4), and the
+// rect moves on the same frame as on the CPU, adaptive or not.
+TEST(GpuChainBars, ACutMovesTheRectAsOnTheCpu) {
+  std::vector<HostFrame> frames;
+  for (uint32_t s = 0; s < 8; ++s) {
+    const int rows = s < 4 ? 88 : 40;
+    const HostFrame inner = picture(PixelFormat::NV12, 1280, 720 - 2 * rows, 520 + s / 4);
+    cv::Mat bgr;
+    cv::cvtColor(inner.to_bgra(), bgr, cv::COLOR_BGRA2BGR);
+    cv::rectangle(bgr, cv::Rect(40 + 16 * static_cast<int>(s), 100, 60, 40), cv::Scalar(30, 200, 60), cv::FILLED);
+    cv::copyMakeBorder(bgr, bgr, rows, rows, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+    frames.push_back(HostFrame::from_bgr(bgr, PixelFormat::NV12));
+  }
+  for (const std::string adaptive : {" adaptive=false", " adaptive=true"}) {
+    auto stages = [&adaptive](Where where) {  // every stage with `adaptive`
+      return std::regex_replace(chain(where, "side-by-side-half", "BGRA"), std::regex("processing=(\\w+)"),
+                                "processing=$1" + adaptive);
+    };
+    const auto gpu = run_chain(stages(kDevice), PixelFormat::NV12, 1280, 720, frames);
+    const auto cpu = run_chain(stages(kCpu), PixelFormat::NV12, 1280, 720, frames);
+    expect_same(gpu, cpu, "a cut to other bars," + adaptive);
   }
 }
 

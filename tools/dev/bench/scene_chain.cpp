@@ -61,9 +61,10 @@ FullChain::FullChain(const StageParams &p, int width, int height, PixelFormat in
 
 void FullChain::frame(const FrameView &src, StageMs *ms) {
   Stopwatch sw;
-  if (crop_) {
+  if (crop_) {  // pseudo3ddepth's observe_bars, in the tracker's order
+    if (bars_.previous_due()) bars_.observe(counts_);
     bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_);
-    bars_.observe(counts_);
+    if (bars_.counted()) bars_.observe(counts_);
   }
   const PixelRect rect = crop_ ? bars_.active(src.width, src.height) : whole_picture(src.width, src.height);
   if (rect != rect_) {  // pseudo3ddepth's frame_rect: a new picture, a new history; 0 outside
@@ -124,16 +125,17 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
 }
 
 // gstpseudo3ddepth.cpp process_ip: the bars counted (again only where the
-// frame changed) and decided; only the blocks of changed tiles are summed
+// frame changed) and decided in the tracker's order; only the blocks of changed tiles are summed
 // again; when no block depth changed the frame gets the previous plane
 // itself. A new rect starts the estimator and the planes over. Backing
 // off (StageInputs::begin): the whole estimate into a new plane.
 AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *changes) {
   const bool compare = depth_inputs_.begin(true);
   *changes = compare ? depth_inputs_.compare(src, {}, {}, tolerance_) : ChangeMap(src.width, src.height, true);
+  if (bars_.previous_due()) bars_.observe(counts_);
   if (changes->any() || counts_.rows.empty())
     bar_counts_cpu(src, bar_luma_threshold(p_.yuv), &counts_, compare ? changes : nullptr);
-  bars_.observe(counts_);
+  if (bars_.counted()) bars_.observe(counts_);
   const PixelRect rect = bars_.active(src.width, src.height);
   if (rect != rect_) {
     estimator_.reset();

@@ -121,7 +121,7 @@ void zero_outside(DepthGrid<float> g, PixelRect r, cudaStream_t stream) {
 }  // namespace
 
 // crop-bars=auto with adaptive off, as the elements run it on CUDA memory:
-// pseudo3ddepth's bar counts (waited for) and frame_rect, pseudo3dfilter's
+// pseudo3ddepth's bar counts (read back at the next frame) and frame_rect, pseudo3dfilter's
 // filter_rect, pseudo3dwarp's ActiveWarpGpu inside the rect.
 void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   Impl &s = *impl_;
@@ -133,10 +133,17 @@ void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   // pseudo3ddepth
   BarCounts counts;
   CudaStatus st;
+  if (s.bars.previous_due()) {  // the previous frame's, queued then
+    if (!s.bar_counts.take(&counts, &st)) throw std::runtime_error("no bar counts queued");
+    check(st);
+    s.bars.observe(counts);
+  }
   check(s.bar_counts.count(src, bar_luma_threshold(s.p.yuv), s.stream));
-  if (!s.bar_counts.take(&counts, &st)) throw std::runtime_error("no bar counts queued");
-  check(st);
-  s.bars.observe(counts);
+  if (s.bars.counted()) {  // the first frame: its own, waited for
+    if (!s.bar_counts.take(&counts, &st)) throw std::runtime_error("no bar counts queued");
+    check(st);
+    s.bars.observe(counts);
+  }
   PixelRect rect = s.bars.active(src.width, src.height);
   const int block_shift = block_grid_shift(s.p.depth, rect.width(), rect.height());
   rect = rect_on_cells(rect, block_shift, src.width, src.height);
