@@ -25,16 +25,29 @@ CudaStatus BarCountsGpu::count(const FrameView &frame, int luma_threshold, cudaS
     host_values_ = values;
   }
   if (!done_) P3D_CUDA_TRY(cudaEventCreateWithFlags(&done_, cudaEventDisableTiming));
+  if (!ready_) P3D_CUDA_TRY(cudaEventCreateWithFlags(&ready_, cudaEventDisableTiming));
+  if (!side_) P3D_CUDA_TRY(cudaStreamCreateWithFlags(&side_, cudaStreamNonBlocking));
+  // The side stream starts where the caller's is (the frame written).
+  P3D_CUDA_TRY(cudaEventRecord(ready_, stream));
+  P3D_CUDA_TRY(cudaStreamWaitEvent(side_, ready_, 0));
+  unjoined_ = true;
   uint32_t *rows = counts_.as<uint32_t>(), *cols = rows + frame.height;
-  P3D_CUDA_TRY(cudaMemsetAsync(rows, 0, values * sizeof(uint32_t), stream));
+  P3D_CUDA_TRY(cudaMemsetAsync(rows, 0, values * sizeof(uint32_t), side_));
   P3D_CUDA_TRY_STATUS(is_deep(frame.format)
-                          ? bars_detail::launch_bar_counts_deep(frame, luma_threshold, rows, cols, stream)
-                          : bars_detail::launch_bar_counts_of(frame, luma_threshold, rows, cols, stream));
-  P3D_CUDA_TRY(cudaMemcpyAsync(host_, rows, values * sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
-  P3D_CUDA_TRY(cudaEventRecord(done_, stream));
+                          ? bars_detail::launch_bar_counts_deep(frame, luma_threshold, rows, cols, side_)
+                          : bars_detail::launch_bar_counts_of(frame, luma_threshold, rows, cols, side_));
+  P3D_CUDA_TRY(cudaMemcpyAsync(host_, rows, values * sizeof(uint32_t), cudaMemcpyDeviceToHost, side_));
+  P3D_CUDA_TRY(cudaEventRecord(done_, side_));
   pending_ = true;
   width_ = frame.width;
   height_ = frame.height;
+  return {};
+}
+
+CudaStatus BarCountsGpu::join(cudaStream_t stream) {
+  if (!unjoined_) return {};
+  unjoined_ = false;
+  P3D_CUDA_TRY(cudaStreamWaitEvent(stream, done_, 0));
   return {};
 }
 
@@ -59,6 +72,11 @@ void BarCountsGpu::reset() {
     cudaEventDestroy(done_);
     done_ = nullptr;
   }
+  if (ready_) cudaEventDestroy(ready_);
+  ready_ = nullptr;
+  if (side_) cudaStreamDestroy(side_);
+  side_ = nullptr;
+  unjoined_ = false;
   if (host_) cudaFreeHost(host_);
   host_ = nullptr;
   host_values_ = 0;

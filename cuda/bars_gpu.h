@@ -10,9 +10,13 @@
 namespace p3d {
 
 // bar_counts_cpu() of frames in device memory: count() queues a frame's
-// counts and their copy into pinned host memory; take() waits for that
-// copy (an event, not the whole stream) and hands the counts over, at the
-// next frame where the tracker's order allows (common/bars.h, step 4). Call
+// counts and their copy into pinned host memory on a stream of its own,
+// behind the work queued so far on the caller's stream, so that the
+// caller's next kernels do not wait behind the copy; join() makes the
+// caller's stream wait for them (call it once the frame's other work is
+// queued, before the frame may be released). take() waits for the copy
+// (an event, not the whole stream) and hands the counts over, at the next
+// frame where the tracker's order allows (common/bars.h, step 4). Call
 // reset() with the context that count() used current before the object
 // goes.
 class BarCountsGpu {
@@ -23,6 +27,8 @@ class BarCountsGpu {
   BarCountsGpu &operator=(const BarCountsGpu &) = delete;
 
   CudaStatus count(const FrameView &frame, int luma_threshold, cudaStream_t stream);
+  // After count(): `stream` waits for the count (no host wait).
+  CudaStatus join(cudaStream_t stream);
   // False, with nothing written, when no count is queued.
   bool take(BarCounts *counts, CudaStatus *status);
   void reset();
@@ -31,8 +37,10 @@ class BarCountsGpu {
   DeviceBuffer counts_;             // rows, then columns (uint32)
   uint32_t *host_ = nullptr;        // pinned, the same layout
   size_t host_values_ = 0;
-  cudaEvent_t done_ = nullptr;
-  bool pending_ = false;
+  cudaStream_t side_ = nullptr;     // the counts' own stream
+  cudaEvent_t ready_ = nullptr;     // the caller's stream up to count()
+  cudaEvent_t done_ = nullptr;      // the counts copied
+  bool pending_ = false, unjoined_ = false;
   int width_ = 0, height_ = 0;
 };
 

@@ -182,10 +182,11 @@ static bool crop_bars(GstPseudo3DDepth *self) {
 // counted for the next one. On the GPU a frame's counts are queued and read
 // back at the next frame, which finds them done: no frame waits for its own
 // but the first after a start, a reset or crop-bars coming back on, whose
-// rect comes from its own counts. changes: the tiles that changed since the
-// previous frame (adaptive, system memory; null: unknown); when that frame
-// was counted here too, only the changed bands are counted again, and an
-// unchanged frame takes its counts again.
+// rect comes from its own counts. The counts run on a stream of their own
+// beside the estimate (BarCountsGpu::join). changes: the tiles that
+// changed since the previous frame (adaptive, system memory; null:
+// unknown); when that frame was counted here too, only the changed bands
+// are counted again, and an unchanged frame takes its counts again.
 static GstFlowReturn observe_bars(GstPseudo3DDepth *self, GstPseudo3DPath path, const p3d::FrameView &view,
                                   const p3d::ChangeMap *changes) {
   GstPseudo3DBase *base = GST_PSEUDO3D_BASE(self);
@@ -317,14 +318,21 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
     if (!compare) state->history_gpu.reset();
     const GstFlowReturn ret = p3d::gst::run_gpu(base, "estimating depth", [&]() -> p3d::CudaStatus {
       cudaStream_t stream = base->gpu->stream();
-      p3d::TileFlags changed;
-      if (compare) {
-        P3D_CUDA_TRY_STATUS(state->history_gpu.compare(view, adaptive.tolerance, state->changes_gpu, stream));
-        P3D_CUDA_TRY_STATUS(state->changes_gpu.summarize(stream));
-        changed = state->changes_gpu.flags().offset(rect.x0, rect.y0);
-      }
-      return state->gpu.estimate(params, active, p3d::sub_grid(plane->grid(), rect), stream,
-                                 compare ? &changed : nullptr);
+      auto estimate = [&]() -> p3d::CudaStatus {
+        p3d::TileFlags changed;
+        if (compare) {
+          P3D_CUDA_TRY_STATUS(state->history_gpu.compare(view, adaptive.tolerance, state->changes_gpu, stream));
+          P3D_CUDA_TRY_STATUS(state->changes_gpu.summarize(stream));
+          changed = state->changes_gpu.flags().offset(rect.x0, rect.y0);
+        }
+        return state->gpu.estimate(params, active, p3d::sub_grid(plane->grid(), rect), stream,
+                                   compare ? &changed : nullptr);
+      };
+      // The bar counts ran beside the estimate; what comes after the depth
+      // (and the frame's release) waits for them.
+      const p3d::CudaStatus st = estimate();
+      const p3d::CudaStatus joined = state->bar_counts_gpu.join(stream);
+      return st.ok() ? joined : st;
     });
     if (ret != GST_FLOW_OK) {
       // The frame's copy may be recorded while the estimator's features

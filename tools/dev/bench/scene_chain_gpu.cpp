@@ -153,6 +153,7 @@ void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   }
   zero_outside(depth, rect, s.stream);
   check(s.estimator.estimate(s.p.depth, sub_frame(src, rect), sub_grid(depth, rect), s.stream));
+  check(s.bar_counts.join(s.stream));
   check(cudaEventRecord(s.marks[1], s.stream), "cudaEventRecord");
   // pseudo3dfilter
   const int cell_shift = bilateral_grid_shift(bilateral_sanitize(s.p.filter), rect.width(), rect.height());
