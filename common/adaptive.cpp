@@ -196,6 +196,12 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
                   active->rect.x1 > src.width || active->rect.y1 > src.height))
     return -1;
   if (kept) kept->written.assign(static_cast<size_t>(dst.height), 1);
+  // Nothing changed: the previous output is the output, no row written.
+  if (changes && !changes->any() && kept && kept->previous) {
+    copy_flagged_rows(*kept->previous, dst, kept->written, true);
+    std::fill(kept->written.begin(), kept->written.end(), 0);
+    return 0;
+  }
   // Rendered into dst itself, the views are written in windows of rows:
   // every row starts as the previous output.
   if (changes && pair_is_dst && kept && kept->previous) copy_flagged_rows(*kept->previous, dst, kept->written, true);

@@ -285,8 +285,12 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   // others have the same pixels, so the same sums).
   const bool incremental = changes && same_grid && features_current_ && changes->width() == W &&
                            changes->height() == H;
-  std::vector<uint8_t> touched, row_touched;  // one flag a block; one a block row
-  if (incremental) {
+  // one flag a block (none where no tile changed); one a block row
+  std::vector<uint8_t> touched, row_touched;
+  const bool none_touched = incremental && !changes->any();
+  if (none_touched) {
+    row_touched.assign(by, 0);
+  } else if (incremental) {
     touched = blocks_touched(*changes, B, bx, by);
     row_touched.resize(by);
     for (int j = 0; j < by; ++j)
@@ -323,8 +327,9 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   // The reference becomes this frame's features. Adaptive calls copy them,
   // since the next call updates features_ in place; others, and a frame
   // that changed every block (the next one likely does too), trade buffers.
-  const bool all_touched =
-      incremental ? std::find(touched.begin(), touched.end(), 0) == touched.end() : !changes || changes->all();
+  const bool all_touched = none_touched ? false
+                           : incremental ? std::find(touched.begin(), touched.end(), 0) == touched.end()
+                                         : !changes || changes->all();
   bool features_current = changes != nullptr;
   // Incremental: the reference differs from features_ only in the rows a
   // change touched since it was taken (ref_behind_), so those rows are
