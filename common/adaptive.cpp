@@ -196,8 +196,10 @@ long long warp_pack_changed_cpu(const WarpParams &params, const PackParams &pack
                   active->rect.x1 > src.width || active->rect.y1 > src.height))
     return -1;
   if (kept) kept->written.assign(static_cast<size_t>(dst.height), 1);
-  // Nothing changed: the previous output is the output, no row written.
-  if (changes && !changes->any() && kept && kept->previous) {
+  // Nothing changed: the previous output is the output, no row written
+  // (frames that fit, as the warp would check them).
+  if (changes && !changes->any() && kept && kept->previous && warp_frames_fit(src, depth, pair) &&
+      changes->width() == src.width && changes->height() == src.height) {
     copy_flagged_rows(*kept->previous, dst, kept->written, true);
     std::fill(kept->written.begin(), kept->written.end(), 0);
     return 0;

@@ -51,6 +51,12 @@ CudaStatus BarCountsGpu::join(cudaStream_t stream) {
   return {};
 }
 
+void BarCountsGpu::settle() {
+  if (!unjoined_) return;
+  unjoined_ = false;
+  cudaEventSynchronize(done_);  // a failure shows again at take()
+}
+
 bool BarCountsGpu::take(BarCounts *counts, CudaStatus *status) {
   *status = {};
   if (!pending_) return false;

@@ -29,6 +29,10 @@ class BarCountsGpu {
   CudaStatus count(const FrameView &frame, int luma_threshold, cudaStream_t stream);
   // After count(): `stream` waits for the count (no host wait).
   CudaStatus join(cudaStream_t stream);
+  // After count(), where the caller queues nothing to join (an error
+  // path): the host waits until the count has read the frame. The counts
+  // stay for take().
+  void settle();
   // False, with nothing written, when no count is queued.
   bool take(BarCounts *counts, CudaStatus *status);
   void reset();

@@ -70,8 +70,8 @@ struct DepthState {
   p3d::gst::InputHistory history;
   p3d::gst::DepthPlanePtr last_plane;
   // crop-bars (common/bars.h), streaming thread: the bars decided from
-  // the frames so far, and the rect the last frame's depth was estimated
-  // in (the estimator's history is of that picture).
+  // the frames before this one, and the rect the last frame's depth was
+  // estimated in (the estimator's history is of that picture).
   p3d::BarTracker bars;
   p3d::BarCounts counts;
   bool counts_current = false;  // counts holds the last frame's, counted on the CPU
@@ -307,7 +307,13 @@ static GstFlowReturn process_ip(GstPseudo3DBase *base, GstPseudo3DPath path, Gst
   // depth_plane.h) where the block is a power of two.
   p3d::gst::DepthPlanePtr plane =
       new_plane(self, path, view, rect, p3d::block_grid_shift(params, rect.width(), rect.height()));
-  if (!plane) return GST_FLOW_ERROR;
+  if (!plane) {
+#if HAVE_CUDA
+    // The frame goes back upstream: the bar counts reading it end first.
+    if (path == GST_PSEUDO3D_PATH_GPU) state->bar_counts_gpu.settle();
+#endif
+    return GST_FLOW_ERROR;
+  }
 #if HAVE_CUDA
   if (path == GST_PSEUDO3D_PATH_GPU) {
     // Adaptive: the frame compared on the device, and only the feature

@@ -3,7 +3,8 @@
 //  * BarCountsGpu gives bar_counts_cpu's row and column counts (every
 //    format, limited and full range, odd sizes, rows with padding, bars
 //    and noise), also for frames queued one after another, each count()
-//    taken before the next;
+//    taken before the next; on its own stream, joined to the caller's,
+//    and a count left untaken ended by the next;
 //  * views_outside_gpu writes views_outside_cpu's pixels and no other;
 //  * ActiveWarpGpu::render gives warp_pack_changed_cpu()'s output with
 //    the same ActiveArea (every row): a letterbox, a pillarbox and both,
@@ -110,6 +111,39 @@ TEST_F(GpuBars, CountsAreTheCpuCounts) {
       EXPECT_EQ(got.cols, want.cols) << test::format_name(f) << " full range " << full_range;
       EXPECT_FALSE(counts_.take(&got, &st)) << "taken once";
     }
+}
+
+// The counts run on BarCountsGpu's own stream: joined to the caller's
+// stream they are the frame's counts; a count left untaken is ended by
+// the next count(), whose counts take() then hands over (not the first's);
+// settle() waits without taking, and leaves nothing to join.
+TEST_F(GpuBars, CountsBesideTheCallersStream) {
+  const int w = 160, h = 96, threshold = bar_luma_threshold(YuvToRgb());
+  const HostFrame a = barred_frame(PixelFormat::NV12, w, h, PixelRect{0, 16, w, h - 16}, 41);
+  const HostFrame b = barred_frame(PixelFormat::NV12, w, h, PixelRect{24, 0, w - 24, h}, 42);
+  BarCounts want_a, want_b, got;
+  bar_counts_cpu(a.view(), threshold, &want_a);
+  bar_counts_cpu(b.view(), threshold, &want_b);
+  ASSERT_NE(want_a.rows, want_b.rows);
+  const test::DeviceFrame da = test::DeviceFrame::upload(a), db = test::DeviceFrame::upload(b);
+  CudaStatus st;
+  // Joined: the caller's stream waits for the count.
+  test::check_cuda(counts_.count(da.view(), threshold, stream_));
+  test::check_cuda(counts_.join(stream_));
+  ASSERT_EQ(cudaStreamSynchronize(stream_), cudaSuccess);
+  ASSERT_TRUE(counts_.take(&got, &st));
+  test::check_cuda(st);
+  EXPECT_EQ(got.rows, want_a.rows);
+  // Untaken: the next count ends it, and its own counts are taken.
+  test::check_cuda(counts_.count(da.view(), threshold, stream_));
+  test::check_cuda(counts_.count(db.view(), threshold, stream_));
+  counts_.settle();
+  ASSERT_TRUE(counts_.take(&got, &st));
+  test::check_cuda(st);
+  EXPECT_EQ(got.rows, want_b.rows);
+  EXPECT_EQ(got.cols, want_b.cols);
+  test::check_cuda(counts_.join(stream_));  // after settle(): nothing to join
+  EXPECT_FALSE(counts_.take(&got, &st)) << "taken once";
 }
 
 TEST_F(GpuBars, ViewsOutsideAreTheCpuViews) {

@@ -260,20 +260,35 @@ TEST(GpuChainBars, MatchesCpuChain) {
   }
 }
 
-// A cut from one letterbox to other bars on CUDA memory: the counts of a
-// frame are read back at the next frame (common/bars.h, step 4), and the
-// rect moves on the same frame as on the CPU, adaptive or not.
+// A cut from a letterbox to a full-frame picture on CUDA memory: the
+// counts of a frame are read back at the next frame (common/bars.h, step
+// 4), so pseudo3ddepth's rect moves at the frame after the cut, and the
+// chain's output is the CPU chain's frame by frame, adaptive or not.
 TEST(GpuChainBars, ACutMovesTheRectAsOnTheCpu) {
+  constexpr int kBars = 88, kCut = 4;
   std::vector<HostFrame> frames;
-  for (uint32_t s = 0; s < 8; ++s) {
-    const int rows = s < 4 ? 88 : 40;
-    const HostFrame inner = picture(PixelFormat::NV12, 1280, 720 - 2 * rows, 520 + s / 4);
+  for (int k = 0; k < 8; ++k) {
+    const int rows = k < kCut ? kBars : 0;
+    const HostFrame inner = picture(PixelFormat::NV12, 1280, 720 - 2 * rows, 520 + (k < kCut ? 0 : 1));
     cv::Mat bgr;
     cv::cvtColor(inner.to_bgra(), bgr, cv::COLOR_BGRA2BGR);
-    cv::rectangle(bgr, cv::Rect(40 + 16 * static_cast<int>(s), 100, 60, 40), cv::Scalar(30, 200, 60), cv::FILLED);
+    cv::rectangle(bgr, cv::Rect(40 + 16 * k, 100, 60, 40), cv::Scalar(30, 200, 60), cv::FILLED);
     cv::copyMakeBorder(bgr, bgr, rows, rows, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
     frames.push_back(HostFrame::from_bgr(bgr, PixelFormat::NV12));
   }
+  // The rect each frame's depth carries on the device.
+  GstHarness *h = gst_harness_new_parse("cudaupload ! video/x-raw(memory:CUDAMemory) ! pseudo3ddepth processing=gpu");
+  gst_harness_set_src_caps_str(h, raw_caps(PixelFormat::NV12, 1280, 720).c_str());
+  for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
+    GstBuffer *b = gst_harness_push_and_pull(h, buffer_from_frame(frames[k]));
+    ASSERT_NE(b, nullptr);
+    const DepthPlaneInfo info = buffer_depth_info(b);
+    EXPECT_TRUE(info.on_device) << "frame " << k;
+    const PixelRect want = k <= kCut ? PixelRect{0, kBars, 1280, 720 - kBars} : PixelRect{0, 0, 1280, 720};
+    EXPECT_EQ(info.active, want) << "frame " << k;
+    gst_buffer_unref(b);
+  }
+  gst_harness_teardown(h);
   for (const std::string adaptive : {" adaptive=false", " adaptive=true"}) {
     auto stages = [&adaptive](Where where) {  // every stage with `adaptive`
       return std::regex_replace(chain(where, "side-by-side-half", "BGRA"), std::regex("processing=(\\w+)"),
@@ -281,7 +296,7 @@ TEST(GpuChainBars, ACutMovesTheRectAsOnTheCpu) {
     };
     const auto gpu = run_chain(stages(kDevice), PixelFormat::NV12, 1280, 720, frames);
     const auto cpu = run_chain(stages(kCpu), PixelFormat::NV12, 1280, 720, frames);
-    expect_same(gpu, cpu, "a cut to other bars," + adaptive);
+    expect_same(gpu, cpu, "a cut to a full frame," + adaptive);
   }
 }
 

@@ -63,8 +63,9 @@ class WarpTarget {
 };
 
 // crop: crop-bars=auto, as pseudo3ddepth, pseudo3dfilter and pseudo3dwarp
-// run it: the bars decided from the frames so far (BarTracker, the
-// counts taken with the depth), each stage on the picture between them.
+// run it: the bars decided from the frames before this one (BarTracker's
+// order; the counts taken with the depth), each stage on the picture
+// between them.
 class FullChain {
  public:
   FullChain(const StageParams &p, int width, int height, PixelFormat input, bool crop = false);

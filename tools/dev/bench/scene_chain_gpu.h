@@ -8,7 +8,8 @@
 // warp's kernels return at once on a frame whose inputs did not change,
 // whose output is then the kept copy, and render only the rows a change
 // reaches. crop-bars off, or (adaptive off) auto: the bars counted on the
-// device and waited for as pseudo3ddepth does, the depth estimated and
+// device and read back at the next frame as pseudo3ddepth does (the first
+// frame's waited for), the depth estimated and
 // filtered inside them (the planes 0 outside), the views rendered by
 // ActiveWarpGpu. Host code on the CUDA runtime API (built by the host
 // compiler, linked with the kernels).
