@@ -327,9 +327,8 @@ TemporalDecision DepthEstimatorCpu::estimate_blocks(const DepthParams &params, c
   // The reference becomes this frame's features. Adaptive calls copy them,
   // since the next call updates features_ in place; others, and a frame
   // that changed every block (the next one likely does too), trade buffers.
-  const bool all_touched = none_touched ? false
-                           : incremental ? std::find(touched.begin(), touched.end(), 0) == touched.end()
-                                         : !changes || changes->all();
+  const bool all_touched = incremental ? !none_touched && std::find(touched.begin(), touched.end(), 0) == touched.end()
+                                       : !changes || changes->all();
   bool features_current = changes != nullptr;
   // Incremental: the reference differs from features_ only in the rows a
   // change touched since it was taken (ref_behind_), so those rows are

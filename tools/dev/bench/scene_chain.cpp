@@ -125,9 +125,9 @@ void AdaptiveChain::frame(const FrameView &src, StageMs *ms) {
 }
 
 // gstpseudo3ddepth.cpp process_ip: the bars counted (again only where the
-// frame changed) and decided in the tracker's order; only the blocks of changed tiles are summed
-// again; when no block depth changed the frame gets the previous plane
-// itself. A new rect starts the estimator and the planes over. Backing
+// frame changed) and decided in the tracker's order; only the blocks of
+// changed tiles are summed again; when no block depth changed the frame
+// gets the previous plane itself. A new rect starts the estimator and the planes over. Backing
 // off (StageInputs::begin): the whole estimate into a new plane.
 AdaptiveChain::Plane AdaptiveChain::depth(const FrameView &src, ChangeMap *changes) {
   const bool compare = depth_inputs_.begin(true);

@@ -121,8 +121,9 @@ void zero_outside(DepthGrid<float> g, PixelRect r, cudaStream_t stream) {
 }  // namespace
 
 // crop-bars=auto with adaptive off, as the elements run it on CUDA memory:
-// pseudo3ddepth's bar counts (read back at the next frame) and frame_rect, pseudo3dfilter's
-// filter_rect, pseudo3dwarp's ActiveWarpGpu inside the rect.
+// pseudo3ddepth's bar counts (read back at the next frame) and
+// frame_rect, pseudo3dfilter's filter_rect, pseudo3dwarp's ActiveWarpGpu
+// inside the rect.
 void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   Impl &s = *impl_;
   const int k = s.frames % kPoolPlanes;
@@ -131,19 +132,16 @@ void GpuSceneChain::frame_cropped(const FrameView &src, StageMs *ms) {
   const PixelRect whole = whole_picture(src.width, src.height);
   check(cudaEventRecord(s.marks[0], s.stream), "cudaEventRecord");
   // pseudo3ddepth
-  BarCounts counts;
-  CudaStatus st;
-  if (s.bars.previous_due()) {  // the previous frame's, queued then
+  auto observe_queued = [&s] {  // the counts last queued, into the tracker
+    BarCounts counts;
+    CudaStatus st;
     if (!s.bar_counts.take(&counts, &st)) throw std::runtime_error("no bar counts queued");
     check(st);
     s.bars.observe(counts);
-  }
+  };
+  if (s.bars.previous_due()) observe_queued();  // the previous frame's, queued then
   check(s.bar_counts.count(src, bar_luma_threshold(s.p.yuv), s.stream));
-  if (s.bars.counted()) {  // the first frame: its own, waited for
-    if (!s.bar_counts.take(&counts, &st)) throw std::runtime_error("no bar counts queued");
-    check(st);
-    s.bars.observe(counts);
-  }
+  if (s.bars.counted()) observe_queued();  // the first frame: its own, waited for
   PixelRect rect = s.bars.active(src.width, src.height);
   const int block_shift = block_grid_shift(s.p.depth, rect.width(), rect.height());
   rect = rect_on_cells(rect, block_shift, src.width, src.height);
